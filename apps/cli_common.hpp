@@ -1,0 +1,19 @@
+#pragma once
+// Shared pieces of the jointsim command-line front end (a thin layer over the library).
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <Eigen/Core>
+
+namespace jointsim::cli {
+
+/// Parses "v1,v2,...,vn" into a vector; throws InputError naming `option` on a bad number.
+Eigen::VectorXd parseList(const std::string& text, const std::string& option);
+/// As parseList, and checks the count (`what` names the expected entries, e.g. "one per joint").
+Eigen::VectorXd parseList(const std::string& text, const std::string& option, Eigen::Index expected,
+                          const std::string& what);
+
+void addDynamicsCommand(CLI::App& app);
+void addRunCommand(CLI::App& app);
+
+}  // namespace jointsim::cli

@@ -1,0 +1,37 @@
+// jointsim command-line interface: parses arguments and dispatches to library calls.
+// Exit status: 0 success, 1 simulation/solver failure, 2 bad input (files, keys, values, options).
+#include <exception>
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "jointsim/common/error.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"jointsim — high-fidelity robot joint and multibody simulator"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "jointsim 0.1.0");
+  jointsim::cli::addDynamicsCommand(app);
+  jointsim::cli::addRunCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "jointsim: " << e.what() << " (see jointsim --help)\n";
+    return 2;
+  } catch (const jointsim::InputError& e) {
+    std::cerr << "jointsim: error: " << e.what() << '\n';
+    return 2;
+  } catch (const jointsim::Error& e) {
+    std::cerr << "jointsim: failed: " << e.what() << '\n';
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "jointsim: internal error: " << e.what() << '\n';
+    return 1;
+  }
+  return 0;
+}

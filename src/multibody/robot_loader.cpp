@@ -1,0 +1,364 @@
+#include "jointsim/multibody/robot_loader.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <Eigen/Geometry>
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include "io/yaml_reader.hpp"
+#include "jointsim/common/error.hpp"
+
+namespace jointsim::multibody {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// ----------------------------------------------------------------------------------------- URDF
+
+// Collects urdfdom's console_bridge messages so they go into the exception instead of stderr.
+class CapturingOutputHandler : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) messages += (messages.empty() ? "" : "; ") + text;
+  }
+  std::string messages;
+};
+
+struct ScopedOutputCapture {
+  CapturingOutputHandler handler;
+  ScopedOutputCapture() { console_bridge::useOutputHandler(&handler); }
+  ~ScopedOutputCapture() { console_bridge::restorePreviousOutputHandler(); }
+};
+
+Placement fromUrdfPose(const urdf::Pose& pose) {
+  Placement X;
+  double qx, qy, qz, qw;
+  pose.rotation.getQuaternion(qx, qy, qz, qw);
+  X.R = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
+  X.p = {pose.position.x, pose.position.y, pose.position.z};
+  return X;
+}
+
+BodyInertia fromUrdfInertial(const urdf::Link& link) {
+  BodyInertia I;
+  if (!link.inertial) return I;
+  const urdf::Inertial& in = *link.inertial;
+  const Placement X = fromUrdfPose(in.origin);
+  Eigen::Matrix3d Ic;
+  Ic << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+  I.mass = in.mass;
+  I.com = X.p;
+  I.inertia = X.R * Ic * X.R.transpose();
+  return I;
+}
+
+void addUrdfSubtree(const urdf::Link& link, const std::string& file, ModelBuilder& builder) {
+  for (const auto& joint : link.child_joints) {
+    const std::string where = file + ": joint '" + joint->name + "'";
+    JointSpec spec;
+    spec.name = joint->name;
+    switch (joint->type) {
+      case urdf::Joint::REVOLUTE:
+      case urdf::Joint::CONTINUOUS: spec.type = JointType::Revolute; break;
+      case urdf::Joint::PRISMATIC: spec.type = JointType::Prismatic; break;
+      case urdf::Joint::FIXED: spec.type = JointType::Fixed; break;
+      default:
+        throw InputError(where + ": joint type not supported (expected revolute, continuous, prismatic or fixed)");
+    }
+    spec.origin = fromUrdfPose(joint->parent_to_joint_origin_transform);
+    spec.axis = {joint->axis.x, joint->axis.y, joint->axis.z};
+    if (joint->limits) {
+      if (joint->type != urdf::Joint::CONTINUOUS) {
+        spec.limits.lower = joint->limits->lower;
+        spec.limits.upper = joint->limits->upper;
+      }
+      if (joint->limits->velocity > 0) spec.limits.velocity = joint->limits->velocity;
+      if (joint->limits->effort > 0) spec.limits.effort = joint->limits->effort;
+    }
+    urdf::LinkSharedPtr child_link;
+    for (const auto& c : link.child_links)
+      if (c->name == joint->child_link_name) child_link = c;
+    if (!child_link) throw InputError(where + ": child link '" + joint->child_link_name + "' not found");
+    const BodyInertia inertia = fromUrdfInertial(*child_link);
+    if (const std::string why = inertia.validate(); !why.empty())
+      throw InputError(file + ": link '" + child_link->name + "' <inertial>: " + why);
+    try {
+      builder.addLink(link.name, spec, child_link->name, inertia);
+    } catch (const InputError& e) {
+      throw InputError(file + ": " + e.what());
+    }
+    addUrdfSubtree(*child_link, file, builder);
+  }
+}
+
+// ----------------------------------------------------------------------------------------- YAML
+
+using io::YamlValue;
+
+BodyInertia readInertia(const YamlValue& link) {
+  BodyInertia I;
+  const YamlValue mass = link.required("mass", "link mass in kg");
+  I.mass = mass.asDouble("a mass in kg");
+  if (I.mass < 0.0) mass.fail("mass must be >= 0 kg, got " + std::to_string(I.mass));
+  I.com = link.required("com", "centre of mass [x, y, z] in m").asVector3("a list of 3 numbers [x, y, z] in m");
+  const YamlValue inertia = link.required("inertia", "[Ixx, Iyy, Izz, Ixy, Ixz, Iyz] in kg·m² about the CoM");
+  const auto v = inertia.asDoubles(6, "a list of 6 numbers [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] in kg·m²");
+  I.inertia << v[0], v[3], v[4], v[3], v[1], v[5], v[4], v[5], v[2];
+  if (const std::string why = I.validate(); !why.empty()) inertia.fail(why);
+  return I;
+}
+
+JointLimits readLimits(const YamlValue& node) {
+  JointLimits lim;
+  if (!node.defined()) return lim;
+  node.expectMap("a mapping {lower, upper, velocity, effort}");
+  node.allowKeys({"lower", "upper", "velocity", "effort"});
+  lim.lower = node["lower"].asDouble(lim.lower, "a lower limit in rad or m");
+  lim.upper = node["upper"].asDouble(lim.upper, "an upper limit in rad or m");
+  lim.velocity = node["velocity"].asDouble(lim.velocity, "a velocity limit in rad/s or m/s");
+  lim.effort = node["effort"].asDouble(lim.effort, "an effort limit in N·m or N");
+  if (lim.lower > lim.upper) node.fail("lower limit exceeds upper limit");
+  if (lim.velocity <= 0.0) node["velocity"].fail("velocity limit must be > 0");
+  if (lim.effort <= 0.0) node["effort"].fail("effort limit must be > 0");
+  return lim;
+}
+
+double readArmature(const YamlValue& joint) {
+  const YamlValue a = joint["armature"];
+  const double value = a.asDouble(0.0, "an armature (reflected rotor inertia) in kg·m²");
+  if (value < 0.0) a.fail("armature must be >= 0");
+  return value;
+}
+
+Placement readPose(const YamlValue& node, const std::string& what) {
+  Placement X;
+  if (!node.defined()) return X;
+  node.expectMap(what);
+  node.allowKeys({"xyz", "rpy"});
+  if (node.has("xyz")) X.p = node["xyz"].asVector3("a list of 3 numbers [x, y, z] in m");
+  if (node.has("rpy")) {
+    const Eigen::Vector3d rpy = node["rpy"].asVector3("a list of 3 angles [roll, pitch, yaw] in rad");
+    X.R = rotationFromRpy(rpy.x(), rpy.y(), rpy.z());
+  }
+  return X;
+}
+
+JointType readJointType(const YamlValue& node, bool allow_fixed) {
+  const std::string t = node.asString("revolute", "a joint type");
+  if (t == "revolute" || (allow_fixed && t == "continuous")) return JointType::Revolute;
+  if (t == "prismatic") return JointType::Prismatic;
+  if (allow_fixed && t == "fixed") return JointType::Fixed;
+  node.failExpected(allow_fixed ? "one of revolute, continuous, prismatic, fixed" : "revolute or prismatic");
+}
+
+void rethrowWithFile(const YamlValue& where, const InputError& e) { where.fail(e.what()); }
+
+// Hayati DH chain: frame J_i (joint frame, body i) = DH frame i−1 rotated by q about z; DH frame i =
+// J_i · C_i with C_i = Transl(z,d) Rot(z,θ_off) Transl(x,a) Rot(x,α) Rot(y,β) (Rot(z,q) commutes with
+// Transl(z,d), and for a prismatic joint Transl(z,q) comes first).
+Model buildDhChain(const YamlValue& root, const std::string& name) {
+  root.allowKeys({"name", "gravity", "convention", "dh_units", "links", "tool", "base_link"});
+  double length_scale = 1.0, angle_scale = 1.0;
+  if (const YamlValue units = root["dh_units"]; units.defined()) {
+    units.expectMap("a mapping {length: m|mm, angle: rad|deg}");
+    units.allowKeys({"length", "angle"});
+    const std::string L = units["length"].asString("m", "m or mm");
+    const std::string A = units["angle"].asString("rad", "rad or deg");
+    if (L == "mm") length_scale = 1e-3; else if (L != "m") units["length"].failExpected("m or mm");
+    if (A == "deg") angle_scale = kPi / 180.0; else if (A != "rad") units["angle"].failExpected("rad or deg");
+  }
+  ModelBuilder builder(name, root["base_link"].asString("base", "a link name"));
+  const YamlValue links = root.required("links", "the list of links of the chain");
+  links.expectSequence("a list of links");
+  if (links.size() == 0) links.fail("expected at least one link");
+  std::string parent = root["base_link"].asString("base", "a link name");
+  for (size_t i = 0; i < links.size(); ++i) {
+    const YamlValue link = links.at(i);
+    link.expectMap("a link mapping {name, joint, mass, com, inertia}");
+    link.allowKeys({"name", "joint", "mass", "com", "inertia"});
+    const std::string link_name = link.required("name", "link name").asString("a link name");
+    const YamlValue joint = link.required("joint", "the DH joint of this link");
+    joint.expectMap("a joint mapping {name, type, a, alpha, beta, d, theta, armature, limits}");
+    joint.allowKeys({"name", "type", "a", "alpha", "beta", "d", "theta", "armature", "limits"});
+    JointSpec spec;
+    spec.name = joint.required("name", "joint name").asString("a joint name");
+    spec.type = readJointType(joint["type"], false);
+    spec.axis = Eigen::Vector3d::UnitZ();
+    spec.armature = readArmature(joint);
+    spec.limits = readLimits(joint["limits"]);
+    const double a = joint.required("a", "DH link length a").asDouble("a length") * length_scale;
+    const double alpha = joint.required("alpha", "DH twist alpha").asDouble("an angle") * angle_scale;
+    const double beta = joint["beta"].asDouble(0.0, "an angle") * angle_scale;
+    const double d = joint.required("d", "DH offset d").asDouble("a length") * length_scale;
+    const double theta = joint.required("theta", "DH angle offset theta").asDouble("an angle") * angle_scale;
+    const BodyInertia inertia = readInertia(link);
+    Placement C;  // DH frame i in the joint frame J_i
+    C.R = (Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitX()) *
+           Eigen::AngleAxisd(beta, Eigen::Vector3d::UnitY()))
+              .toRotationMatrix();
+    C.p = Eigen::Vector3d(0.0, 0.0, d) + Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()) * Eigen::Vector3d(a, 0, 0);
+    try {
+      // The moving body is the joint frame (named after the joint); the DH link frame is fixed to it.
+      builder.addLink(parent, spec, spec.name, BodyInertia{});
+      JointSpec fixed;
+      fixed.name = spec.name + "_dh";
+      fixed.type = JointType::Fixed;
+      fixed.origin = C;
+      builder.addLink(spec.name, fixed, link_name, inertia);
+    } catch (const InputError& e) {
+      rethrowWithFile(link, e);
+    }
+    parent = link_name;
+  }
+  if (const YamlValue tool = root["tool"]; tool.defined()) {
+    tool.expectMap("a mapping {name, xyz, rpy}");
+    tool.allowKeys({"name", "xyz", "rpy"});
+    const std::string tool_name = tool.required("name", "tool frame name").asString("a frame name");
+    Placement X;
+    if (tool.has("xyz")) X.p = tool["xyz"].asVector3("a list of 3 numbers [x, y, z] in m");
+    if (tool.has("rpy")) {
+      const Eigen::Vector3d rpy = tool["rpy"].asVector3("a list of 3 angles [roll, pitch, yaw] in rad");
+      X.R = rotationFromRpy(rpy.x(), rpy.y(), rpy.z());
+    }
+    try {
+      builder.addFrame(tool_name, parent, X);
+    } catch (const InputError& e) {
+      rethrowWithFile(tool, e);
+    }
+  }
+  if (root.has("gravity")) builder.setGravity(root["gravity"].asVector3("a list of 3 numbers in m/s²"));
+  return builder.build();
+}
+
+Model buildTree(const YamlValue& root, const std::string& name) {
+  root.allowKeys({"name", "gravity", "convention", "links", "joints"});
+  const YamlValue links = root.required("links", "the list of links");
+  const YamlValue joints = root.required("joints", "the list of joints");
+  links.expectSequence("a list of links");
+  joints.expectSequence("a list of joints");
+  std::map<std::string, size_t> link_index;
+  std::vector<std::string> link_order;
+  for (size_t i = 0; i < links.size(); ++i) {
+    const YamlValue link = links.at(i);
+    link.expectMap("a link mapping {name, mass, com, inertia}");
+    link.allowKeys({"name", "mass", "com", "inertia"});
+    const std::string n = link.required("name", "link name").asString("a link name");
+    if (link_index.count(n)) link["name"].fail("link '" + n + "' is defined twice");
+    link_index[n] = i;
+    link_order.push_back(n);
+  }
+  // Joints by parent link; each child at most once.
+  std::map<std::string, std::vector<size_t>> children;
+  std::map<std::string, size_t> parent_joint;
+  for (size_t j = 0; j < joints.size(); ++j) {
+    const YamlValue joint = joints.at(j);
+    joint.expectMap("a joint mapping {name, type, parent, child, origin, axis, armature, limits}");
+    joint.allowKeys({"name", "type", "parent", "child", "origin", "axis", "armature", "limits"});
+    joint.required("name", "joint name");
+    const YamlValue p = joint.required("parent", "parent link name");
+    const YamlValue c = joint.required("child", "child link name");
+    if (!link_index.count(p.asString("a link name"))) p.fail("unknown link '" + p.asString() + "'");
+    if (!link_index.count(c.asString("a link name"))) c.fail("unknown link '" + c.asString() + "'");
+    if (parent_joint.count(c.asString())) c.fail("link '" + c.asString() + "' is the child of two joints");
+    parent_joint[c.asString()] = j;
+    children[p.asString()].push_back(j);
+  }
+  std::string base;
+  for (const auto& n : link_order)
+    if (!parent_joint.count(n)) {
+      if (!base.empty()) links.fail("links '" + base + "' and '" + n + "' both have no parent joint; expected a single root");
+      base = n;
+    }
+  if (base.empty()) links.fail("every link has a parent joint (a cycle); expected one root link");
+  ModelBuilder builder(name, base);
+  size_t added = 1;
+  // Depth-first from the root, in file order, so parents come before children.
+  std::vector<std::string> stack{base};
+  while (!stack.empty()) {
+    const std::string parent = stack.back();
+    stack.pop_back();
+    const auto& js = children[parent];
+    for (auto it = js.rbegin(); it != js.rend(); ++it) stack.push_back(joints.at(*it)["child"].asString());
+    for (size_t j : js) {
+      const YamlValue joint = joints.at(j);
+      JointSpec spec;
+      spec.name = joint["name"].asString("a joint name");
+      spec.type = readJointType(joint["type"], true);
+      spec.origin = readPose(joint["origin"], "a mapping {xyz: [m], rpy: [rad]}");
+      if (spec.type != JointType::Fixed)
+        spec.axis = joint.required("axis", "joint axis [x, y, z]").asVector3("a list of 3 numbers");
+      spec.armature = readArmature(joint);
+      spec.limits = readLimits(joint["limits"]);
+      const std::string child = joint["child"].asString();
+      const BodyInertia inertia = readInertia(links.at(link_index[child]));
+      try {
+        builder.addLink(parent, spec, child, inertia);
+      } catch (const InputError& e) {
+        rethrowWithFile(joint, e);
+      }
+      ++added;
+    }
+  }
+  if (added != link_order.size()) links.fail("some links are not connected to the root link '" + base + "'");
+  if (root.has("gravity")) builder.setGravity(root["gravity"].asVector3("a list of 3 numbers in m/s²"));
+  return builder.build();
+}
+
+Model buildFromYaml(const YamlValue& root) {
+  root.expectMap("a robot description mapping");
+  const std::string name = root.required("name", "robot name").asString("a robot name");
+  const YamlValue convention = root.required("convention", "dh_hayati or tree");
+  const std::string conv = convention.asString("dh_hayati or tree");
+  if (conv == "dh_hayati") return buildDhChain(root, name);
+  if (conv == "tree") return buildTree(root, name);
+  convention.failExpected("dh_hayati or tree");
+}
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
+Model loadUrdfString(const std::string& xml, const std::string& name) {
+  ScopedOutputCapture capture;
+  const urdf::ModelInterfaceSharedPtr urdf_model = urdf::parseURDF(xml);
+  if (!urdf_model) {
+    throw InputError(name + ": not a valid URDF" +
+                     (capture.handler.messages.empty() ? std::string() : ": " + capture.handler.messages));
+  }
+  const urdf::LinkConstSharedPtr root = urdf_model->getRoot();
+  ModelBuilder builder(urdf_model->getName(), root->name);
+  addUrdfSubtree(*root, name, builder);
+  try {
+    return builder.build();
+  } catch (const InputError& e) {
+    throw InputError(name + ": " + e.what());
+  }
+}
+
+Model loadUrdf(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open file for reading");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return loadUrdfString(ss.str(), path);
+}
+
+Model loadRobotYamlString(const std::string& text, const std::string& name) {
+  return buildFromYaml(YamlValue::loadString(text, name));
+}
+
+Model loadRobotYaml(const std::string& path) { return buildFromYaml(YamlValue::loadFile(path)); }
+
+Model loadRobot(const std::string& path) {
+  if (endsWith(path, ".urdf")) return loadUrdf(path);
+  if (endsWith(path, ".yaml") || endsWith(path, ".yml")) return loadRobotYaml(path);
+  throw InputError(path + ": unknown robot file type (expected a .urdf, .yaml or .yml file)");
+}
+
+}  // namespace jointsim::multibody

@@ -1,0 +1,45 @@
+#pragma once
+// Shared test helpers: matrix comparison with an explanatory failure message, seeded random states,
+// and paths to the source tree.
+#include <random>
+#include <sstream>
+#include <string>
+
+#include <Eigen/Core>
+#include <gtest/gtest.h>
+
+namespace jointsim::test {
+
+inline std::string sourcePath(const std::string& relative) { return std::string(JOINTSIM_SOURCE_DIR) + "/" + relative; }
+
+/// |a − b| ≤ tol·max(1, |b|) entrywise; on failure names the worst entry, both values and the difference.
+inline ::testing::AssertionResult MatricesNear(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double tol) {
+  if (a.rows() != b.rows() || a.cols() != b.cols()) {
+    return ::testing::AssertionFailure() << "size mismatch: " << a.rows() << "x" << a.cols() << " vs "
+                                         << b.rows() << "x" << b.cols();
+  }
+  double worst = -1.0;
+  Eigen::Index wr = 0, wc = 0;
+  for (Eigen::Index r = 0; r < a.rows(); ++r)
+    for (Eigen::Index c = 0; c < a.cols(); ++c) {
+      const double err = std::abs(a(r, c) - b(r, c)) / std::max(1.0, std::abs(b(r, c)));
+      if (!(err <= worst)) {
+        worst = err;
+        wr = r;
+        wc = c;
+      }
+    }
+  if (worst <= tol) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "entry (" << wr << "," << wc << "): " << a(wr, wc) << " vs " << b(wr, wc)
+                                       << ", scaled difference " << worst << " > tolerance " << tol;
+}
+
+/// Deterministic random vector with entries uniform in [lo, hi].
+inline Eigen::VectorXd randomVector(std::mt19937& rng, Eigen::Index n, double lo, double hi) {
+  std::uniform_real_distribution<double> dist(lo, hi);
+  Eigen::VectorXd v(n);
+  for (Eigen::Index i = 0; i < n; ++i) v[i] = dist(rng);
+  return v;
+}
+
+}  // namespace jointsim::test
