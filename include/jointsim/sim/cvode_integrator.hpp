@@ -1,0 +1,164 @@
+#pragma once
+/// \file
+/// RAII wrapper around the SUNDIALS CVODE integrator (SUNDIALS 6.x) for explicit ODE systems
+/// y' = f(t, y) with y in R^n.
+///
+/// The SUNDIALS types are hidden behind a pimpl: this header only needs Eigen and the standard
+/// library. Every CVODE failure is reported as a jointsim::SolverError carrying the simulated time,
+/// the CVODE flag name, the component involved and CVODE's own diagnostic text (CVODE never prints
+/// to stderr through this wrapper). Misuse that can be detected up front (bad sizes, bad options)
+/// is reported as a jointsim::InputError.
+
+#include <Eigen/Core>
+
+#include <functional>
+#include <memory>
+#include <string>
+
+namespace jointsim::sim {
+
+/// Linear multistep family used by CVODE.
+enum class Method {
+  /// Backward differentiation formulas (orders 1..5) solved with Newton iteration and a dense direct
+  /// linear solver. The choice for stiff systems (joint friction, contact, stiff drives).
+  BDF,
+  /// Adams-Moulton formulas (orders 1..12) solved with fixed-point (functional) iteration; no linear
+  /// solver, no Jacobian. Cheaper per step for non-stiff systems, but fails or crawls on stiff ones.
+  Adams,
+};
+
+/// Integrator settings. Validated by the CvodeIntegrator constructor (InputError on bad values).
+struct CvodeOptions {
+  /// Integration method, see Method.
+  Method method = Method::BDF;
+  /// Relative tolerance [-], > 0. CVODE keeps the local error of each component below
+  /// rtol * |y_i| + atol_i.
+  double rtol = 1e-6;
+  /// Scalar absolute tolerance, >= 0, in the units of the state components. Used for every
+  /// component when atol_vector is empty.
+  double atol = 1e-8;
+  /// Per-component absolute tolerances (size n, every entry >= 0, in the units of the matching
+  /// state component). Overrides atol when non-empty.
+  Eigen::VectorXd atol_vector;
+  /// Upper bound on |step size| [s], >= 0; 0 means unlimited.
+  double max_step = 0.0;
+  /// First step size to try [s]; 0 lets CVODE estimate it. Its sign must match the direction of
+  /// integration.
+  double initial_step = 0.0;
+  /// Lower bound on |step size| [s], >= 0 (and <= max_step when max_step > 0); 0 means no bound.
+  double min_step = 0.0;
+  /// Maximum number of internal steps per call of advance(), > 0. Exceeding it raises a
+  /// SolverError with flag "CV_TOO_MUCH_WORK"; the integrator remains usable and a further
+  /// advance() continues from where it stopped.
+  long max_num_steps = 500000;
+  /// Maximum method order; 0 means CVODE's default (5 for BDF, 12 for Adams). Otherwise
+  /// 1..5 for BDF, 1..12 for Adams.
+  int max_order = 0;
+  /// Enable BDF stability limit detection (CVodeSetStabLimDet). BDF of order >= 3 is not A-stable:
+  /// for lightly damped oscillatory modes (eigenvalues near the imaginary axis) it can be forced to
+  /// tiny steps or go unstable; the detection lowers the order when it sees this. Only valid with
+  /// Method::BDF (InputError with Adams).
+  bool stability_limit_detection = false;
+  /// Treat a non-finite (NaN/Inf) derivative or Jacobian entry as a recoverable failure of the
+  /// right-hand side: CVODE retries with a smaller step and, if the problem persists, fails with
+  /// CV_FIRST_RHSFUNC_ERR / CV_REPTD_RHSFUNC_ERR (or CV_LSETUP_FAIL for the Jacobian), the
+  /// SolverError naming the offending component index. Costs one pass over ydot per evaluation.
+  bool check_finite = true;
+  /// Name of the simulated system, used in error messages (e.g. "ur5 multibody"). May be empty.
+  std::string component;
+};
+
+/// Solver counters. Counts are cumulative over the integrator's lifetime, including every restart
+/// by initialize(); last_order, last_step and current_time refer to the current segment (since the
+/// last initialize()).
+struct SolverStats {
+  long steps = 0;                    ///< internal steps taken
+  long rhs_evals = 0;                ///< right-hand side evaluations by the integrator/nonlinear solver
+  long rhs_evals_jacobian = 0;       ///< RHS evaluations for difference-quotient Jacobians (BDF only)
+  long jac_evals = 0;                ///< Jacobian evaluations, user-supplied or DQ (BDF only)
+  long lin_setups = 0;               ///< linear solver setups (Newton matrix factorisations)
+  long error_test_failures = 0;      ///< local error test failures
+  long nonlinear_iterations = 0;     ///< nonlinear (Newton or fixed-point) iterations
+  long nonlinear_conv_failures = 0;  ///< nonlinear solver convergence failures
+  int last_order = 0;                ///< method order used on the last internal step (0: no step yet)
+  double last_step = 0.0;            ///< size of the last internal step [s] (0: no step yet)
+  double current_time = 0.0;         ///< CVODE's internal time t_n [s] (may be ahead of time())
+};
+
+/// Right-hand side ydot = f(t, y). `ydot` has size n and must be filled completely; it must not be
+/// resized. May throw (preferably jointsim::ComponentError): the integrator stops and raises a
+/// SolverError. Called in a hot loop: avoid allocating.
+using RhsFunction = std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                       Eigen::Ref<Eigen::VectorXd> ydot)>;
+
+/// Dense Jacobian J = df/dy (n x n, column-major; J(i, j) = d ydot_i / d y_j) at (t, y), with
+/// `ydot` = f(t, y) already evaluated. J is zero on entry, so only non-zeros need to be written.
+/// May throw like RhsFunction.
+using JacobianFunction =
+    std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                       const Eigen::Ref<const Eigen::VectorXd>& ydot, Eigen::Ref<Eigen::MatrixXd> J)>;
+
+/// CVODE integrator for y' = f(t, y), y in R^n.
+///
+/// Usage: construct, initialize(t0, y0), then advance(t_out, y) repeatedly. After a discontinuity
+/// (e.g. an event changing the right-hand side or a state jump) call initialize(t, y) again to
+/// restart the multistep history (CVodeReInit); options and solver objects are kept.
+///
+/// Not copyable; movable (a moved-from integrator may only be destroyed or assigned to). Not
+/// thread-safe; distinct instances are independent.
+class CvodeIntegrator {
+ public:
+  /// \param n         number of states (> 0)
+  /// \param rhs       right-hand side (non-empty)
+  /// \param options   settings, validated here
+  /// \param jacobian  optional analytic Jacobian, used with Method::BDF (ignored for Adams); when
+  ///                  empty, BDF uses CVODE's internal difference-quotient Jacobian
+  /// \throws InputError on invalid arguments/options
+  CvodeIntegrator(int n, RhsFunction rhs, CvodeOptions options = {}, JacobianFunction jacobian = nullptr);
+  ~CvodeIntegrator();
+  CvodeIntegrator(const CvodeIntegrator&) = delete;
+  CvodeIntegrator& operator=(const CvodeIntegrator&) = delete;
+  CvodeIntegrator(CvodeIntegrator&&) noexcept;
+  CvodeIntegrator& operator=(CvodeIntegrator&&) noexcept;
+
+  /// Set the initial condition y(t0) = y0 [s, state units]. The first call sets up CVODE
+  /// (CVodeInit, tolerances, solvers); later calls restart it (CVodeReInit) from (t0, y0), which
+  /// may be any time (also backwards). A stop time set with setStopTime() stays in force.
+  /// \throws InputError if y0 has the wrong size or t0 / y0 is not finite
+  /// \throws SolverError if CVODE rejects the setup
+  void initialize(double t0, const Eigen::Ref<const Eigen::VectorXd>& y0);
+
+  /// Integrate towards t_out [s] (CV_NORMAL mode: internal steps may overshoot t_out, the result
+  /// is interpolated) and store y(t) in y_out (size n). Returns the time reached: t_out, or the stop
+  /// time if one is set and lies between time() and t_out.
+  /// \throws InputError if y_out has the wrong size or t_out is not finite
+  /// \throws jointsim::Error if initialize() was never called
+  /// \throws SolverError on any CVODE failure or exception from the RHS/Jacobian. If the cause was
+  ///         an exception, the SolverError is thrown with std::throw_with_nested (the original can
+  ///         be recovered with std::rethrow_if_nested) and its flag() is "RHS_EXCEPTION". y_out is
+  ///         left unchanged on failure.
+  double advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out);
+
+  /// Never step past t_stop [s]: advance() returns at t_stop exactly if t_out lies beyond it. The
+  /// stop time is one-shot: it is cleared once advance() has returned at it (as in SUNDIALS >= 6.5).
+  /// May be set before initialize(). \throws InputError if t_stop is not finite.
+  void setStopTime(double t_stop);
+  /// Remove a stop time set with setStopTime().
+  void clearStopTime();
+
+  /// Time of the last result [s]: t0 after initialize(), the value returned by advance(), or after a
+  /// failure CVODE's internal time at the failure. NaN before initialize().
+  double time() const;
+  /// Number of states n.
+  int size() const;
+  /// Solver counters, see SolverStats.
+  SolverStats stats() const;
+  /// The options given at construction.
+  const CvodeOptions& options() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace jointsim::sim

@@ -1,0 +1,486 @@
+#include "jointsim/sim/cvode_integrator.hpp"
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sundials/sundials_types.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <exception>
+#include <limits>
+#include <sstream>
+#include <type_traits>
+#include <utility>
+
+#include "jointsim/common/error.hpp"
+
+static_assert(std::is_same<realtype, double>::value, "SUNDIALS must be built in double precision");
+
+namespace jointsim::sim {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// Name of a CVODE return flag. CVodeGetReturnFlagName returns a malloc'ed string the caller frees.
+std::string flagName(int flag) {
+  char* raw = CVodeGetReturnFlagName(flag);
+  if (raw == nullptr) return "CV_FLAG_" + std::to_string(flag);
+  std::string name(raw);
+  std::free(raw);
+  return name;
+}
+
+std::string formatTime(double t) {
+  std::ostringstream os;
+  os.precision(10);
+  os << t;
+  return os.str();
+}
+
+}  // namespace
+
+struct CvodeIntegrator::Impl {
+  int n = 0;
+  RhsFunction rhs;
+  JacobianFunction jac;
+  CvodeOptions opts;
+
+  SUNContext ctx = nullptr;
+  void* mem = nullptr;
+  N_Vector y = nullptr;               // state work/output vector (also the template vector)
+  SUNMatrix A = nullptr;              // BDF only
+  SUNLinearSolver LS = nullptr;       // BDF only
+  SUNNonlinearSolver NLS = nullptr;   // Adams only (BDF uses CVODE's own default Newton solver)
+
+  bool initialized = false;
+  bool fresh = true;                  // no CVode call since the last (Re)Init
+  double t0 = kNaN;                   // time of the last initialize()
+  double t_last = kNaN;               // last result time (see time())
+
+  bool stop_set = false;              // user stop time requested
+  double stop_time = 0.0;
+  bool cvode_tstop_touched = false;   // CVodeSetStopTime was ever called (must be neutralised on clear)
+
+  SolverStats base;                   // counters accumulated from earlier segments
+
+  // Failure capture (filled from inside the C callbacks; no allocation on the success path).
+  std::exception_ptr callback_exception;
+  double callback_exception_time = kNaN;
+  const char* callback_exception_source = "";  // "right-hand side" or "Jacobian"
+  bool nonfinite_seen = false;
+  double nonfinite_time = kNaN;
+  Eigen::Index nonfinite_row = -1;
+  Eigen::Index nonfinite_col = -1;    // -1 for the RHS
+  double nonfinite_value = 0.0;
+  std::string cvode_message;          // last CVODE error text (from the error handler)
+  std::string cvode_warning;          // last CVODE warning text
+  long cvode_warnings = 0;
+
+  ~Impl() {
+    if (mem != nullptr) CVodeFree(&mem);
+    if (NLS != nullptr) SUNNonlinSolFree(NLS);
+    if (LS != nullptr) SUNLinSolFree(LS);
+    if (A != nullptr) SUNMatDestroy(A);
+    if (y != nullptr) N_VDestroy(y);
+    if (ctx != nullptr) SUNContext_Free(&ctx);
+  }
+
+  const std::string& componentLabel() const { return opts.component; }
+
+  std::string prefix() const {
+    std::string p = "CVODE integrator";
+    if (!opts.component.empty()) p += " (" + opts.component + ")";
+    return p;
+  }
+
+  void resetCapture() {
+    callback_exception = nullptr;
+    callback_exception_time = kNaN;
+    nonfinite_seen = false;
+    cvode_message.clear();
+    cvode_warning.clear();
+    cvode_warnings = 0;
+  }
+
+  double cvodeTime() const {
+    double t = kNaN;
+    if (mem != nullptr && CVodeGetCurrentTime(mem, &t) != CV_SUCCESS) t = kNaN;
+    return t;
+  }
+
+  /// Throw a SolverError for a failed CVODE call `what` that returned `flag`.
+  [[noreturn]] void fail(const char* what, int flag, double t) {
+    const std::string name = flagName(flag);
+    std::string component = opts.component;
+    std::ostringstream msg;
+    if (callback_exception) {
+      t = callback_exception_time;
+      std::string original = "unknown exception";
+      try {
+        std::rethrow_exception(callback_exception);
+      } catch (const ComponentError& e) {
+        component = e.component();
+        original = e.what();
+      } catch (const std::exception& e) {
+        original = e.what();
+      } catch (...) {
+      }
+      msg << "CVODE integrator";
+      if (!component.empty()) msg << " (" << component << ")";
+      msg << ": " << callback_exception_source << " threw at t = " << formatTime(t) << " s: " << original
+          << " [" << what << " returned " << name << ", flag RHS_EXCEPTION]";
+      if (!cvode_message.empty()) msg << "; CVODE: " << cvode_message;
+      auto ep = callback_exception;
+      callback_exception = nullptr;
+      try {
+        std::rethrow_exception(ep);
+      } catch (...) {
+        std::throw_with_nested(SolverError(msg.str(), t, "RHS_EXCEPTION", component));
+      }
+    }
+    msg << prefix() << ": " << what << " failed with " << name << " at t = " << formatTime(t) << " s";
+    if (!cvode_message.empty()) msg << ": " << cvode_message;
+    if (nonfinite_seen) {
+      msg << "; the " << (nonfinite_col < 0 ? "right-hand side" : "Jacobian") << " returned a non-finite value (";
+      if (nonfinite_col < 0) {
+        msg << "ydot[" << nonfinite_row << "]";
+      } else {
+        msg << "J(" << nonfinite_row << ", " << nonfinite_col << ")";
+      }
+      msg << " = " << nonfinite_value << ") at t = " << formatTime(nonfinite_time) << " s";
+    }
+    if (cvode_warnings > 0) {
+      msg << "; last of " << cvode_warnings << " CVODE warning(s): " << cvode_warning;
+    }
+    throw SolverError(msg.str(), t, name, component);
+  }
+
+  /// Check the return flag of a setup call.
+  void check(int flag, const char* what) {
+    if (flag < 0) fail(what, flag, t0);
+  }
+
+  // ------------------------------------------------------------------ C callbacks
+  static int rhsCallback(realtype t, N_Vector yv, N_Vector ydotv, void* user_data) noexcept {
+    auto* self = static_cast<Impl*>(user_data);
+    const Eigen::Map<const Eigen::VectorXd> ym(N_VGetArrayPointer(yv), self->n);
+    Eigen::Map<Eigen::VectorXd> ydm(N_VGetArrayPointer(ydotv), self->n);
+    try {
+      self->rhs(t, ym, ydm);
+    } catch (...) {
+      self->callback_exception = std::current_exception();
+      self->callback_exception_time = t;
+      self->callback_exception_source = "right-hand side";
+      return -1;  // unrecoverable
+    }
+    if (self->opts.check_finite && !ydm.allFinite()) {
+      for (Eigen::Index i = 0; i < self->n; ++i) {
+        if (!std::isfinite(ydm[i])) {
+          self->nonfinite_row = i;
+          self->nonfinite_value = ydm[i];
+          break;
+        }
+      }
+      self->nonfinite_seen = true;
+      self->nonfinite_col = -1;
+      self->nonfinite_time = t;
+      return 1;  // recoverable: CVODE retries with a smaller step
+    }
+    return 0;
+  }
+
+  static int jacCallback(realtype t, N_Vector yv, N_Vector fyv, SUNMatrix J, void* user_data, N_Vector,
+                         N_Vector, N_Vector) noexcept {
+    auto* self = static_cast<Impl*>(user_data);
+    const Eigen::Map<const Eigen::VectorXd> ym(N_VGetArrayPointer(yv), self->n);
+    const Eigen::Map<const Eigen::VectorXd> fm(N_VGetArrayPointer(fyv), self->n);
+    // SUNDenseMatrix storage is column-major with leading dimension M = n.
+    Eigen::Map<Eigen::MatrixXd> jm(SM_DATA_D(J), self->n, self->n);
+    try {
+      self->jac(t, ym, fm, jm);
+    } catch (...) {
+      self->callback_exception = std::current_exception();
+      self->callback_exception_time = t;
+      self->callback_exception_source = "Jacobian";
+      return -1;
+    }
+    if (self->opts.check_finite && !jm.allFinite()) {
+      for (Eigen::Index j = 0; j < self->n && !self->nonfinite_seen; ++j) {
+        for (Eigen::Index i = 0; i < self->n; ++i) {
+          if (!std::isfinite(jm(i, j))) {
+            self->nonfinite_row = i;
+            self->nonfinite_col = j;
+            self->nonfinite_value = jm(i, j);
+            self->nonfinite_seen = true;
+            break;
+          }
+        }
+      }
+      self->nonfinite_seen = true;
+      self->nonfinite_time = t;
+      return 1;
+    }
+    return 0;
+  }
+
+  static void errCallback(int error_code, const char* module, const char* function, char* msg,
+                          void* eh_data) noexcept {
+    auto* self = static_cast<Impl*>(eh_data);
+    try {
+      std::string text = std::string("[") + (module ? module : "") + " " + (function ? function : "") + "] " +
+                         (msg ? msg : "");
+      if (error_code == CV_WARNING) {
+        self->cvode_warning = std::move(text);
+        ++self->cvode_warnings;
+      } else {
+        self->cvode_message = std::move(text);
+      }
+    } catch (...) {
+      // Out of memory while recording a diagnostic: drop the text, the flag is still reported.
+    }
+  }
+
+  // ------------------------------------------------------------------ setup
+  void firstInit(double t, N_Vector y0) {
+    check(CVodeInit(mem, &Impl::rhsCallback, t, y0), "CVodeInit");
+    if (opts.atol_vector.size() > 0) {
+      N_Vector abstol = N_VNew_Serial(n, ctx);
+      if (abstol == nullptr) throw Error(prefix() + ": allocation of the tolerance vector failed");
+      Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(abstol), n) = opts.atol_vector;
+      const int flag = CVodeSVtolerances(mem, opts.rtol, abstol);  // CVODE keeps its own copy
+      N_VDestroy(abstol);
+      check(flag, "CVodeSVtolerances");
+    } else {
+      check(CVodeSStolerances(mem, opts.rtol, opts.atol), "CVodeSStolerances");
+    }
+    if (opts.method == Method::BDF) {
+      A = SUNDenseMatrix(n, n, ctx);
+      if (A == nullptr) throw Error(prefix() + ": allocation of the dense Jacobian matrix failed");
+      LS = SUNLinSol_Dense(y, A, ctx);
+      if (LS == nullptr) throw Error(prefix() + ": creation of the dense linear solver failed");
+      check(CVodeSetLinearSolver(mem, LS, A), "CVodeSetLinearSolver");
+      if (jac) check(CVodeSetJacFn(mem, &Impl::jacCallback), "CVodeSetJacFn");
+      if (opts.stability_limit_detection) check(CVodeSetStabLimDet(mem, SUNTRUE), "CVodeSetStabLimDet");
+    } else {
+      NLS = SUNNonlinSol_FixedPoint(y, 0, ctx);
+      if (NLS == nullptr) throw Error(prefix() + ": creation of the fixed-point nonlinear solver failed");
+      check(CVodeSetNonlinearSolver(mem, NLS), "CVodeSetNonlinearSolver");
+    }
+    check(CVodeSetMaxNumSteps(mem, opts.max_num_steps), "CVodeSetMaxNumSteps");
+    if (opts.max_step > 0.0) check(CVodeSetMaxStep(mem, opts.max_step), "CVodeSetMaxStep");
+    if (opts.min_step > 0.0) check(CVodeSetMinStep(mem, opts.min_step), "CVodeSetMinStep");
+    if (opts.initial_step != 0.0) check(CVodeSetInitStep(mem, opts.initial_step), "CVodeSetInitStep");
+    if (opts.max_order > 0) check(CVodeSetMaxOrd(mem, opts.max_order), "CVodeSetMaxOrd");
+  }
+
+  /// Add the counters of the current segment to `base` (before a CVodeReInit resets them).
+  void accumulate() {
+    const SolverStats cur = segmentStats();
+    base.steps += cur.steps;
+    base.rhs_evals += cur.rhs_evals;
+    base.rhs_evals_jacobian += cur.rhs_evals_jacobian;
+    base.jac_evals += cur.jac_evals;
+    base.lin_setups += cur.lin_setups;
+    base.error_test_failures += cur.error_test_failures;
+    base.nonlinear_iterations += cur.nonlinear_iterations;
+    base.nonlinear_conv_failures += cur.nonlinear_conv_failures;
+  }
+
+  /// Counters of the current segment (zero if CVode was not called since the last (Re)Init: the
+  /// linear solver counters are only reset at the first CVode call after a CVodeReInit).
+  SolverStats segmentStats() const {
+    SolverStats s;
+    s.current_time = initialized ? t0 : kNaN;
+    if (!initialized || fresh) return s;
+    long nsteps = 0, nfe = 0, nsetups = 0, netf = 0;
+    int qlast = 0, qcur = 0;
+    double hinused = 0, hlast = 0, hcur = 0, tcur = 0;
+    if (CVodeGetIntegratorStats(mem, &nsteps, &nfe, &nsetups, &netf, &qlast, &qcur, &hinused, &hlast, &hcur,
+                                &tcur) == CV_SUCCESS) {
+      s.steps = nsteps;
+      s.rhs_evals = nfe;
+      s.lin_setups = nsetups;
+      s.error_test_failures = netf;
+      s.last_order = qlast;
+      s.last_step = hlast;
+      s.current_time = tcur;
+    }
+    long v = 0;
+    if (CVodeGetNumNonlinSolvIters(mem, &v) == CV_SUCCESS) s.nonlinear_iterations = v;
+    if (CVodeGetNumNonlinSolvConvFails(mem, &v) == CV_SUCCESS) s.nonlinear_conv_failures = v;
+    if (opts.method == Method::BDF) {
+      if (CVodeGetNumJacEvals(mem, &v) == CV_SUCCESS) s.jac_evals = v;
+      if (CVodeGetNumLinRhsEvals(mem, &v) == CV_SUCCESS) s.rhs_evals_jacobian = v;
+    }
+    return s;
+  }
+};
+
+// ==================================================================== public API
+
+CvodeIntegrator::CvodeIntegrator(int n, RhsFunction rhs, CvodeOptions options, JacobianFunction jacobian)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  const std::string who =
+      "CvodeIntegrator" + (options.component.empty() ? std::string() : " (" + options.component + ")");
+  auto bad = [&who](const std::string& what) { throw InputError(who + ": " + what); };
+
+  if (n <= 0) bad("number of states must be positive, got " + std::to_string(n));
+  if (!rhs) bad("right-hand side function is empty");
+  if (!(options.rtol > 0.0) || !std::isfinite(options.rtol)) {
+    bad("rtol must be a finite number > 0, got " + formatTime(options.rtol));
+  }
+  if (options.atol_vector.size() > 0) {
+    if (options.atol_vector.size() != n) {
+      bad("atol_vector has " + std::to_string(options.atol_vector.size()) + " entries, expected " +
+          std::to_string(n) + " (one per state)");
+    }
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double a = options.atol_vector[i];
+      if (!(a >= 0.0) || !std::isfinite(a)) {
+        bad("atol_vector[" + std::to_string(i) + "] must be a finite number >= 0, got " + formatTime(a));
+      }
+    }
+  } else if (!(options.atol >= 0.0) || !std::isfinite(options.atol)) {
+    bad("atol must be a finite number >= 0, got " + formatTime(options.atol));
+  }
+  if (!(options.max_step >= 0.0) || !std::isfinite(options.max_step)) {
+    bad("max_step must be a finite number >= 0 (0 = unlimited), got " + formatTime(options.max_step));
+  }
+  if (!(options.min_step >= 0.0) || !std::isfinite(options.min_step)) {
+    bad("min_step must be a finite number >= 0, got " + formatTime(options.min_step));
+  }
+  if (options.max_step > 0.0 && options.min_step > options.max_step) {
+    bad("min_step (" + formatTime(options.min_step) + ") exceeds max_step (" + formatTime(options.max_step) + ")");
+  }
+  if (!std::isfinite(options.initial_step)) bad("initial_step must be finite");
+  if (options.max_num_steps <= 0) {
+    bad("max_num_steps must be > 0, got " + std::to_string(options.max_num_steps));
+  }
+  const int order_limit = options.method == Method::BDF ? 5 : 12;
+  if (options.max_order < 0 || options.max_order > order_limit) {
+    bad("max_order must be 0 (default) or 1.." + std::to_string(order_limit) + " for " +
+        (options.method == Method::BDF ? "BDF" : "Adams") + ", got " + std::to_string(options.max_order));
+  }
+  if (options.stability_limit_detection && options.method != Method::BDF) {
+    bad("stability_limit_detection is only available with Method::BDF");
+  }
+
+  m.n = n;
+  m.rhs = std::move(rhs);
+  if (options.method == Method::BDF) m.jac = std::move(jacobian);
+  m.opts = std::move(options);
+
+  if (SUNContext_Create(nullptr, &m.ctx) != 0 || m.ctx == nullptr) {
+    throw Error(m.prefix() + ": SUNContext_Create failed");
+  }
+  m.y = N_VNew_Serial(n, m.ctx);
+  if (m.y == nullptr) throw Error(m.prefix() + ": allocation of the state vector failed");
+  m.mem = CVodeCreate(m.opts.method == Method::BDF ? CV_BDF : CV_ADAMS, m.ctx);
+  if (m.mem == nullptr) throw Error(m.prefix() + ": CVodeCreate failed");
+  m.check(CVodeSetErrHandlerFn(m.mem, &Impl::errCallback, &m), "CVodeSetErrHandlerFn");
+  m.check(CVodeSetUserData(m.mem, &m), "CVodeSetUserData");
+}
+
+CvodeIntegrator::~CvodeIntegrator() = default;
+CvodeIntegrator::CvodeIntegrator(CvodeIntegrator&&) noexcept = default;
+CvodeIntegrator& CvodeIntegrator::operator=(CvodeIntegrator&&) noexcept = default;
+
+void CvodeIntegrator::initialize(double t0, const Eigen::Ref<const Eigen::VectorXd>& y0) {
+  Impl& m = *impl_;
+  if (y0.size() != m.n) {
+    throw InputError(m.prefix() + ": initial state has " + std::to_string(y0.size()) + " entries, expected " +
+                     std::to_string(m.n));
+  }
+  if (!std::isfinite(t0)) throw InputError(m.prefix() + ": initial time must be finite");
+  if (!y0.allFinite()) throw InputError(m.prefix() + ": initial state contains NaN or Inf");
+
+  m.resetCapture();
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(m.y), m.n) = y0;
+  m.t0 = t0;
+  if (!m.initialized) {
+    m.firstInit(t0, m.y);
+    m.initialized = true;
+  } else {
+    if (!m.fresh) m.accumulate();
+    m.check(CVodeReInit(m.mem, t0, m.y), "CVodeReInit");
+  }
+  m.fresh = true;
+  m.t_last = t0;
+}
+
+double CvodeIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out) {
+  Impl& m = *impl_;
+  if (!m.initialized) throw Error(m.prefix() + ": advance() called before initialize()");
+  if (y_out.size() != m.n) {
+    throw InputError(m.prefix() + ": output vector has " + std::to_string(y_out.size()) + " entries, expected " +
+                     std::to_string(m.n));
+  }
+  if (!std::isfinite(t_out)) throw InputError(m.prefix() + ": output time must be finite");
+
+  Eigen::Map<const Eigen::VectorXd> ym(N_VGetArrayPointer(m.y), m.n);
+  if (m.fresh && t_out == m.t0) {  // CVODE would reject tout == t0 (CV_TOO_CLOSE)
+    y_out = ym;
+    return m.t0;
+  }
+
+  m.resetCapture();
+  if (m.stop_set) {
+    m.check(CVodeSetStopTime(m.mem, m.stop_time), "CVodeSetStopTime");
+    m.cvode_tstop_touched = true;
+  } else if (m.cvode_tstop_touched) {
+    // SUNDIALS 6.4 has no CVodeClearStopTime: push the stop time out of reach in the direction of travel.
+    const double far = t_out >= m.t_last ? std::numeric_limits<double>::max() : -std::numeric_limits<double>::max();
+    m.check(CVodeSetStopTime(m.mem, far), "CVodeSetStopTime");
+  }
+
+  double t_ret = m.t_last;
+  const int flag = CVode(m.mem, t_out, m.y, &t_ret, CV_NORMAL);
+  m.fresh = false;
+  if (flag < 0 || m.callback_exception) {
+    m.t_last = m.cvodeTime();
+    m.fail("CVode", flag, m.t_last);
+  }
+  if (flag == CV_TSTOP_RETURN) m.stop_set = false;  // one-shot
+  m.t_last = t_ret;
+  y_out = ym;
+  return t_ret;
+}
+
+void CvodeIntegrator::setStopTime(double t_stop) {
+  if (!std::isfinite(t_stop)) throw InputError(impl_->prefix() + ": stop time must be finite");
+  impl_->stop_set = true;
+  impl_->stop_time = t_stop;
+}
+
+void CvodeIntegrator::clearStopTime() { impl_->stop_set = false; }
+
+double CvodeIntegrator::time() const { return impl_->t_last; }
+
+int CvodeIntegrator::size() const { return impl_->n; }
+
+SolverStats CvodeIntegrator::stats() const {
+  const SolverStats cur = impl_->segmentStats();
+  SolverStats s = impl_->base;
+  s.steps += cur.steps;
+  s.rhs_evals += cur.rhs_evals;
+  s.rhs_evals_jacobian += cur.rhs_evals_jacobian;
+  s.jac_evals += cur.jac_evals;
+  s.lin_setups += cur.lin_setups;
+  s.error_test_failures += cur.error_test_failures;
+  s.nonlinear_iterations += cur.nonlinear_iterations;
+  s.nonlinear_conv_failures += cur.nonlinear_conv_failures;
+  s.last_order = cur.last_order;
+  s.last_step = cur.last_step;
+  s.current_time = cur.current_time;
+  return s;
+}
+
+const CvodeOptions& CvodeIntegrator::options() const { return impl_->opts; }
+
+}  // namespace jointsim::sim
