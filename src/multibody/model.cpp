@@ -47,6 +47,12 @@ std::string BodyInertia::validate() const {
        << ev(0) << ", " << ev(1) << ", " << ev(2) << "] kg·m²";
     return os.str();
   }
+  // Principal moments of a real body satisfy I_a + I_b >= I_c (equality for a planar body).
+  if (mass > 0.0 && ev(0) + ev(1) < ev(2) * (1.0 - 1e-9)) {
+    os << "principal moments of inertia [" << ev(0) << ", " << ev(1) << ", " << ev(2)
+       << "] kg·m² violate the triangle inequality I1 + I2 >= I3 of a rigid body";
+    return os.str();
+  }
   if (mass == 0.0 && ev.minCoeff() < -1e-14 * scale) {
     os << "inertia tensor must be positive semi-definite, its eigenvalues are [" << ev(0) << ", "
        << ev(1) << ", " << ev(2) << "] kg·m²";

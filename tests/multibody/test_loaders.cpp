@@ -189,6 +189,12 @@ TEST(LoaderErrors, NonPositiveDefiniteInertia) {
   EXPECT_THAT(yamlError(text), AllOf(HasSubstr("robot.yaml:8: links[0].inertia:"), HasSubstr("positive definite")));
 }
 
+TEST(LoaderErrors, InertiaViolatingTriangleInequality) {
+  std::string text = kGoodChain;
+  text.replace(text.find("[0.01, 0.05, 0.05, 0, 0, 0]"), 27, "[0.01, 0.02, 0.05, 0, 0, 0]");
+  EXPECT_THAT(yamlError(text), AllOf(HasSubstr("robot.yaml:8: links[0].inertia:"), HasSubstr("triangle inequality")));
+}
+
 TEST(LoaderErrors, WrongTypeAndWrongLength) {
   std::string text = kGoodChain;
   text.replace(text.find("[-0.25, 0, 0]"), 13, "[-0.25, 0]");

@@ -25,8 +25,8 @@ struct BodyInertia {
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();     ///< inertia about the CoM, link-frame axes [kg·m²]
 
   /// Returns an empty string when the parameters are physical, otherwise the reason: negative or
-  /// non-finite mass, non-symmetric inertia, inertia not positive definite (mass > 0) or not positive
-  /// semi-definite (mass = 0).
+  /// non-finite mass, non-symmetric inertia, inertia not positive definite or violating the triangle
+  /// inequality of principal moments (mass > 0), or not positive semi-definite (mass = 0).
   std::string validate() const;
   /// This body's inertia re-expressed in a frame in which the link frame has placement X.
   BodyInertia transformed(const Placement& X) const;
