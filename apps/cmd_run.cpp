@@ -1,6 +1,29 @@
-// `jointsim run`: placeholder until the experiment runner lands (see below).
+// `jointsim run EXPERIMENT.yaml [-o DIR]`: runs an experiment file and reports where its outputs went.
+#include <cstdio>
+#include <memory>
+
 #include "cli_common.hpp"
+#include "jointsim/experiments/runner.hpp"
 
 namespace jointsim::cli {
-void addRunCommand(CLI::App&) {}
+
+void addRunCommand(CLI::App& app) {
+  struct Options {
+    std::string config, output_dir;
+  };
+  auto opt = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("run", "Run an experiment YAML file; writes DIR/<name>.csv and DIR/summary.json");
+  cmd->add_option("experiment", opt->config, "Experiment description (.yaml)")->required();
+  cmd->add_option("-o,--output-dir", opt->output_dir, "Output directory (default: out/<experiment name>/)");
+  cmd->callback([opt] {
+    experiments::RunOptions options;
+    options.output_dir = opt->output_dir;
+    const experiments::RunReport r = experiments::runExperimentFile(opt->config, options);
+    std::printf("%s: %s\n  log:     %s\n  summary: %s\n  simulated %.6g s in %.3g s wall time: real-time factor %.4g\n"
+                "  solver: %ld steps, %ld RHS evaluations, %ld error-test failures\n",
+                r.experiment.c_str(), r.status.c_str(), r.csv_path.c_str(), r.summary_path.c_str(), r.sim_time_s,
+                r.wall_time_s, r.real_time_factor, r.stats.steps, r.stats.rhs_evals, r.stats.error_test_failures);
+  });
+}
+
 }  // namespace jointsim::cli

@@ -1,0 +1,32 @@
+#pragma once
+/// \file
+/// Runs an experiment described by a YAML file (the library side of `jointsim run`): dispatches on
+/// `experiment.type`, writes `<output_dir>/<name>.csv` and `<output_dir>/summary.json`.
+/// Experiment types so far: `passive_robot` (see passive_robot.hpp and docs/experiments.md).
+
+#include <string>
+
+#include "jointsim/sim/cvode_integrator.hpp"
+
+namespace jointsim::experiments {
+
+struct RunOptions {
+  std::string output_dir;  ///< empty: out/<experiment name>/ relative to the working directory
+};
+
+struct RunReport {
+  std::string experiment;         ///< experiment name
+  std::string status;             ///< "ok" or "failed"
+  std::string csv_path;           ///< log file written (empty when failed)
+  std::string summary_path;       ///< summary.json written
+  double sim_time_s = 0.0;        ///< simulated time [s]
+  double wall_time_s = 0.0;       ///< wall-clock time [s]
+  double real_time_factor = 0.0;  ///< sim_time_s / wall_time_s
+  sim::SolverStats stats;
+};
+
+/// Loads, validates and runs the experiment. Bad input: InputError (nothing written). Solver failure:
+/// summary.json with status "failed" and the reason is written, no CSV, and the SolverError rethrown.
+RunReport runExperimentFile(const std::string& config_path, const RunOptions& options = {});
+
+}  // namespace jointsim::experiments

@@ -1,0 +1,43 @@
+#pragma once
+/// \file
+/// Output files that never appear half-written: data go to a temporary file beside the target, which is
+/// renamed into place only on commit(). A writer destroyed without commit() removes its temporary file.
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace jointsim::io {
+
+/// CSV with a header line of `name[unit]` columns and full double precision (%.17g) rows.
+class CsvWriter {
+ public:
+  /// Opens a temporary file next to `path`; throws jointsim::Error if the directory is not writable.
+  CsvWriter(std::string path, const std::vector<std::string>& header);
+  ~CsvWriter();
+  CsvWriter(const CsvWriter&) = delete;
+  CsvWriter& operator=(const CsvWriter&) = delete;
+
+  /// Appends one row; its size must equal the number of columns.
+  void writeRow(const Eigen::Ref<const Eigen::VectorXd>& row);
+  /// Flushes, closes and renames the temporary file to `path`. Throws jointsim::Error on I/O failure.
+  void commit();
+  size_t columns() const { return columns_; }
+  size_t rows() const { return rows_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_, tmp_path_;
+  std::FILE* file_ = nullptr;
+  size_t columns_ = 0, rows_ = 0;
+};
+
+/// Writes `content` to `path` through a temporary file and a rename.
+void writeFileAtomically(const std::string& path, const std::string& content);
+
+/// Creates a directory and its parents (no error if it exists); throws jointsim::Error on failure.
+void createDirectories(const std::string& path);
+
+}  // namespace jointsim::io

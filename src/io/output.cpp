@@ -1,0 +1,79 @@
+#include "jointsim/io/output.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <system_error>
+
+#include <unistd.h>
+
+#include "jointsim/common/error.hpp"
+
+namespace jointsim::io {
+namespace {
+std::string temporaryName(const std::string& path) {
+  return path + ".tmp." + std::to_string(static_cast<long>(::getpid()));
+}
+}  // namespace
+
+CsvWriter::CsvWriter(std::string path, const std::vector<std::string>& header)
+    : path_(std::move(path)), tmp_path_(temporaryName(path_)), columns_(header.size()) {
+  file_ = std::fopen(tmp_path_.c_str(), "w");
+  if (file_ == nullptr) throw Error(path_ + ": cannot write output file: " + std::strerror(errno));
+  for (size_t i = 0; i < header.size(); ++i) std::fprintf(file_, "%s%s", i ? "," : "", header[i].c_str());
+  std::fputc('\n', file_);
+}
+
+CsvWriter::~CsvWriter() {
+  if (file_ != nullptr) {
+    std::fclose(file_);
+    std::remove(tmp_path_.c_str());
+  }
+}
+
+void CsvWriter::writeRow(const Eigen::Ref<const Eigen::VectorXd>& row) {
+  if (static_cast<size_t>(row.size()) != columns_)
+    throw Error(path_ + ": row has " + std::to_string(row.size()) + " values, header has " + std::to_string(columns_));
+  for (Eigen::Index i = 0; i < row.size(); ++i) std::fprintf(file_, i ? ",%.17g" : "%.17g", row[i]);
+  std::fputc('\n', file_);
+  ++rows_;
+}
+
+void CsvWriter::commit() {
+  if (file_ == nullptr) throw Error(path_ + ": already committed");
+  const bool ok = std::fflush(file_) == 0 && std::ferror(file_) == 0;
+  const int close_rc = std::fclose(file_);
+  file_ = nullptr;
+  if (!ok || close_rc != 0) {
+    std::remove(tmp_path_.c_str());
+    throw Error(path_ + ": writing failed: " + std::strerror(errno));
+  }
+  if (std::rename(tmp_path_.c_str(), path_.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp_path_.c_str());
+    throw Error(path_ + ": cannot move output into place: " + why);
+  }
+}
+
+void writeFileAtomically(const std::string& path, const std::string& content) {
+  const std::string tmp = temporaryName(path);
+  std::FILE* f = std::fopen(tmp.c_str(), "w");
+  if (f == nullptr) throw Error(path + ": cannot write output file: " + std::strerror(errno));
+  const bool ok = std::fwrite(content.data(), 1, content.size(), f) == content.size();
+  if (std::fclose(f) != 0 || !ok) {
+    std::remove(tmp.c_str());
+    throw Error(path + ": writing failed");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw Error(path + ": cannot move output into place: " + std::strerror(errno));
+  }
+}
+
+void createDirectories(const std::string& path) {
+  std::error_code ec;
+  std::filesystem::create_directories(path, ec);
+  if (ec) throw Error(path + ": cannot create output directory: " + ec.message());
+}
+
+}  // namespace jointsim::io
