@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Quick start, command 2 (and CI): install what is missing, build, run the whole test suite with CTest.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/install-deps.sh
+scripts/build.sh
+ctest --test-dir build --output-on-failure -j "$(nproc)"
