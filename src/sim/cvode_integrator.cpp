@@ -90,8 +90,6 @@ struct CvodeIntegrator::Impl {
     if (ctx != nullptr) SUNContext_Free(&ctx);
   }
 
-  const std::string& componentLabel() const { return opts.component; }
-
   std::string prefix() const {
     std::string p = "CVODE integrator";
     if (!opts.component.empty()) p += " (" + opts.component + ")";
@@ -210,14 +208,14 @@ struct CvodeIntegrator::Impl {
       return -1;
     }
     if (self->opts.check_finite && !jm.allFinite()) {
-      for (Eigen::Index j = 0; j < self->n && !self->nonfinite_seen; ++j) {
-        for (Eigen::Index i = 0; i < self->n; ++i) {
+      bool found = false;
+      for (Eigen::Index j = 0; j < self->n && !found; ++j) {
+        for (Eigen::Index i = 0; i < self->n && !found; ++i) {
           if (!std::isfinite(jm(i, j))) {
             self->nonfinite_row = i;
             self->nonfinite_col = j;
             self->nonfinite_value = jm(i, j);
-            self->nonfinite_seen = true;
-            break;
+            found = true;
           }
         }
       }

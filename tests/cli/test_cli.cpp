@@ -126,6 +126,40 @@ TEST(CliDynamics, BadNumberUnknownFrameBadFiles) {
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one-line error: " << r.err;
 }
 
+// Every class of bad robot file gives exit status 2 and one line naming the file, line, key path and expectation.
+TEST(CliDynamics, BadRobotFilesExitTwoWithOneLine) {
+  const std::string good = R"(name: arm
+convention: dh_hayati
+links:
+  - name: link1
+    joint: {name: j1, a: 0.5, alpha: 0, d: 0, theta: 0}
+    mass: 2.0
+    com: [-0.25, 0, 0]
+    inertia: [0.01, 0.05, 0.05, 0, 0, 0]
+)";
+  struct Case {
+    std::string from, to, expected;
+  };
+  const std::vector<Case> cases = {
+      {"    mass: 2.0", "    mass: 2.0\n    colour: red", ":7: links[0].colour: unknown key 'colour'"},
+      {"    com: [-0.25, 0, 0]\n", "", ":4: links[0]: missing required key 'com'"},
+      {"mass: 2.0", "mass: -2.0", ":6: links[0].mass: mass must be >= 0 kg"},
+      {"[0.01, 0.05, 0.05, 0, 0, 0]", "[0.01, 0.05, 0.05, 0, 0, -0.1]", ":8: links[0].inertia: inertia tensor"},
+      {"a: 0.5", "a: [0.5]", ":5: links[0].joint.a: expected a length, got a list of 1 items"},
+  };
+  const auto path = std::filesystem::temp_directory_path() / "jointsim_cli_bad_robot.yaml";
+  for (const Case& c : cases) {
+    std::string text = good;
+    text.replace(text.find(c.from), c.from.size(), c.to);
+    std::ofstream(path) << text;
+    const Result r = runCli("dynamics --robot " + path.string() + " --q 0");
+    EXPECT_EQ(r.status, 2) << c.expected;
+    EXPECT_THAT(r.err, HasSubstr(path.string() + c.expected));
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_TRUE(r.out.empty());
+  }
+}
+
 TEST(CliRun, WritesCsvAndSummary) {
   const auto dir = std::filesystem::temp_directory_path() / "jointsim_run_test";
   std::filesystem::remove_all(dir);

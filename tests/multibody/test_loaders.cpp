@@ -228,3 +228,59 @@ joints:
 )";
   EXPECT_THAT(yamlError(unknown_child), HasSubstr("robot.yaml:6: joints[0].child: unknown link 'c'"));
 }
+
+TEST(Urdf, ContinuousPrismaticInertialRpyAndLimits) {
+  // The same robot built by hand: a continuous joint about a tilted axis, then a prismatic joint; the
+  // second link's inertial frame is offset and rotated (rpy) relative to the link frame.
+  const char* xml = R"(<robot name="rp">
+    <link name="base"/>
+    <link name="l1"><inertial><origin xyz="0.1 0 0.05" rpy="0 0 0"/><mass value="2"/>
+      <inertia ixx="0.02" iyy="0.03" izz="0.04" ixy="0" ixz="0" iyz="0"/></inertial></link>
+    <link name="l2"><inertial><origin xyz="0 0.2 0" rpy="0.3 -0.2 0.5"/><mass value="1.5"/>
+      <inertia ixx="0.01" iyy="0.015" izz="0.02" ixy="0.001" ixz="0" iyz="0.002"/></inertial></link>
+    <joint name="spin" type="continuous"><parent link="base"/><child link="l1"/>
+      <origin xyz="0 0 0.3" rpy="0.1 0.2 0.3"/><axis xyz="0 0.6 0.8"/></joint>
+    <joint name="slide" type="prismatic"><parent link="l1"/><child link="l2"/>
+      <origin xyz="0.4 0 0" rpy="0 0 0"/><axis xyz="1 0 0"/>
+      <limit lower="-0.1" upper="0.25" effort="200" velocity="0.5"/></joint>
+  </robot>)";
+  const Model urdf = loadUrdfString(xml, "rp.urdf");
+  ModelBuilder b("rp");
+  Placement X;
+  X.p = {0, 0, 0.3};
+  X.R = rotationFromRpy(0.1, 0.2, 0.3);
+  Eigen::Matrix3d I1 = Eigen::Vector3d(0.02, 0.03, 0.04).asDiagonal();
+  b.addLink("base", {"spin", JointType::Revolute, X, Eigen::Vector3d(0, 0.6, 0.8), 0, {}}, "l1", {2.0, {0.1, 0, 0.05}, I1});
+  Eigen::Matrix3d I2;
+  I2 << 0.01, 0.001, 0, 0.001, 0.015, 0.002, 0, 0.002, 0.02;
+  const Eigen::Matrix3d R2 = rotationFromRpy(0.3, -0.2, 0.5);
+  Placement X2;
+  X2.p = {0.4, 0, 0};
+  b.addLink("l1", {"slide", JointType::Prismatic, X2, Eigen::Vector3d::UnitX(), 0, {}}, "l2",
+            {1.5, {0, 0.2, 0}, R2 * I2 * R2.transpose()});
+  const Model ref = b.build();
+  ASSERT_EQ(urdf.nq, 2);
+  EXPECT_EQ(urdf.joint_types[0], JointType::Revolute);
+  EXPECT_EQ(urdf.joint_types[1], JointType::Prismatic);
+  EXPECT_TRUE(std::isinf(urdf.limits[0].lower)) << "continuous joints have no position limits";
+  EXPECT_DOUBLE_EQ(urdf.limits[1].lower, -0.1);
+  EXPECT_DOUBLE_EQ(urdf.limits[1].upper, 0.25);
+  EXPECT_DOUBLE_EQ(urdf.limits[1].velocity, 0.5);
+  EXPECT_DOUBLE_EQ(urdf.limits[1].effort, 200);
+  Data du(urdf), dr(ref);
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Eigen::VectorXd q = jointsim::test::randomVector(rng, 2, -1, 1);
+    const Eigen::VectorXd qd = jointsim::test::randomVector(rng, 2, -1, 1);
+    const Eigen::VectorXd qdd = jointsim::test::randomVector(rng, 2, -1, 1);
+    EXPECT_TRUE(MatricesNear(rnea(urdf, du, q, qd, qdd), rnea(ref, dr, q, qd, qdd), 1e-13));
+    EXPECT_TRUE(MatricesNear(crba(urdf, du, q), crba(ref, dr, q), 1e-13));
+  }
+}
+
+TEST(Urdf, UnsupportedJointTypeIsNamed) {
+  const char* xml = R"(<robot name="f"><link name="base"/><link name="b"/>
+    <joint name="free" type="floating"><parent link="base"/><child link="b"/></joint></robot>)";
+  EXPECT_THAT([&] { loadUrdfString(xml, "f.urdf"); },
+              ::testing::ThrowsMessage<InputError>(AllOf(HasSubstr("f.urdf: joint 'free'"), HasSubstr("not supported"))));
+}
