@@ -27,22 +27,43 @@ inline bool isRevolute(const Model& model, size_t i) {
   return model.joint_types[i] == JointType::Revolute;
 }
 
-// liMi = X_tree · X_joint(q).
+// liMi = X_tree · X_joint(q). Rotations about a coordinate axis (model.axis_kind 0, 1, 2) combine the
+// columns of X_tree.R directly; other axes use Rodrigues' formula.
 inline void jointPlacement(const Model& model, size_t i, double q, Placement& out) {
   const Placement& T = model.joint_placements[i];
   const Vector3d& k = model.axes[i];
-  if (isRevolute(model, i)) {
-    // Rodrigues: R_J = cos q 1 + sin q [k] + (1 − cos q) k kᵀ.
-    const double s = std::sin(q), c = std::cos(q), t = 1.0 - c;
-    Matrix3d RJ;
-    RJ << c + t * k.x() * k.x(), t * k.x() * k.y() - s * k.z(), t * k.x() * k.z() + s * k.y(),
-        t * k.x() * k.y() + s * k.z(), c + t * k.y() * k.y(), t * k.y() * k.z() - s * k.x(),
-        t * k.x() * k.z() - s * k.y(), t * k.y() * k.z() + s * k.x(), c + t * k.z() * k.z();
-    out.R.noalias() = T.R * RJ;
-    out.p = T.p;
-  } else {
+  if (!isRevolute(model, i)) {
     out.R = T.R;
     out.p.noalias() = T.p + T.R * (k * q);
+    return;
+  }
+  const double s = std::sin(q), c = std::cos(q);
+  out.p = T.p;
+  switch (model.axis_kind[i]) {
+    case 0:  // R_J = Rx(q): columns e0, (0, c, s), (0, −s, c)
+      out.R.col(0) = T.R.col(0);
+      out.R.col(1) = c * T.R.col(1) + s * T.R.col(2);
+      out.R.col(2) = c * T.R.col(2) - s * T.R.col(1);
+      return;
+    case 1:  // R_J = Ry(q): columns (c, 0, −s), e1, (s, 0, c)
+      out.R.col(0) = c * T.R.col(0) - s * T.R.col(2);
+      out.R.col(1) = T.R.col(1);
+      out.R.col(2) = s * T.R.col(0) + c * T.R.col(2);
+      return;
+    case 2:  // R_J = Rz(q): columns (c, s, 0), (−s, c, 0), e2
+      out.R.col(0) = c * T.R.col(0) + s * T.R.col(1);
+      out.R.col(1) = c * T.R.col(1) - s * T.R.col(0);
+      out.R.col(2) = T.R.col(2);
+      return;
+    default: {
+      // Rodrigues: R_J = cos q 1 + sin q [k] + (1 − cos q) k kᵀ.
+      const double t = 1.0 - c;
+      Matrix3d RJ;
+      RJ << c + t * k.x() * k.x(), t * k.x() * k.y() - s * k.z(), t * k.x() * k.z() + s * k.y(),
+          t * k.x() * k.y() + s * k.z(), c + t * k.y() * k.y(), t * k.y() * k.z() - s * k.x(),
+          t * k.x() * k.z() - s * k.y(), t * k.y() * k.z() + s * k.x(), c + t * k.z() * k.z();
+      out.R.noalias() = T.R * RJ;
+    }
   }
 }
 

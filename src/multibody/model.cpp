@@ -115,7 +115,11 @@ void Model::updateDerived() {
   mass.resize(n);
   first_moment.resize(n);
   inertia_origin.resize(n);
+  axis_kind.resize(n);
   for (size_t i = 0; i < n; ++i) {
+    axis_kind[i] = 3;
+    for (int a = 0; a < 3; ++a)
+      if (axes[i] == Eigen::Vector3d::Unit(a)) axis_kind[i] = a;
     const BodyInertia& I = inertias[i];
     mass[i] = I.mass;
     first_moment[i] = I.mass * I.com;

@@ -160,12 +160,17 @@ struct CvodeIntegrator::Impl {
 
   /// Check the return flag of a setup call.
   void check(int flag, const char* what) {
-    if (flag < 0) fail(what, flag, t0);
+    if (flag < 0) fail(what, flag, initialized ? cvodeTime() : t0);
   }
 
   // ------------------------------------------------------------------ C callbacks
   static int rhsCallback(realtype t, N_Vector yv, N_Vector ydotv, void* user_data) noexcept {
     auto* self = static_cast<Impl*>(user_data);
+    // Once a callback has thrown, fail every further call without running user code. Besides not
+    // re-entering a component in an unknown state, this is needed because the SUNDIALS 6.4
+    // fixed-point solver (Adams) treats a failing RHS as a recoverable convergence failure and would
+    // otherwise keep retrying with smaller steps until max_num_steps.
+    if (self->callback_exception) return -1;
     const Eigen::Map<const Eigen::VectorXd> ym(N_VGetArrayPointer(yv), self->n);
     Eigen::Map<Eigen::VectorXd> ydm(N_VGetArrayPointer(ydotv), self->n);
     try {
@@ -195,6 +200,7 @@ struct CvodeIntegrator::Impl {
   static int jacCallback(realtype t, N_Vector yv, N_Vector fyv, SUNMatrix J, void* user_data, N_Vector,
                          N_Vector, N_Vector) noexcept {
     auto* self = static_cast<Impl*>(user_data);
+    if (self->callback_exception) return -1;
     const Eigen::Map<const Eigen::VectorXd> ym(N_VGetArrayPointer(yv), self->n);
     const Eigen::Map<const Eigen::VectorXd> fm(N_VGetArrayPointer(fyv), self->n);
     // SUNDenseMatrix storage is column-major with leading dimension M = n.

@@ -74,6 +74,7 @@ struct Model {
   std::vector<double> mass;                   ///< (nq) [kg]
   std::vector<Eigen::Vector3d> first_moment;  ///< (nq) h = m c [kg·m]
   std::vector<Eigen::Matrix3d> inertia_origin;///< (nq) I_O [kg·m²]
+  std::vector<int> axis_kind;                 ///< (nq) 0, 1, 2: axis is +x, +y, +z exactly; 3: other
 
   /// Index of the joint with this name; throws InputError naming the known joints if absent.
   int jointIndex(const std::string& name) const;
