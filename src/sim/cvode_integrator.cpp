@@ -72,13 +72,16 @@ struct CvodeIntegrator::Impl {
   std::exception_ptr callback_exception;
   double callback_exception_time = kNaN;
   const char* callback_exception_source = "";  // "right-hand side" or "Jacobian"
+  bool poisoned = false;              // a callback failed fatally in this call: fail all further calls
   bool nonfinite_seen = false;
+  long nonfinite_count = 0;           // non-finite RHS/Jacobian results in this advance() call
   double nonfinite_time = kNaN;
   Eigen::Index nonfinite_row = -1;
   Eigen::Index nonfinite_col = -1;    // -1 for the RHS
   double nonfinite_value = 0.0;
   std::string cvode_message;          // last CVODE error text (from the error handler)
-  std::string cvode_warning;          // last CVODE warning text
+  std::string cvode_first_warning;    // first CVODE warning text in this call
+  std::string cvode_warning;          // last CVODE warning text in this call
   long cvode_warnings = 0;
 
   ~Impl() {
@@ -99,8 +102,11 @@ struct CvodeIntegrator::Impl {
   void resetCapture() {
     callback_exception = nullptr;
     callback_exception_time = kNaN;
+    poisoned = false;
     nonfinite_seen = false;
+    nonfinite_count = 0;
     cvode_message.clear();
+    cvode_first_warning.clear();
     cvode_warning.clear();
     cvode_warnings = 0;
   }
@@ -150,10 +156,14 @@ struct CvodeIntegrator::Impl {
       } else {
         msg << "J(" << nonfinite_row << ", " << nonfinite_col << ")";
       }
-      msg << " = " << nonfinite_value << ") at t = " << formatTime(nonfinite_time) << " s";
+      msg << " = " << nonfinite_value << ") at t = " << formatTime(nonfinite_time) << " s, "
+          << nonfinite_count << " time(s) in this call";
+      if (nonfinite_count > opts.max_nonfinite_retries) msg << " (retry limit max_nonfinite_retries exceeded)";
     }
     if (cvode_warnings > 0) {
-      msg << "; last of " << cvode_warnings << " CVODE warning(s): " << cvode_warning;
+      msg << "; CVODE warning";
+      if (cvode_warnings > 1) msg << "s (" << cvode_warnings << "), first: " << cvode_first_warning << "; last";
+      msg << ": " << cvode_warning;
     }
     throw SolverError(msg.str(), t, name, component);
   }
@@ -164,13 +174,26 @@ struct CvodeIntegrator::Impl {
   }
 
   // ------------------------------------------------------------------ C callbacks
+  /// Record a non-finite RHS/Jacobian result at t: recoverable (CVODE retries with a smaller step)
+  /// until the per-call budget is spent, then unrecoverable. The budget stops CVODE from creeping
+  /// towards a time beyond which the RHS is always non-finite until max_num_steps is exhausted.
+  int nonfiniteResult(double t) noexcept {
+    nonfinite_seen = true;
+    nonfinite_time = t;
+    if (++nonfinite_count > opts.max_nonfinite_retries) {
+      poisoned = true;
+      return -1;
+    }
+    return 1;
+  }
+
   static int rhsCallback(realtype t, N_Vector yv, N_Vector ydotv, void* user_data) noexcept {
     auto* self = static_cast<Impl*>(user_data);
     // Once a callback has thrown, fail every further call without running user code. Besides not
     // re-entering a component in an unknown state, this is needed because the SUNDIALS 6.4
     // fixed-point solver (Adams) treats a failing RHS as a recoverable convergence failure and would
     // otherwise keep retrying with smaller steps until max_num_steps.
-    if (self->callback_exception) return -1;
+    if (self->poisoned) return -1;
     const Eigen::Map<const Eigen::VectorXd> ym(N_VGetArrayPointer(yv), self->n);
     Eigen::Map<Eigen::VectorXd> ydm(N_VGetArrayPointer(ydotv), self->n);
     try {
@@ -179,6 +202,7 @@ struct CvodeIntegrator::Impl {
       self->callback_exception = std::current_exception();
       self->callback_exception_time = t;
       self->callback_exception_source = "right-hand side";
+      self->poisoned = true;
       return -1;  // unrecoverable
     }
     if (self->opts.check_finite && !ydm.allFinite()) {
@@ -189,10 +213,8 @@ struct CvodeIntegrator::Impl {
           break;
         }
       }
-      self->nonfinite_seen = true;
       self->nonfinite_col = -1;
-      self->nonfinite_time = t;
-      return 1;  // recoverable: CVODE retries with a smaller step
+      return self->nonfiniteResult(t);
     }
     return 0;
   }
@@ -200,7 +222,7 @@ struct CvodeIntegrator::Impl {
   static int jacCallback(realtype t, N_Vector yv, N_Vector fyv, SUNMatrix J, void* user_data, N_Vector,
                          N_Vector, N_Vector) noexcept {
     auto* self = static_cast<Impl*>(user_data);
-    if (self->callback_exception) return -1;
+    if (self->poisoned) return -1;
     const Eigen::Map<const Eigen::VectorXd> ym(N_VGetArrayPointer(yv), self->n);
     const Eigen::Map<const Eigen::VectorXd> fm(N_VGetArrayPointer(fyv), self->n);
     // SUNDenseMatrix storage is column-major with leading dimension M = n.
@@ -211,6 +233,7 @@ struct CvodeIntegrator::Impl {
       self->callback_exception = std::current_exception();
       self->callback_exception_time = t;
       self->callback_exception_source = "Jacobian";
+      self->poisoned = true;
       return -1;
     }
     if (self->opts.check_finite && !jm.allFinite()) {
@@ -225,9 +248,7 @@ struct CvodeIntegrator::Impl {
           }
         }
       }
-      self->nonfinite_seen = true;
-      self->nonfinite_time = t;
-      return 1;
+      return self->nonfiniteResult(t);
     }
     return 0;
   }
@@ -239,6 +260,7 @@ struct CvodeIntegrator::Impl {
       std::string text = std::string("[") + (module ? module : "") + " " + (function ? function : "") + "] " +
                          (msg ? msg : "");
       if (error_code == CV_WARNING) {
+        if (self->cvode_warnings == 0) self->cvode_first_warning = text;
         self->cvode_warning = std::move(text);
         ++self->cvode_warnings;
       } else {
@@ -363,6 +385,9 @@ CvodeIntegrator::CvodeIntegrator(int n, RhsFunction rhs, CvodeOptions options, J
     bad("min_step (" + formatTime(options.min_step) + ") exceeds max_step (" + formatTime(options.max_step) + ")");
   }
   if (!std::isfinite(options.initial_step)) bad("initial_step must be finite");
+  if (options.max_nonfinite_retries < 0) {
+    bad("max_nonfinite_retries must be >= 0, got " + std::to_string(options.max_nonfinite_retries));
+  }
   if (options.max_num_steps <= 0) {
     bad("max_num_steps must be > 0, got " + std::to_string(options.max_num_steps));
   }
@@ -457,9 +482,22 @@ double CvodeIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out)
 }
 
 void CvodeIntegrator::setStopTime(double t_stop) {
-  if (!std::isfinite(t_stop)) throw InputError(impl_->prefix() + ": stop time must be finite");
-  impl_->stop_set = true;
-  impl_->stop_time = t_stop;
+  Impl& m = *impl_;
+  if (!std::isfinite(t_stop)) throw InputError(m.prefix() + ": stop time must be finite");
+  if (m.initialized) {
+    // Validate now (CVODE rejects a stop time behind its internal time) so the error surfaces here.
+    m.cvode_message.clear();
+    const int flag = CVodeSetStopTime(m.mem, t_stop);
+    m.cvode_tstop_touched = true;
+    if (flag < 0) {
+      throw InputError(m.prefix() + ": stop time " + formatTime(t_stop) + " s rejected (" + flagName(flag) +
+                       "): " + m.cvode_message + " CVODE's internal time is " + formatTime(m.cvodeTime()) +
+                       " s; internal steps overshoot the requested output time, so set the stop time before "
+                       "advancing past it (or restart with initialize())");
+    }
+  }
+  m.stop_set = true;
+  m.stop_time = t_stop;
 }
 
 void CvodeIntegrator::clearStopTime() { impl_->stop_set = false; }

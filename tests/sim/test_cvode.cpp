@@ -50,7 +50,8 @@ TEST_P(ExponentialDecay, MatchesClosedFormAtSeveralTimes) {
     EXPECT_EQ(reached, t);
     EXPECT_EQ(cv.time(), t);
     const double exact = y0 * std::exp(-k * t);
-    EXPECT_LT(std::abs(y[0] - exact) / exact, 1e-8) << methodName(GetParam()) << " t=" << t;
+    // Global error: local tolerance 1e-10 accumulated over the steps taken.
+    EXPECT_LT(std::abs(y[0] - exact) / exact, 5e-8) << methodName(GetParam()) << " t=" << t;
   }
   const auto s = cv.stats();
   EXPECT_GT(s.steps, 10);
@@ -214,8 +215,10 @@ TEST(Robertson, MatchesPublishedAndHighAccuracyReference) {
       const Eigen::Vector3d& y = run->y[k];
       for (int i : {0, 2}) {
         EXPECT_NEAR(y[i], ref.y[k][i], 1e-3 * std::abs(ref.y[k][i]) + 1e-6) << "component " << i;
-        EXPECT_NEAR(y[i], pub[i], 2e-3 * std::abs(pub[i]) + 1e-6) << "component " << i;
       }
+      // Same method and tolerances as the example: its printed values are reproduced closely (the
+      // example also does root finding, which perturbs the step sequence slightly).
+      for (int i : {0, 1, 2}) EXPECT_NEAR(y[i], pub[i], 5e-4 * pub[i]) << "component " << i;
       EXPECT_NEAR(y[1], ref.y[k][1], 1e-2 * ref.y[k][1]);
       EXPECT_NEAR(y.sum(), 1.0, 1e-6);
     }
@@ -345,13 +348,44 @@ TEST(CvodeErrors, NaNLaterIsReportedNearItsTime) {
       FAIL() << "expected SolverError";
     } catch (const SolverError& e) {
       SCOPED_TRACE(e.what());
-      EXPECT_TRUE(e.flag() == "CV_REPTD_RHSFUNC_ERR" || e.flag() == "CV_TOO_MUCH_WORK" ||
-                  e.flag() == "CV_TOO_CLOSE" || e.flag() == "CV_CONV_FAILURE")
-          << e.flag();
+      // After max_nonfinite_retries the RHS failure becomes unrecoverable. (The SUNDIALS 6.4
+      // fixed-point solver used with Adams reports that as a convergence failure.)
+      EXPECT_EQ(e.flag(), method == Method::BDF ? "CV_RHSFUNC_FAIL" : "CV_CONV_FAILURE");
       EXPECT_TRUE(contains(e.what(), e.flag()));
-      EXPECT_TRUE(contains(e.what(), "non-finite"));
+      EXPECT_TRUE(contains(e.what(), "non-finite value (ydot[0] = nan)"));
+      EXPECT_TRUE(contains(e.what(), "max_nonfinite_retries"));
       EXPECT_NEAR(e.time(), 0.3, 1e-3);
+      EXPECT_LT(cv.stats().steps, 1000);  // fails promptly instead of creeping to max_num_steps
     }
+  }
+}
+
+TEST(CvodeErrors, NaNFromOversizedTrialStepIsRecovered) {
+  // y' = -sqrt(y), y(0) = 1: y = (1 - t/2)^2 for t <= 2. Trial steps that overshoot y < 0 give NaN;
+  // CVODE must retry with smaller steps and still reach the accurate solution.
+  for (Method method : {Method::BDF, Method::Adams}) {
+    SCOPED_TRACE(methodName(method));
+    CvodeOptions opt;
+    opt.method = method;
+    opt.rtol = 1e-6;
+    opt.atol = 1e-10;
+    long nans = 0;
+    RhsFunction f = [&nans](double, const auto& y, auto ydot) {
+      ydot[0] = -std::sqrt(y[0]);
+      if (std::isnan(ydot[0])) ++nans;
+    };
+    CvodeIntegrator cv(1, f, opt);
+    cv.initialize(0.0, Eigen::VectorXd::Ones(1));
+    Eigen::VectorXd y(1);
+    EXPECT_EQ(cv.advance(1.9, y), 1.9);
+    EXPECT_GT(nans, 0);
+    EXPECT_NEAR(y[0], 0.0025, 1e-6);
+
+    // With a zero retry budget the first NaN is fatal.
+    opt.max_nonfinite_retries = 0;
+    CvodeIntegrator strict(1, f, opt);
+    strict.initialize(0.0, Eigen::VectorXd::Ones(1));
+    EXPECT_THROW(strict.advance(1.9, y), SolverError);
   }
 }
 
@@ -368,7 +402,8 @@ TEST(CvodeErrors, TooMuchWorkThenContinue) {
   } catch (const SolverError& e) {
     EXPECT_EQ(e.flag(), "CV_TOO_MUCH_WORK");
     EXPECT_TRUE(contains(e.what(), "CV_TOO_MUCH_WORK"));
-    EXPECT_NEAR(e.time(), 0.2, 1e-9);  // 20 steps of at most 0.01 s
+    EXPECT_GT(e.time(), 0.0);
+    EXPECT_LE(e.time(), 0.2 + 1e-12);  // 20 steps of at most 0.01 s
     EXPECT_DOUBLE_EQ(cv.time(), e.time());
   }
   // The integrator is still usable: each call does up to 20 more steps.
@@ -518,14 +553,29 @@ TEST(CvodeStopTime, IntegrationDoesNotPassStopTime) {
   EXPECT_NEAR(y[0], 0.7 - 1.3, 1e-9);
 
   // clearStopTime removes a pending stop time.
-  cv.setStopTime(2.5);
+  double t_internal = cv.stats().current_time;
+  ASSERT_GT(t_internal, 2.0);  // CV_NORMAL overshoots t_out
+  cv.setStopTime(t_internal + 0.1);
   cv.clearStopTime();
-  EXPECT_EQ(cv.advance(3.0, y), 3.0);
-  // And a new one after a cleared one is honoured again.
+  EXPECT_EQ(cv.advance(t_internal + 1.0, y), t_internal + 1.0);
+  EXPECT_NEAR(y[0], 0.7 - (t_internal + 1.0 - 0.7), 1e-9);
+  // A stop time that CVODE has already stepped past internally is rejected up front.
+  const double t_last = cv.time();
+  t_internal = cv.stats().current_time;
+  ASSERT_GT(t_internal, t_last);
+  try {
+    cv.setStopTime(0.5 * (t_last + t_internal));
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(), "behind current t"));
+  }
+  // And a new valid one after a cleared one is honoured again.
+  const double t_stop = t_internal + 0.25;
   t_max_seen = -1.0;
-  cv.setStopTime(3.25);
-  EXPECT_EQ(cv.advance(4.0, y), 3.25);
-  EXPECT_LE(t_max_seen, 3.25);
+  cv.setStopTime(t_stop);
+  EXPECT_EQ(cv.advance(t_stop + 1.0, y), t_stop);
+  EXPECT_LE(t_max_seen, t_stop);
+  EXPECT_NEAR(y[0], 0.7 - (t_stop - 0.7), 1e-9);
 }
 
 // ----------------------------------------------------------------------------- misc

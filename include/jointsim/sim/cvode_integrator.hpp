@@ -59,11 +59,18 @@ struct CvodeOptions {
   /// tiny steps or go unstable; the detection lowers the order when it sees this. Only valid with
   /// Method::BDF (InputError with Adams).
   bool stability_limit_detection = false;
-  /// Treat a non-finite (NaN/Inf) derivative or Jacobian entry as a recoverable failure of the
-  /// right-hand side: CVODE retries with a smaller step and, if the problem persists, fails with
-  /// CV_FIRST_RHSFUNC_ERR / CV_REPTD_RHSFUNC_ERR (or CV_LSETUP_FAIL for the Jacobian), the
-  /// SolverError naming the offending component index. Costs one pass over ydot per evaluation.
+  /// Check every derivative and Jacobian for NaN/Inf entries. A non-finite result is reported to
+  /// CVODE as a recoverable failure (it retries with a smaller step, which helps when an oversized
+  /// trial step left the physical range); see max_nonfinite_retries. The resulting SolverError names
+  /// the offending entry (ydot[i] or J(i, j)) and time. Costs one pass over ydot (and J) per
+  /// evaluation. When false, NaNs reach CVODE unchecked (typically error-test or convergence failures).
   bool check_finite = true;
+  /// Number of non-finite results tolerated (as recoverable) per advance() call, >= 0. The next one
+  /// is unrecoverable and advance() fails promptly, typically with CV_RHSFUNC_FAIL (at the first
+  /// evaluation: CV_FIRST_RHSFUNC_ERR; repeated failures on one step: CV_REPTD_RHSFUNC_ERR; Jacobian:
+  /// CV_LSETUP_FAIL). Without this budget, an RHS that is NaN for all t beyond some time makes CVODE
+  /// creep towards that time until max_num_steps is spent. 0 = every non-finite result is fatal.
+  int max_nonfinite_retries = 100;
   /// Name of the simulated system, used in error messages (e.g. "ur5 multibody"). May be empty.
   std::string component;
 };
@@ -141,7 +148,10 @@ class CvodeIntegrator {
 
   /// Never step past t_stop [s]: advance() returns at t_stop exactly if t_out lies beyond it. The
   /// stop time is one-shot: it is cleared once advance() has returned at it (as in SUNDIALS >= 6.5).
-  /// May be set before initialize(). \throws InputError if t_stop is not finite.
+  /// May be set before initialize(). Because CVODE's internal steps overshoot the requested output
+  /// time (see SolverStats::current_time), a stop time must be set before the integrator has stepped
+  /// past it; initialize() resets the internal time.
+  /// \throws InputError if t_stop is not finite or CVODE has already stepped past it.
   void setStopTime(double t_stop);
   /// Remove a stop time set with setStopTime().
   void clearStopTime();
