@@ -305,16 +305,18 @@ struct CvodeIntegrator::Impl {
   }
 
   /// Add the counters of the current segment to `base` (before a CVodeReInit resets them).
-  void accumulate() {
-    const SolverStats cur = segmentStats();
-    base.steps += cur.steps;
-    base.rhs_evals += cur.rhs_evals;
-    base.rhs_evals_jacobian += cur.rhs_evals_jacobian;
-    base.jac_evals += cur.jac_evals;
-    base.lin_setups += cur.lin_setups;
-    base.error_test_failures += cur.error_test_failures;
-    base.nonlinear_iterations += cur.nonlinear_iterations;
-    base.nonlinear_conv_failures += cur.nonlinear_conv_failures;
+  void accumulate() { addCounters(base, segmentStats()); }
+
+  /// Adds the event counters of `from` to `into` (order, step and time are not counters).
+  static void addCounters(SolverStats& into, const SolverStats& from) {
+    into.steps += from.steps;
+    into.rhs_evals += from.rhs_evals;
+    into.rhs_evals_jacobian += from.rhs_evals_jacobian;
+    into.jac_evals += from.jac_evals;
+    into.lin_setups += from.lin_setups;
+    into.error_test_failures += from.error_test_failures;
+    into.nonlinear_iterations += from.nonlinear_iterations;
+    into.nonlinear_conv_failures += from.nonlinear_conv_failures;
   }
 
   /// Counters of the current segment (zero if CVode was not called since the last (Re)Init: the
@@ -509,14 +511,7 @@ int CvodeIntegrator::size() const { return impl_->n; }
 SolverStats CvodeIntegrator::stats() const {
   const SolverStats cur = impl_->segmentStats();
   SolverStats s = impl_->base;
-  s.steps += cur.steps;
-  s.rhs_evals += cur.rhs_evals;
-  s.rhs_evals_jacobian += cur.rhs_evals_jacobian;
-  s.jac_evals += cur.jac_evals;
-  s.lin_setups += cur.lin_setups;
-  s.error_test_failures += cur.error_test_failures;
-  s.nonlinear_iterations += cur.nonlinear_iterations;
-  s.nonlinear_conv_failures += cur.nonlinear_conv_failures;
+  Impl::addCounters(s, cur);
   s.last_order = cur.last_order;
   s.last_step = cur.last_step;
   s.current_time = cur.current_time;
