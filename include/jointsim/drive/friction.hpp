@@ -1,0 +1,39 @@
+#pragma once
+/// \file
+/// Interface of friction models acting on one shaft (motor side or output side).
+///
+/// The friction torque is returned as the torque OPPOSING the motion: a shaft of inertia J obeys
+/// J q̈ = τ_driving − τ_friction, so τ_friction > 0 while sliding with v > 0.
+/// `driving_torque` is the sum of all other torques on that shaft (used by models with true sticking,
+/// e.g. the Modelica BearingFriction semantics; others ignore it). evaluate() is pure and allocation-free.
+
+#include <string>
+#include <vector>
+
+namespace jointsim::drive {
+
+struct FrictionInput {
+  double v = 0.0;               ///< sliding velocity of the shaft [rad/s]
+  double driving_torque = 0.0;  ///< sum of all non-friction torques on the shaft [N·m]
+};
+
+class Friction {
+ public:
+  virtual ~Friction() = default;
+  /// Short type name ("coulomb_viscous", "table", "stribeck", "dahl", "lugre", "lugre_ur5").
+  virtual std::string type() const = 0;
+  /// Number of internal states (bristle deflection z for Dahl and LuGre).
+  virtual int stateSize() const { return 0; }
+  /// Initial internal state (stateSize() values), at rest: zeros unless documented otherwise.
+  virtual void initialState(double* z) const {
+    for (int i = 0; i < stateSize(); ++i) z[i] = 0.0;
+  }
+  /// Friction torque [N·m] (opposing motion) and the internal state derivative zdot. Pure.
+  virtual double evaluate(const FrictionInput& in, const double* z, double* zdot) const = 0;
+  /// Steady-state friction torque at constant sliding velocity v (the static map) [N·m].
+  virtual double steadyState(double v) const = 0;
+  /// Names with units of the internal states, e.g. "z[rad]".
+  virtual std::vector<std::string> stateNames() const { return {}; }
+};
+
+}  // namespace jointsim::drive
