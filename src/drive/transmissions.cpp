@@ -1,0 +1,123 @@
+#include "jointsim/drive/transmissions.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <Eigen/LU>
+
+#include "jointsim/common/error.hpp"
+
+namespace jointsim::drive {
+namespace {
+void requirePositive(double v, const std::string& name, const char* unit) {
+  if (!(v > 0.0) || !std::isfinite(v))
+    throw InputError(name + ": expected a finite value > 0 " + unit + ", got " + std::to_string(v));
+}
+void requireNonNegative(double v, const std::string& name, const char* unit) {
+  if (!(v >= 0.0) || !std::isfinite(v))
+    throw InputError(name + ": expected a finite value >= 0 " + unit + ", got " + std::to_string(v));
+}
+
+// Deflection and its rate on the compliance side, and the map from the side torque to the ports.
+struct SideKinematics {
+  double delta, delta_dot;
+};
+inline SideKinematics deflection(const ShaftPorts& p, double N, ComplianceSide side) {
+  if (side == ComplianceSide::Motor) return {p.q_in - N * p.q_out, p.qd_in - N * p.qd_out};
+  return {p.q_in / N - p.q_out, p.qd_in / N - p.qd_out};
+}
+inline PortTorques portTorques(double tau_side, double N, ComplianceSide side) {
+  if (side == ComplianceSide::Motor) return {tau_side, N * tau_side};
+  return {tau_side / N, tau_side};
+}
+}  // namespace
+
+RigidGear::RigidGear(double ratio) : N_(ratio) { requirePositive(ratio, "ratio", "(-)"); }
+
+void ElasticGearParams::validate() const {
+  requirePositive(ratio, "ratio", "(-)");
+  requirePositive(stiffness, "stiffness", "N·m/rad");
+  requireNonNegative(damping, "damping", "N·m·s/rad");
+}
+
+ElasticGear::ElasticGear(const ElasticGearParams& params) : p_(params) { p_.validate(); }
+
+PortTorques ElasticGear::evaluate(const ShaftPorts& ports, const double*, double*) const {
+  const SideKinematics k = deflection(ports, p_.ratio, p_.side);
+  return portTorques(p_.stiffness * k.delta + p_.damping * k.delta_dot, p_.ratio, p_.side);
+}
+
+double ElasticGear::storedEnergy(const ShaftPorts& ports, const double*) const {
+  const double d = deflection(ports, p_.ratio, p_.side).delta;
+  return 0.5 * p_.stiffness * d * d;
+}
+
+void ElastoBacklashParams::validate() const {
+  requirePositive(ratio, "ratio", "(-)");
+  requirePositive(stiffness, "stiffness", "N·m/rad");
+  requireNonNegative(damping, "damping", "N·m·s/rad");
+  requireNonNegative(backlash, "backlash", "rad");
+}
+
+ElastoBacklash::ElastoBacklash(const ElastoBacklashParams& params) : p_(params) { p_.validate(); }
+
+double ElastoBacklash::contactTorque(double delta, double delta_dot) const {
+  const double c = p_.stiffness, b = p_.backlash;
+  const double tau_d = p_.damping * delta_dot;
+  if (b <= 1e-10) return c * delta + tau_d;
+  const double half = 0.5 * b;
+  if (delta > half) {
+    const double tau_c = c * (delta - half);
+    return tau_c + tau_d <= 0.0 ? 0.0 : tau_c + std::min(tau_c, tau_d);
+  }
+  if (delta < -half) {
+    const double tau_c = c * (delta + half);
+    return tau_c + tau_d >= 0.0 ? 0.0 : tau_c + std::max(tau_c, tau_d);
+  }
+  return 0.0;  // inside the gap
+}
+
+PortTorques ElastoBacklash::evaluate(const ShaftPorts& ports, const double*, double*) const {
+  const SideKinematics k = deflection(ports, p_.ratio, p_.side);
+  return portTorques(contactTorque(k.delta, k.delta_dot), p_.ratio, p_.side);
+}
+
+double ElastoBacklash::storedEnergy(const ShaftPorts& ports, const double*) const {
+  const double d = deflection(ports, p_.ratio, p_.side).delta;
+  const double s = std::max(0.0, std::abs(d) - 0.5 * p_.backlash);
+  return 0.5 * p_.stiffness * s * s;
+}
+
+CouplingMatrix::CouplingMatrix(const Eigen::MatrixXd& G) : G_(G) {
+  if (G.rows() != G.cols() || G.rows() == 0)
+    throw InputError("coupling matrix: expected a non-empty square matrix, got " + std::to_string(G.rows()) + "x" +
+                     std::to_string(G.cols()));
+  if (!G.allFinite()) throw InputError("coupling matrix: entries must be finite");
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(G);
+  if (!lu.isInvertible()) throw InputError("coupling matrix: must be invertible (each motor drives the joints independently)");
+  Ginv_ = lu.inverse();
+}
+
+Eigen::VectorXd CouplingMatrix::jointTorques(const Eigen::VectorXd& tau_motor) const {
+  return Ginv_.transpose() * tau_motor;
+}
+
+Eigen::MatrixXd CouplingMatrix::reflectedInertia(const Eigen::VectorXd& motor_inertias) const {
+  return Ginv_.transpose() * motor_inertias.asDiagonal() * Ginv_;
+}
+
+Eigen::Matrix3d CouplingMatrix::irb140Wrist() {
+  // MODEL_REFERENCE §2.6 (000 Listing 4.1, spaces inside numbers of the extraction removed).
+  const double a = 6649.0 / 110.0, b = 207675.0 / 3190.0, c = 486720.0 / 7975.0;
+  Eigen::Matrix3d G = Eigen::Matrix3d::Zero();
+  G(0, 0) = 110.0 / 6649.0;
+  G(1, 0) = 71.0 / (22.0 * a * b);
+  G(1, 1) = 3190.0 / 207675.0;
+  G(2, 0) = (71.0 * 243360.0 * 22.0 + b * 64.0 * 22.0 * 4147.0) / (22.0 * 4147.0 * 22.0 * a * b * c);
+  G(2, 1) = 243360.0 / (4147.0 * b * c);
+  G(2, 2) = 7975.0 / 486720.0;
+  return G;
+}
+
+}  // namespace jointsim::drive
