@@ -1,0 +1,107 @@
+#pragma once
+/// \file
+/// Joint test rig: one drive — motor (torque source or DC electrics), transmission, friction — turning a
+/// load inertia or clamped at its output (seed 001's clamping bench, seed 004's friction-map bench).
+///
+/// State vector (in this order, absent parts skipped):
+///   [q_m, qd_m]            motor shaft angle [rad] and velocity [rad/s]
+///   [i]                    motor current [A]            (voltage input, or PI with voltage output)
+///   [x_transmission...]    transmission internal states (e.g. strain-wave gear)
+///   [z_friction...]        friction internal states (LuGre, Dahl)
+///   [q_l, qd_l]            output shaft angle and velocity (compliant transmission, free load)
+///   [e_int]                integral of the velocity error [rad] (velocity PI input)
+/// A rigid transmission merges the shafts (q_l = q_m / N); a clamped output holds q_l = qd_l = 0.
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "jointsim/control/profile.hpp"
+#include "jointsim/drive/dc_motor.hpp"
+#include "jointsim/drive/friction.hpp"
+#include "jointsim/drive/transmission.hpp"
+#include "jointsim/sim/cvode_integrator.hpp"
+
+namespace jointsim::experiments {
+
+enum class RigInput { MotorTorque, Voltage, VelocityPI };
+enum class Side { Motor, Output };
+
+/// Velocity PI loop (seed 004's friction-map measurement): u = kp e + ki ∫e, e = ω_ref − ω_measured,
+/// clamped to ±limit with conditional integration (anti-windup).
+struct VelocityPi {
+  double kp = 1.0;            ///< proportional gain [N·m·s/rad] (torque output) or [V·s/rad] (voltage output)
+  double ki = 10.0;           ///< integral gain [N·m/rad] or [V/rad]
+  double limit = 1e9;         ///< output saturation [N·m] or [V], > 0
+  bool voltage_output = false;///< false: u is the motor torque; true: u is the voltage command
+  Side measure = Side::Motor; ///< which shaft's velocity is controlled
+};
+
+struct JointRigSetup {
+  std::string name = "joint_rig";
+  std::optional<drive::DcMotorParams> motor;     ///< electrics (needed for voltage input / voltage PI)
+  double rotor_inertia = 1e-3;                   ///< J_m [kg·m²] when `motor` is absent (else motor->J_M)
+  std::shared_ptr<const drive::Transmission> transmission;
+  std::shared_ptr<const drive::Friction> friction;  ///< may be null
+  Side friction_side = Side::Motor;
+  bool clamped = false;                          ///< output held at q_l = 0
+  double load_inertia = 1.0;                     ///< J_l [kg·m²], > 0 unless clamped
+  double load_damping = 0.0;                     ///< viscous load b_l [N·m·s/rad], >= 0
+  RigInput input = RigInput::MotorTorque;
+  control::Profile profile = control::Profile::constant(0.0);  ///< torque [N·m], voltage [V] or ω_ref [rad/s]
+  VelocityPi pi;
+  double q_m0 = 0.0, qd_m0 = 0.0;                ///< initial motor angle [rad] and velocity [rad/s]
+  double q_l0 = 0.0, qd_l0 = 0.0;                ///< initial output angle/velocity (free compliant load)
+  double duration = 1.0;                         ///< [s]
+  double log_rate = 1000.0;                      ///< [Hz]
+  sim::CvodeOptions solver = defaultSolver();    ///< integrator settings
+  /// BDF (stiff drive modes), rtol 1e-8, atol 1e-10.
+  static sim::CvodeOptions defaultSolver();
+  /// Throws InputError for inconsistent settings (e.g. voltage input without motor, output friction on a
+  /// clamped output).
+  void validate() const;
+};
+
+/// The assembled rig: state layout, pure right-hand side and logged signals.
+class JointRig {
+ public:
+  explicit JointRig(JointRigSetup setup);
+  const JointRigSetup& setup() const { return s_; }
+  int stateSize() const { return n_; }
+  Eigen::VectorXd initialState() const;
+  /// ẏ = f(t, y). Pure; no allocation.
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const;
+  /// Logged signals at (t, y) in columns() order.
+  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const;
+  /// `name[unit]` of every logged column.
+  const std::vector<std::string>& columns() const { return columns_; }
+  /// Index of a column by its name without unit (e.g. "motor_torque"); throws if absent.
+  int column(const std::string& name) const;
+
+ private:
+  struct Eval;  // all algebraic signals at (t, y)
+  Eval evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* xdot_tr, double* zdot) const;
+  JointRigSetup s_;
+  double J_m_ = 0;
+  int n_ = 0, i_idx_ = -1, x_idx_ = -1, z_idx_ = -1, l_idx_ = -1, e_idx_ = -1;
+  int nx_ = 0, nz_ = 0;
+  std::optional<drive::DcMotor> motor_;
+  std::vector<std::string> columns_;
+};
+
+struct RigRunResult {
+  sim::SolverStats stats;
+  double sim_time_s = 0.0;
+  double wall_time_s = 0.0;
+  size_t samples = 0;
+};
+
+/// Simulates from t = 0 to setup().duration, restarting CVODE at the input profile's breakpoints, and
+/// hands every log row to `sink`. Throws SolverError on failure.
+RigRunResult simulateJointRig(const JointRig& rig, const std::function<void(const Eigen::VectorXd&)>& sink);
+
+}  // namespace jointsim::experiments
