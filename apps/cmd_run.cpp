@@ -10,14 +10,19 @@ namespace jointsim::cli {
 void addRunCommand(CLI::App& app) {
   struct Options {
     std::string config, output_dir;
+    std::vector<std::string> overrides;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("run", "Run an experiment YAML file; writes DIR/<name>.csv and DIR/summary.json");
   cmd->add_option("experiment", opt->config, "Experiment description (.yaml)")->required();
   cmd->add_option("-o,--output-dir", opt->output_dir, "Output directory (default: out/<experiment name>/)");
+  cmd->add_option("--set", opt->overrides, "Override a scalar of the experiment file: key.path=value (repeatable)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->callback([opt] {
     experiments::RunOptions options;
     options.output_dir = opt->output_dir;
+    options.overrides = opt->overrides;
     const experiments::RunReport r = experiments::runExperimentFile(opt->config, options);
     std::printf("%s: %s\n  log:     %s\n  summary: %s\n  simulated %.6g s in %.3g s wall time: real-time factor %.4g\n"
                 "  solver: %ld steps, %ld RHS evaluations, %ld error-test failures\n",

@@ -2,16 +2,19 @@
 /// \file
 /// Runs an experiment described by a YAML file (the library side of `jointsim run`): dispatches on
 /// `experiment.type`, writes `<output_dir>/<name>.csv` and `<output_dir>/summary.json`.
-/// Experiment types so far: `passive_robot` (see passive_robot.hpp and docs/experiments.md).
+/// Experiment types: `passive_robot` (passive_robot.hpp) and `joint_rig` (joint_rig.hpp); the file
+/// formats are described in docs/experiments.md.
 
 #include <string>
+#include <vector>
 
 #include "jointsim/sim/cvode_integrator.hpp"
 
 namespace jointsim::experiments {
 
 struct RunOptions {
-  std::string output_dir;  ///< empty: out/<experiment name>/ relative to the working directory
+  std::string output_dir;              ///< empty: out/<experiment name>/ relative to the working directory
+  std::vector<std::string> overrides;  ///< "key.path=value" (e.g. "load.inertia=2", "input.profile.values[1]=3")
 };
 
 struct RunReport {
