@@ -1,0 +1,235 @@
+#include "jointsim/drive/friction_models.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "jointsim/common/error.hpp"
+
+namespace jointsim::drive {
+namespace {
+
+// Parameter errors have the form "<model> parameter '<field>': expected <rule>, got <value>", where
+// <field> is spelled like the YAML key (friction_yaml.cpp relies on this to point at the key's line).
+std::string num(double v) {
+  std::ostringstream os;
+  os.precision(10);
+  os << v;
+  return os.str();
+}
+[[noreturn]] void badParameter(const char* model, const std::string& field, const std::string& rule, double value) {
+  throw InputError(std::string(model) + " parameter '" + field + "': expected " + rule + ", got " + num(value));
+}
+void requirePositive(const char* model, const std::string& field, double v, const char* unit) {
+  if (!(v > 0.0) || !std::isfinite(v)) badParameter(model, field, std::string("a finite value > 0 ") + unit, v);
+}
+void requireNonNegative(const char* model, const std::string& field, double v, const char* unit) {
+  if (!(v >= 0.0) || !std::isfinite(v)) badParameter(model, field, std::string("a finite value >= 0 ") + unit, v);
+}
+
+inline double sgn(double v) { return static_cast<double>((v > 0.0) - (v < 0.0)); }
+
+// Checks one per-direction set; `lugre` additionally requires α0 > 0 so that g(v) >= α0 > 0.
+void validateBranch(const char* model, const std::string& side, const StribeckBranch& b, bool lugre) {
+  if (lugre)
+    requirePositive(model, side + ".alpha0", b.alpha0, "N·m (g(v) >= alpha0 must stay > 0)");
+  else
+    requireNonNegative(model, side + ".alpha0", b.alpha0, "N·m");
+  requireNonNegative(model, side + ".alpha1", b.alpha1, "N·m (Stribeck: g decreases from alpha0 + alpha1)");
+  requireNonNegative(model, side + ".alpha2", b.alpha2, "N·m·s/rad");
+  requirePositive(model, side + ".v_s", b.v_s, "rad/s");
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------ Coulomb + viscous
+
+void CoulombViscousParams::validate() const {
+  requireNonNegative("coulomb_viscous", "f_c", f_c, "N·m");
+  requireNonNegative("coulomb_viscous", "f_v", f_v, "N·m·s/rad");
+  requirePositive("coulomb_viscous", "v_reg", v_reg, "rad/s");
+}
+
+CoulombViscousFriction::CoulombViscousFriction(const CoulombViscousParams& params) : p_(params) { p_.validate(); }
+
+double CoulombViscousFriction::evaluate(const FrictionInput& in, const double*, double*) const {
+  return steadyState(in.v);
+}
+
+double CoulombViscousFriction::steadyState(double v) const {
+  // 004 eq. 4.2, F = F_v v + F_C sgn(v), with sgn(v) ≈ tanh(v / v_reg) (MODEL_REFERENCE §3.9).
+  return p_.f_c * std::tanh(v / p_.v_reg) + p_.f_v * v;
+}
+
+// ------------------------------------------------------------------------------ table friction
+
+void TableFrictionParams::validate() const {
+  const char* m = "table";
+  if (tau_pos.empty()) badParameter(m, "tau_pos", "at least one row [w, tau]", 0.0);
+  for (size_t i = 0; i < tau_pos.size(); ++i) {
+    const std::string row = "tau_pos[" + std::to_string(i) + "]";
+    requireNonNegative(m, row, tau_pos[i][0], "rad/s as the velocity w (column 1)");
+    requireNonNegative(m, row, tau_pos[i][1], "N·m as the friction torque (column 2)");
+    if (i > 0 && !(tau_pos[i][0] > tau_pos[i - 1][0]))
+      badParameter(m, row, "velocities strictly increasing, w > " + num(tau_pos[i - 1][0]) + " rad/s",
+                   tau_pos[i][0]);
+  }
+  if (tau_pos.size() >= 2) {
+    const auto& a = tau_pos[0];
+    const auto& b = tau_pos[1];
+    const double tau0 = a[1] - a[0] * (b[1] - a[1]) / (b[0] - a[0]);  // extrapolation to w = 0
+    if (!(tau0 >= 0.0)) badParameter(m, "tau_pos", "a table whose value extrapolated to w = 0 is >= 0 N·m", tau0);
+    const auto& y = tau_pos[tau_pos.size() - 2];
+    const auto& z = tau_pos.back();
+    const double slope = (z[1] - y[1]) / (z[0] - y[0]);
+    if (!(slope >= 0.0))
+      badParameter(m, "tau_pos", "a last slope >= 0 N·m·s/rad (extrapolated friction must stay >= 0)", slope);
+  }
+  if (!(peak >= 1.0) || !std::isfinite(peak)) badParameter(m, "peak", "a finite value >= 1 (-)", peak);
+  requirePositive(m, "v_stick", v_stick, "rad/s");
+  requireNonNegative(m, "d_stick", d_stick, "N·m·s/rad (0 = automatic)");
+}
+
+TableFriction::TableFriction(const TableFrictionParams& params) : p_(params) {
+  p_.validate();
+  tau0_ = tableTorque(0.0);
+  d_stick_ = p_.d_stick > 0.0 ? p_.d_stick : p_.peak * tau0_ / p_.v_stick;
+}
+
+double TableFriction::tableTorque(double w) const {
+  // MSL BearingFriction: linear interpolation in tau_pos, extrapolation through the end segments.
+  const auto& t = p_.tau_pos;
+  const size_t n = t.size();
+  if (n == 1) return t[0][1];
+  size_t i = 1;  // segment [i-1, i]
+  while (i < n - 1 && w > t[i][0]) ++i;
+  const auto& a = t[i - 1];
+  const auto& b = t[i];
+  return a[1] + (w - a[0]) * (b[1] - a[1]) / (b[0] - a[0]);
+}
+
+double TableFriction::evaluate(const FrictionInput& in, const double*, double*) const {
+  const double v = in.v;
+  const double stiction = p_.peak * tau0_;
+  if (std::abs(v) < p_.v_stick) {
+    // Karnopp band (MODEL_REFERENCE §3.3): stuck while |τ_d| <= peak·τ0 (000 eq. 3.1); the sticking
+    // damping makes J v̇ = −d_stick v so the shaft comes to rest.
+    if (std::abs(in.driving_torque) <= stiction)
+      return std::clamp(in.driving_torque + d_stick_ * v, -stiction, stiction);
+    // Break-away (MSL startForward/startBackward): the friction drops to the table value.
+    return sgn(in.driving_torque) * tableTorque(std::abs(v));
+  }
+  return sgn(v) * tableTorque(std::abs(v));  // sliding, 000 eq. 3.1: τ = k ω ± m
+}
+
+double TableFriction::steadyState(double v) const { return sgn(v) * tableTorque(std::abs(v)); }
+
+// ------------------------------------------------------------------------------ Stribeck
+
+void StribeckParams::validate() const {
+  validateBranch("stribeck", "positive", positive, false);
+  validateBranch("stribeck", "negative", negative, false);
+  requirePositive("stribeck", "delta", delta, "(-)");
+  requirePositive("stribeck", "k_s", k_s, "s/rad");
+}
+
+StribeckFriction::StribeckFriction(const StribeckParams& params) : p_(params) { p_.validate(); }
+
+double StribeckFriction::evaluate(const FrictionInput& in, const double*, double*) const {
+  return steadyState(in.v);
+}
+
+double StribeckFriction::steadyState(double v) const {
+  const StribeckBranch& b = v >= 0.0 ? p_.positive : p_.negative;
+  const double a = std::abs(v);
+  // 004 eq. 4.6 with |v| in the exponent, times the slope limiter 1 − e^{−k_S|v|} of 004 eq. 4.24.
+  const double branch = (b.alpha0 + b.alpha1 * std::exp(-std::pow(a / b.v_s, p_.delta))) * sgn(v) + b.alpha2 * v;
+  return branch * -std::expm1(-p_.k_s * a);
+}
+
+// ------------------------------------------------------------------------------ Dahl
+
+void DahlParams::validate() const {
+  requirePositive("dahl", "sigma", sigma, "N·m/rad");
+  requirePositive("dahl", "f_c", f_c, "N·m");
+  if (!(alpha >= 1.0) || !std::isfinite(alpha))
+    badParameter("dahl", "alpha", "a finite value >= 1 (-) (alpha < 1 is not Lipschitz at |F| = f_c)", alpha);
+}
+
+DahlFriction::DahlFriction(const DahlParams& params) : p_(params) { p_.validate(); }
+
+double DahlFriction::evaluate(const FrictionInput& in, const double* z, double* zdot) const {
+  const double v = in.v;
+  // 004 eq. 4.7 in the bristle state: dF/dx = σ (1 − F sgn(v)/F_C)^α, F = σ z, ż = v · dF/dx / σ.
+  const double u = 1.0 - p_.sigma * z[0] * sgn(v) / p_.f_c;
+  const double phi = p_.alpha == 1.0 ? u : sgn(u) * std::pow(std::abs(u), p_.alpha);
+  zdot[0] = v * phi;  // α = 1: ż = v − σ|v| z / F_C (eq. 4.9)
+  return p_.sigma * z[0];
+}
+
+double DahlFriction::steadyState(double v) const { return p_.f_c * sgn(v); }
+
+// ------------------------------------------------------------------------------ LuGre
+
+void LuGreParams::validate() const {
+  requirePositive("lugre", "sigma0", sigma0, "N·m/rad");
+  requirePositive("lugre", "sigma1", sigma1, "N·m·s/rad");
+  validateBranch("lugre", "positive", positive, true);
+  validateBranch("lugre", "negative", negative, true);
+}
+
+LuGreFriction::LuGreFriction(const LuGreParams& params) : p_(params) { p_.validate(); }
+
+double LuGreFriction::g(double v) const {
+  const StribeckBranch& b = v >= 0.0 ? p_.positive : p_.negative;
+  const double r = v / b.v_s;
+  return b.alpha0 + b.alpha1 * std::exp(-r * r);  // 004 eq. 4.17
+}
+
+double LuGreFriction::evaluate(const FrictionInput& in, const double* z, double* zdot) const {
+  const double v = in.v;
+  const double alpha2 = v >= 0.0 ? p_.positive.alpha2 : p_.negative.alpha2;
+  const double zd = v - p_.sigma0 * std::abs(v) * z[0] / g(v);  // 004 eq. 4.15
+  zdot[0] = zd;
+  return p_.sigma0 * z[0] + p_.sigma1 * zd + alpha2 * v;  // 004 eq. 4.16
+}
+
+double LuGreFriction::steadyState(double v) const {
+  const double alpha2 = v >= 0.0 ? p_.positive.alpha2 : p_.negative.alpha2;
+  return g(v) * sgn(v) + alpha2 * v;  // 004 eq. 4.21
+}
+
+// ------------------------------------------------------------------------------ UR5 LuGre
+
+void LuGreUr5Params::validate() const {
+  const char* m = "lugre_ur5";
+  requirePositive(m, "sigma0", sigma0, "N·m/rad");
+  requirePositive(m, "sigma1", sigma1, "N·m·s/rad");
+  requirePositive(m, "qd_s", qd_s, "rad/s");
+  requireNonNegative(m, "k_static", k_static, "(-)");
+  requirePositive(m, "viscous_exponent", viscous_exponent, "(-)");
+  // Not given by seed 002: must be supplied (NaN = unset fails these checks).
+  requirePositive(m, "f_c", f_c, "N·m (required: not given by seed 002)");
+  requireNonNegative(m, "f_v", f_v, "N·m·(s/rad)^exponent (required: not given by seed 002)");
+  requireNonNegative(m, "k_q", k_q, "(-) (required: not given by seed 002)");
+}
+
+LuGreUr5Friction::LuGreUr5Friction(const LuGreUr5Params& params) : p_(params) { p_.validate(); }
+
+double LuGreUr5Friction::g(double v) const {
+  const double a = std::abs(v);
+  // 002 eq. 7 with |q̇|^{2/3} (MODEL_REFERENCE §3.7 [FIX]).
+  return p_.f_c * (1.0 + p_.k_static * std::exp(-p_.k_q * a / p_.qd_s)) + p_.f_v * std::pow(a, p_.viscous_exponent);
+}
+
+double LuGreUr5Friction::evaluate(const FrictionInput& in, const double* z, double* zdot) const {
+  const double v = in.v;
+  const double zd = v - std::abs(v) * z[0] / g(v) * p_.sigma0;  // 002 eq. 7
+  zdot[0] = zd;
+  return p_.sigma0 * z[0] + p_.sigma1 * zd;  // T_f = σ0 z + σ1 ż, no separate viscous term
+}
+
+double LuGreUr5Friction::steadyState(double v) const { return sgn(v) * g(v); }
+
+}  // namespace jointsim::drive
