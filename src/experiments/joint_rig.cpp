@@ -13,6 +13,9 @@ sim::CvodeOptions JointRigSetup::defaultSolver() {
   o.method = sim::Method::BDF;
   o.rtol = 1e-8;
   o.atol = 1e-10;
+  // BDF orders 3–5 are not A-stable: lightly damped kHz drive modes (strain-wave gear, stiff springs)
+  // then force steps of a few µs. BDF2 is A-stable and damps unresolved modes (docs/design.md).
+  o.max_order = 2;
   return o;
 }
 
@@ -218,6 +221,11 @@ RigRunResult simulateJointRig(const JointRig& rig, const std::function<void(cons
   const JointRigSetup& s = rig.setup();
   sim::CvodeOptions options = s.solver;
   if (options.component.empty()) options.component = "joint rig '" + s.name + "'";
+  // max_step 0 means one log interval. A stuck shaft (sticking friction) makes the state nearly constant,
+  // the step size grows without bound, and a step whose two ends are both "stuck" can jump over the whole
+  // slip phase in between: the error test sees nothing. Measured on the seed-001 clamping rig: one 40 s
+  // BDF1 step skipped a break-away.
+  if (options.max_step == 0.0) options.max_step = 1.0 / s.log_rate;
   sim::CvodeIntegrator integ(rig.stateSize(),
                              [&rig](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
                                rig.derivatives(t, y, yd);
@@ -226,6 +234,7 @@ RigRunResult simulateJointRig(const JointRig& rig, const std::function<void(cons
   Eigen::VectorXd y = rig.initialState();
   Eigen::VectorXd row(static_cast<Eigen::Index>(rig.columns().size()));
   std::vector<double> breaks = s.profile.breakpoints(s.duration);
+  breaks.push_back(s.duration);  // never integrate (or evaluate inputs) beyond the end
   std::sort(breaks.begin(), breaks.end());
   size_t next_break = 0;
 

@@ -58,8 +58,10 @@ struct JointRigSetup {
   double q_l0 = 0.0, qd_l0 = 0.0;                ///< initial output angle/velocity (free compliant load)
   double duration = 1.0;                         ///< [s]
   double log_rate = 1000.0;                      ///< [Hz]
-  sim::CvodeOptions solver = defaultSolver();    ///< integrator settings
-  /// BDF (stiff drive modes), rtol 1e-8, atol 1e-10.
+  /// Integrator settings. max_step = 0 means one log interval (1/log_rate): the solver never steps over
+  /// more than one logged sample, so it cannot skip a slip phase between two "stuck" states.
+  sim::CvodeOptions solver = defaultSolver();
+  /// BDF capped at order 2 (A-stable; see docs/design.md), rtol 1e-8, atol 1e-10.
   static sim::CvodeOptions defaultSolver();
   /// Throws InputError for inconsistent settings (e.g. voltage input without motor, output friction on a
   /// clamped output).
