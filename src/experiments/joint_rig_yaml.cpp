@@ -91,6 +91,7 @@ JointRigSetup readJointRig(const YamlValue& root, const std::string& config_path
   s.name = name;
   if (root.has("motor")) s.motor = readMotor(root["motor"]);
   s.rotor_inertia = root["rotor_inertia"].asDouble(s.rotor_inertia, "a rotor inertia in kg·m²");
+  if (!(s.rotor_inertia > 0.0)) root["rotor_inertia"].failExpected("a rotor inertia > 0 kg·m²");
   if (root.has("motor") && root.has("rotor_inertia"))
     root["rotor_inertia"].fail("give the rotor inertia as motor.J_M when a motor block is present");
   s.transmission = readTransmission(root.required("transmission", "the transmission"));
@@ -108,7 +109,9 @@ JointRigSetup readJointRig(const YamlValue& root, const std::string& config_path
     load.allowKeys({"clamped", "inertia", "damping"});
     s.clamped = load.has("clamped") && load["clamped"].asBool("true or false");
     s.load_inertia = load["inertia"].asDouble(s.load_inertia, "an inertia in kg·m²");
+    if (!(s.load_inertia > 0.0)) load["inertia"].failExpected("an inertia > 0 kg·m²");
     s.load_damping = load["damping"].asDouble(0.0, "a damping in N·m·s/rad");
+    if (!(s.load_damping >= 0.0)) load["damping"].failExpected("a damping >= 0 N·m·s/rad");
   }
   const YamlValue input = root.required("input", "the input {type, profile, controller}");
   input.expectMap("an input mapping {type, profile, controller}");
