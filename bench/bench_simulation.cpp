@@ -2,6 +2,9 @@
 // factor counter (simulated seconds per wall-clock second). Run: ./build/bench/bench_simulation
 #include <benchmark/benchmark.h>
 
+#include "jointsim/drive/friction_models.hpp"
+#include "jointsim/drive/strain_wave_gear.hpp"
+#include "jointsim/experiments/joint_rig.hpp"
 #include "jointsim/experiments/passive_robot.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
 
@@ -27,5 +30,38 @@ static void UR5_Fall_1s_Adams(benchmark::State& state) {
   state.counters["cvode_steps"] = static_cast<double>(steps);
 }
 BENCHMARK(UR5_Fall_1s_Adams)->Arg(100)->Unit(benchmark::kMillisecond);
+
+// The UR5 base joint on the rig (config/experiments/ur5_swg_joint_velocity.yaml): DC motor, size-A
+// strain-wave gear, UR5 LuGre friction, load 1.279 kg·m², motor-velocity PI on the voltage; 10 s.
+static void UR5_SwgJointRig_10s(benchmark::State& state) {
+  experiments::JointRigSetup s;
+  s.name = "bench";
+  s.motor = drive::DcMotorParams::ur5(1);
+  s.transmission = std::make_shared<drive::StrainWaveGear>(drive::StrainWaveGearParams::ur5SizeA());
+  drive::LuGreUr5Params f;
+  f.f_c = 4.0;
+  f.f_v = 2.0;
+  f.k_q = 0.0;
+  s.friction = std::make_shared<drive::LuGreUr5Friction>(f);
+  s.friction_side = experiments::Side::Output;
+  s.load_inertia = 1.279;
+  s.input = experiments::RigInput::VelocityPI;
+  s.pi = {0.5, 20.0, 48.0, true, experiments::Side::Motor};
+  s.profile = control::Profile::piecewise({0, 1, 4, 5, 8, 9, 10}, {0, 101, 101, 0, 0, -50.5, -50.5});
+  s.duration = 10.0;
+  s.log_rate = 1000.0;
+  s.solver.rtol = 1e-6;
+  s.solver.atol = 1e-9;
+  const experiments::JointRig rig(s);
+  long steps = 0;
+  for (auto _ : state) {
+    const auto r = experiments::simulateJointRig(rig, [](const Eigen::VectorXd& row) { benchmark::DoNotOptimize(row.data()); });
+    steps = r.stats.steps;
+  }
+  state.counters["real_time_factor"] =
+      benchmark::Counter(s.duration * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["cvode_steps"] = static_cast<double>(steps);
+}
+BENCHMARK(UR5_SwgJointRig_10s)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();
