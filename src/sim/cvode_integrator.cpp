@@ -477,7 +477,9 @@ double CvodeIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out)
     m.t_last = m.cvodeTime();
     m.fail("CVode", flag, m.t_last);
   }
-  if (flag == CV_TSTOP_RETURN) m.stop_set = false;  // one-shot
+  // One-shot: cleared once reached, also when CVODE reports the arrival as a normal return (t_out equal
+  // to the stop time); otherwise the next advance() would re-arm a stop time already behind us.
+  if (flag == CV_TSTOP_RETURN || (m.stop_set && t_ret == m.stop_time)) m.stop_set = false;
   m.t_last = t_ret;
   y_out = ym;
   return t_ret;

@@ -602,3 +602,19 @@ TEST(CvodeIntegrator, MoveKeepsWorking) {
 }
 
 }  // namespace
+
+TEST(StopTimeRegression, ReachedAsOutputTimeIsCleared) {
+  // advance(t_stop) with t_stop also the output time, then restart and continue: must not fail with
+  // "tstop is behind current t" (found by the joint rig and the robot system).
+  CvodeOptions o;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  CvodeIntegrator integ(1, [](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) { yd[0] = -y[0]; }, o);
+  Eigen::VectorXd y(1);
+  integ.initialize(0.0, Eigen::VectorXd::Ones(1));
+  integ.setStopTime(0.2);
+  EXPECT_DOUBLE_EQ(integ.advance(0.2, y), 0.2);
+  integ.initialize(0.2, y);
+  EXPECT_DOUBLE_EQ(integ.advance(1.0, y), 1.0);
+  EXPECT_NEAR(y[0], std::exp(-1.0), 1e-6);
+}

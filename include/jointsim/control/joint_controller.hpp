@@ -1,0 +1,67 @@
+#pragma once
+/// \file
+/// Per-joint drive controllers (continuous-time):
+/// - `Cascade002` — seed 002 §2.1, Table 1 (MODEL_REFERENCE §6.1): position P with motor-speed
+///   feed-forward N q̇_set, motor-velocity PI giving the current reference, current PI giving the voltage
+///   reference. Output: voltage [V] (saturated by the PWM stage). The current integrator stops while the
+///   voltage is saturated and the error drives further into saturation (conditional-integration
+///   anti-windup; 002 states none — without it a saturated start winds up and overshoots).
+/// - `MotorPPI000` — seed 000 §2.8/A.12 (MODEL_REFERENCE §6.2): u = N q̇_ref + kp (N q_ref − φ_m) − ω_m,
+///   τ_m = ks (u + x), ẋ = u/Ts, x(0) = −u(0). Output: motor torque [N·m] (no current loop).
+/// - `None` — zero motor torque (uncontrolled).
+/// Each controller is a pure function of its inputs and its internal state slice.
+
+#include <string>
+
+namespace jointsim::control {
+
+enum class ControllerType { None, Cascade002, MotorPPI000 };
+
+struct JointControllerParams {
+  ControllerType type = ControllerType::None;
+  // Cascade002 (002 Table 1)
+  double P_pos = 0.0;   ///< position P: joint error [rad] → motor speed [rad/s] [1/s], >= 0
+  double P_vel = 0.0;   ///< velocity P [A·s/rad], >= 0
+  double I_vel = 0.0;   ///< velocity I [A/rad], >= 0
+  double P_cur = 0.0;   ///< current P [V/A], >= 0
+  double I_cur = 0.0;   ///< current I [V/(A·s)], >= 0
+  // MotorPPI000 (000 A.12)
+  double kp = 0.0;      ///< position gain [1/s], >= 0
+  double ks = 0.0;      ///< speed PI gain [N·m·s/rad], >= 0
+  double Ts = 0.01;     ///< PI integrator time constant [s], > 0
+  /// Throws InputError naming the gain and the rule (gains must be >= 0, Ts > 0).
+  void validate(const std::string& where) const;
+};
+
+/// Measured and desired signals at one instant.
+struct ControllerInputs {
+  double q_set = 0, qd_set = 0;   ///< joint-side reference [rad], [rad/s]
+  double q_fb = 0;                ///< measured joint angle [rad]
+  double qm_fb = 0, qdm_fb = 0;   ///< measured motor angle [rad] and speed [rad/s]
+  double i_fb = 0;                ///< measured motor current [A]
+  double ratio = 1;               ///< gear ratio N used to scale references
+  double v_limit = 0;             ///< supply voltage [V] (Cascade002 anti-windup)
+};
+
+struct ControllerOutputs {
+  bool voltage = false;  ///< true: `u` is a voltage command [V]; false: a motor torque [N·m]
+  double u = 0.0;
+  double i_ref = 0.0;    ///< current reference [A] (Cascade002), else 0
+  double qdm_ref = 0.0;  ///< motor speed reference [rad/s]
+};
+
+class JointController {
+ public:
+  explicit JointController(const JointControllerParams& p) : p_(p) {}
+  const JointControllerParams& params() const { return p_; }
+  int stateSize() const;
+  /// Internal state at t0 for the given inputs (000: zero initial output; 002: zero integrals).
+  void initialState(const ControllerInputs& in, double* x) const;
+  /// Outputs and state derivatives.
+  ControllerOutputs evaluate(const ControllerInputs& in, const double* x, double* xdot) const;
+
+ private:
+  JointControllerParams p_;
+};
+
+}  // namespace jointsim::control

@@ -1,0 +1,118 @@
+#pragma once
+/// \file
+/// A robot with drives: the multibody core plus one drive chain per joint, assembled into one state
+/// vector for CVODE. Per drive: controller → voltage (saturated PWM) → motor electrics → motor inertia →
+/// transmission → gear output shaft, with friction on the gear output shaft; an optional coupling
+/// matrix G maps gear output angles to joint angles (q = G φ_out, τ_joint = G⁻ᵀ τ_out).
+///
+/// State vector: [q (n), q̇ (n)], then per drive k (absent parts skipped):
+///   [q_m, q̇_m] (compliant transmission), [i] (motor electrics), [x_gear...], [z_friction...], [x_ctrl...].
+/// A rigid transmission merges the motor into the joint: q_m = N φ_out and its rotor inertia N² J_M is
+/// added to the joint-space inertia (the gear output torque is then N τ_M − N² J_M φ̈_out).
+/// Sensors are ideal (the controllers see the true states).
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "jointsim/control/joint_controller.hpp"
+#include "jointsim/drive/dc_motor.hpp"
+#include "jointsim/drive/friction.hpp"
+#include "jointsim/drive/transmission.hpp"
+#include "jointsim/multibody/data.hpp"
+#include "jointsim/multibody/model.hpp"
+
+namespace jointsim::sim {
+
+struct DriveSpec {
+  std::string joint;                                      ///< name of the joint this drive moves
+  drive::DcMotorParams motor;                             ///< motor (J_M always used; electrics if `electrics`)
+  bool electrics = true;                                  ///< false: torque-controlled motor, no current state
+  std::shared_ptr<const drive::Transmission> transmission;
+  std::shared_ptr<const drive::Friction> friction;        ///< on the gear output shaft; may be null
+  control::JointControllerParams controller;
+};
+
+/// Joint-space reference at time t (writes q_set, q̇_set, q̈_set of size n).
+using SetpointFunction = std::function<void(double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
+                                            Eigen::Ref<Eigen::VectorXd> qdd)>;
+
+/// External wrenches on the bodies at (t, kinematics in `data`): fills `fext` (6 × n, body frames, as in
+/// multibody::rnea). Used for clamps and contacts.
+using WrenchFunction = std::function<void(double t, const multibody::Model& model, const multibody::Data& data,
+                                          const Eigen::Ref<const Eigen::VectorXd>& q,
+                                          const Eigen::Ref<const Eigen::VectorXd>& qd, multibody::Matrix6Xd& fext)>;
+
+/// Signals of one evaluation, per joint (size n each), for logging.
+struct RobotSignals {
+  Eigen::VectorXd q_set, qd_set, qdd_set;
+  Eigen::VectorXd q_fb;           ///< measured joint angle [rad]
+  Eigen::VectorXd qm, qdm;        ///< motor angle [rad] and speed [rad/s]
+  Eigen::VectorXd current, i_ref; ///< motor current and its reference [A]
+  Eigen::VectorXd voltage;        ///< supply voltage [V]
+  Eigen::VectorXd tau_motor;      ///< electromagnetic motor torque [N·m]
+  Eigen::VectorXd tau_gear;       ///< gear output torque [N·m] (before friction, output shaft)
+  Eigen::VectorXd tau_friction;   ///< friction torque on the output shaft [N·m]
+  Eigen::VectorXd tau_joint;      ///< torque applied to the joints by the drives [N·m]
+  Eigen::VectorXd qdd;            ///< joint accelerations [rad/s²]
+  void resize(int n);
+};
+
+class RobotSystem {
+ public:
+  /// `drives` must name every movable joint of `model` exactly once. `coupling` (n × n, optional, empty =
+  /// identity) maps gear output angles to joint angles. Throws InputError on inconsistencies.
+  RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, Eigen::MatrixXd coupling = {});
+
+  const multibody::Model& model() const { return model_; }
+  const std::vector<DriveSpec>& drives() const { return drives_; }
+  int stateSize() const { return n_states_; }
+  int dof() const { return model_.nq; }
+
+  void setSetpoints(SetpointFunction f) { setpoints_ = std::move(f); }
+  void setExternalWrenches(WrenchFunction f) { wrenches_ = std::move(f); }
+
+  /// Initial state: joints at q0 (at rest), motors at N φ_out, gear internal states at static
+  /// equilibrium, friction states at rest, controller states from their rules.
+  Eigen::VectorXd initialState(const Eigen::VectorXd& q0, double t0 = 0.0) const;
+  /// ẏ = f(t, y): pure apart from the workspace below; no heap allocation.
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const;
+  /// All signals at (t, y) (evaluates the right-hand side).
+  const RobotSignals& signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  /// Mechanical energy: multibody kinetic + potential, motor rotor kinetic, stored transmission energy [J].
+  double mechanicalEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  /// Index of the first state of drive k's parts (-1 if absent).
+  struct DriveLayout {
+    int motor = -1, current = -1, gear = -1, friction = -1, controller = -1;
+    int n_gear = 0, n_friction = 0, n_controller = 0;
+    bool rigid = false;
+    double ratio = 1.0;
+  };
+  const DriveLayout& layout(int k) const { return layout_[static_cast<size_t>(k)]; }
+
+ private:
+  multibody::Model model_;
+  std::vector<DriveSpec> drives_;
+  std::vector<control::JointController> controllers_;
+  std::vector<DriveLayout> layout_;
+  Eigen::MatrixXd G_, Ginv_;
+  bool coupled_ = false;
+  bool crba_path_ = false;          // coupled rigid drives: non-diagonal reflected inertia
+  Eigen::MatrixXd reflected_;       // G⁻ᵀ diag(N² J_M rigid) G⁻¹ (crba path)
+  int n_states_ = 0;
+  SetpointFunction setpoints_;
+  WrenchFunction wrenches_;
+  // Workspace (mutable: the right-hand side is logically const).
+  mutable multibody::Data data_;
+  mutable RobotSignals sig_;
+  mutable Eigen::VectorXd phi_, phid_, tau_out_, tau_, tmp_;
+  mutable multibody::Matrix6Xd fext_;
+  mutable Eigen::MatrixXd M_;
+  mutable Eigen::LLT<Eigen::MatrixXd> llt_;
+  void evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
+};
+
+}  // namespace jointsim::sim

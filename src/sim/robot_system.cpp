@@ -1,0 +1,292 @@
+#include "jointsim/sim/robot_system.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/LU>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/multibody/algorithms.hpp"
+
+namespace jointsim::sim {
+
+void RobotSignals::resize(int n) {
+  for (Eigen::VectorXd* v : {&q_set, &qd_set, &qdd_set, &q_fb, &qm, &qdm, &current, &i_ref, &voltage, &tau_motor,
+                             &tau_gear, &tau_friction, &tau_joint, &qdd})
+    v->setZero(n);
+}
+
+RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, Eigen::MatrixXd coupling)
+    : model_(std::move(model)), drives_(std::move(drives)), data_(model_) {
+  const int n = model_.nq;
+  if (static_cast<int>(drives_.size()) != n)
+    throw InputError("robot '" + model_.name + "' has " + std::to_string(n) + " joints but " +
+                     std::to_string(drives_.size()) + " drives were given; expected one drive per joint");
+  // Order the drives as the joints; every joint exactly once.
+  std::vector<DriveSpec> ordered(static_cast<size_t>(n));
+  std::vector<bool> seen(static_cast<size_t>(n), false);
+  for (auto& d : drives_) {
+    const int j = model_.jointIndex(d.joint);
+    if (seen[static_cast<size_t>(j)]) throw InputError("joint '" + d.joint + "' has two drives");
+    seen[static_cast<size_t>(j)] = true;
+    ordered[static_cast<size_t>(j)] = std::move(d);
+  }
+  drives_ = std::move(ordered);
+  if (coupling.size() == 0) {
+    G_ = Ginv_ = Eigen::MatrixXd::Identity(n, n);
+  } else {
+    if (coupling.rows() != n || coupling.cols() != n)
+      throw InputError("coupling matrix must be " + std::to_string(n) + "x" + std::to_string(n));
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(coupling);
+    if (!lu.isInvertible()) throw InputError("coupling matrix must be invertible");
+    G_ = coupling;
+    Ginv_ = lu.inverse();
+    coupled_ = !G_.isIdentity(0.0);
+  }
+  const Eigen::VectorXd file_armature = model_.armature.size() == n ? model_.armature : Eigen::VectorXd::Zero(n);
+  reflected_ = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd rotor = Eigen::VectorXd::Zero(n);
+  n_states_ = 2 * n;
+  layout_.resize(static_cast<size_t>(n));
+  for (int k = 0; k < n; ++k) {
+    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const std::string where = "drive of joint '" + d.joint + "'";
+    if (!d.transmission) throw InputError(where + ": missing transmission");
+    d.motor.validate();
+    d.controller.validate(where + ".controller");
+    controllers_.emplace_back(d.controller);
+    const bool voltage_out = d.controller.type == control::ControllerType::Cascade002;
+    if (voltage_out && !d.electrics) throw InputError(where + ": the cascade_002 controller needs the motor electrics");
+    if (!voltage_out && d.controller.type != control::ControllerType::None && d.electrics)
+      throw InputError(where + ": the motor_ppi_000 controller commands torque; set electrics: false");
+    DriveLayout& L = layout_[static_cast<size_t>(k)];
+    L.rigid = d.transmission->isRigid();
+    L.ratio = d.transmission->ratio();
+    if (L.rigid) {
+      rotor[k] = L.ratio * L.ratio * d.motor.J_M;
+    } else {
+      L.motor = n_states_;
+      n_states_ += 2;
+    }
+    if (d.electrics) L.current = n_states_++;
+    L.n_gear = d.transmission->stateSize();
+    if (L.n_gear > 0) {
+      L.gear = n_states_;
+      n_states_ += L.n_gear;
+    }
+    L.n_friction = d.friction ? d.friction->stateSize() : 0;
+    if (L.n_friction > 0) {
+      L.friction = n_states_;
+      n_states_ += L.n_friction;
+    }
+    L.n_controller = controllers_.back().stateSize();
+    if (L.n_controller > 0) {
+      L.controller = n_states_;
+      n_states_ += L.n_controller;
+    }
+  }
+  if (coupled_ && rotor.any()) {
+    crba_path_ = true;
+    reflected_ = Ginv_.transpose() * rotor.asDiagonal() * Ginv_;
+  } else {
+    model_.armature = file_armature + rotor;  // diagonal reflected rotor inertia: ABA handles it
+  }
+  data_ = multibody::Data(model_);
+  sig_.resize(n);
+  phi_.setZero(n);
+  phid_.setZero(n);
+  tau_out_.setZero(n);
+  tau_.setZero(n);
+  tmp_.setZero(n_states_);
+  fext_.setZero(6, n);
+  M_.setZero(n, n);
+  llt_ = Eigen::LLT<Eigen::MatrixXd>(n);
+}
+
+Eigen::VectorXd RobotSystem::initialState(const Eigen::VectorXd& q0, double t0) const {
+  const int n = model_.nq;
+  if (q0.size() != n) throw InputError("initial joint positions: expected " + std::to_string(n) + " values");
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(n_states_);
+  y.head(n) = q0;
+  if (setpoints_) {
+    setpoints_(t0, sig_.q_set, sig_.qd_set, sig_.qdd_set);
+  } else {
+    sig_.q_set = q0;
+    sig_.qd_set.setZero();
+    sig_.qdd_set.setZero();
+  }
+  // Gravity preload: each drive starts holding its share of the static joint torques.
+  const Eigen::VectorXd g = multibody::gravityTorques(model_, data_, q0);
+  const Eigen::VectorXd tau_out_needed = coupled_ ? Eigen::VectorXd(G_.transpose() * g) : g;
+  const Eigen::VectorXd phi = Ginv_ * q0;
+  for (int k = 0; k < n; ++k) {
+    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    const bool holds = d.controller.type != control::ControllerType::None;
+    const double target = holds ? tau_out_needed[k] : 0.0;
+    double q_in = L.ratio * phi[k], tau_M = 0.0;
+    if (L.rigid) {
+      tau_M = target / L.ratio;
+    } else {
+      // Secant iterations on the motor angle for the static output torque (exact in one step for a linear gear).
+      double* x = L.gear >= 0 ? y.data() + L.gear : nullptr;
+      std::vector<double> xd(static_cast<size_t>(std::max(1, L.n_gear)));
+      auto outTorque = [&](double qm) {
+        d.transmission->initialState(qm, phi[k], x);
+        return d.transmission->evaluate({qm, 0.0, phi[k], 0.0}, x, xd.data());
+      };
+      double a = q_in, fa = outTorque(a).tau_out - target;
+      double b = q_in + 1e-3 * L.ratio, fb = outTorque(b).tau_out - target;
+      for (int it = 0; it < 50 && std::abs(fb) > 1e-12 * (1.0 + std::abs(target)); ++it) {
+        if (fb == fa) break;
+        const double c = b - fb * (b - a) / (fb - fa);
+        a = b;
+        fa = fb;
+        b = c;
+        fb = outTorque(b).tau_out - target;
+      }
+      q_in = b;
+      tau_M = outTorque(q_in).tau_in;
+      y[L.motor] = q_in;
+    }
+    const double i = d.electrics ? tau_M / d.motor.kt : 0.0;
+    if (L.current >= 0) y[L.current] = i;
+    if (L.friction >= 0) d.friction->initialState(y.data() + L.friction);
+    if (L.controller >= 0) {
+      control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q0[k], q_in, 0.0, i, L.ratio, d.motor.V_supply};
+      controllers_[static_cast<size_t>(k)].initialState(in, y.data() + L.controller);
+      if (holds && d.controller.type == control::ControllerType::Cascade002) {
+        // Integrators holding the static current and voltage: i_ref = I_vel ∫e_vel, V = I_cur ∫e_cur = R i.
+        if (d.controller.I_vel > 0) y[L.controller] = i / d.controller.I_vel;
+        if (d.controller.I_cur > 0) y[L.controller + 1] = d.motor.R * i / d.controller.I_cur;
+      } else if (holds && d.controller.type == control::ControllerType::MotorPPI000 && d.controller.ks > 0) {
+        y[L.controller] += tau_M / d.controller.ks;
+      }
+    }
+  }
+  return y;
+}
+
+void RobotSystem::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
+  const int n = model_.nq;
+  const auto q = y.head(n);
+  const auto qd = y.segment(n, n);
+  if (setpoints_) {
+    setpoints_(t, sig_.q_set, sig_.qd_set, sig_.qdd_set);
+  }
+  if (coupled_) {
+    phi_.noalias() = Ginv_ * q;
+    phid_.noalias() = Ginv_ * qd;
+  } else {
+    phi_ = q;
+    phid_ = qd;
+  }
+  for (int k = 0; k < n; ++k) {
+    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    const double N = L.ratio;
+    const double qm = L.rigid ? N * phi_[k] : y[L.motor];
+    const double qdm = L.rigid ? N * phid_[k] : y[L.motor + 1];
+    const double i = L.current >= 0 ? y[L.current] : 0.0;
+    sig_.q_fb[k] = q[k];
+    sig_.qm[k] = qm;
+    sig_.qdm[k] = qdm;
+    sig_.current[k] = i;
+    const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q[k], qm, qdm, i, N, d.motor.V_supply};
+    const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(
+        in, L.controller >= 0 ? y.data() + L.controller : nullptr, L.controller >= 0 ? ydot + L.controller : nullptr);
+    sig_.i_ref[k] = out.i_ref;
+    double tau_M = 0.0;
+    if (L.current >= 0) {
+      const double V_cmd = out.voltage ? out.u : 0.0;
+      sig_.voltage[k] = std::clamp(V_cmd, -d.motor.V_supply, d.motor.V_supply);
+      ydot[L.current] = (sig_.voltage[k] - d.motor.R * i - d.motor.ke * qdm) / d.motor.L;
+      tau_M = d.motor.kt * i;
+    } else {
+      sig_.voltage[k] = 0.0;
+      tau_M = out.voltage ? 0.0 : out.u;
+    }
+    sig_.tau_motor[k] = tau_M;
+    double tau_gear = 0.0;
+    if (L.rigid) {
+      tau_gear = N * tau_M;  // rotor inertia term added after the accelerations are known
+    } else {
+      const drive::PortTorques pt = d.transmission->evaluate({qm, qdm, phi_[k], phid_[k]},
+                                                              L.gear >= 0 ? y.data() + L.gear : nullptr,
+                                                              L.gear >= 0 ? ydot + L.gear : nullptr);
+      tau_gear = pt.tau_out;
+      ydot[L.motor] = qdm;
+      ydot[L.motor + 1] = (tau_M - pt.tau_in) / d.motor.J_M;
+    }
+    double tau_f = 0.0;
+    if (d.friction)
+      tau_f = d.friction->evaluate({phid_[k], tau_gear}, L.friction >= 0 ? y.data() + L.friction : nullptr,
+                                   L.friction >= 0 ? ydot + L.friction : nullptr);
+    sig_.tau_friction[k] = tau_f;
+    sig_.tau_gear[k] = tau_gear;
+    tau_out_[k] = tau_gear - tau_f;
+  }
+  if (coupled_) tau_.noalias() = Ginv_.transpose() * tau_out_;
+  else tau_ = tau_out_;
+  sig_.tau_joint = tau_;
+  const multibody::Matrix6Xd* fext = nullptr;
+  if (wrenches_) {
+    multibody::forwardKinematics(model_, data_, q);
+    fext_.setZero();
+    wrenches_(t, model_, data_, q, qd, fext_);
+    fext = &fext_;
+  }
+  if (crba_path_) {
+    multibody::nonLinearEffects(model_, data_, q, qd);
+    if (fext) {
+      multibody::rnea(model_, data_, q, qd, Eigen::VectorXd::Zero(n), fext);  // (allocation only with coupling + wrenches)
+      data_.nle = data_.tau;
+    }
+    M_ = multibody::crba(model_, data_, q);
+    M_ += reflected_;
+    llt_.compute(M_);
+    sig_.qdd = tau_ - data_.nle;
+    llt_.solveInPlace(sig_.qdd);
+  } else {
+    sig_.qdd = multibody::aba(model_, data_, q, qd, tau_, fext);
+  }
+  // Rigid drives: the gear output torque includes the rotor's inertial reaction −N² J_M φ̈.
+  for (int k = 0; k < n; ++k) {
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    if (!L.rigid) continue;
+    const double phidd = coupled_ ? Ginv_.row(k).dot(sig_.qdd) : sig_.qdd[k];
+    sig_.tau_gear[k] -= L.ratio * L.ratio * drives_[static_cast<size_t>(k)].motor.J_M * phidd;
+  }
+  Eigen::Map<Eigen::VectorXd> yd(ydot, n_states_);
+  yd.head(n) = qd;
+  yd.segment(n, n) = sig_.qdd;
+}
+
+void RobotSystem::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+  evaluate(t, y, ydot.data());
+}
+
+const RobotSignals& RobotSystem::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  evaluate(t, y, tmp_.data());
+  return sig_;
+}
+
+double RobotSystem::mechanicalEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const int n = model_.nq;
+  const auto q = y.head(n);
+  const auto qd = y.segment(n, n);
+  double E = multibody::kineticEnergy(model_, data_, q, qd) + multibody::potentialEnergy(model_, data_, q);
+  if (crba_path_) E += 0.5 * qd.dot(reflected_ * qd);
+  const Eigen::VectorXd phi = Ginv_ * q, phid = Ginv_ * qd;
+  for (int k = 0; k < n; ++k) {
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    if (L.rigid) continue;
+    const double qdm = y[L.motor + 1];
+    E += 0.5 * drives_[static_cast<size_t>(k)].motor.J_M * qdm * qdm;
+    E += drives_[static_cast<size_t>(k)].transmission->storedEnergy({y[L.motor], qdm, phi[k], phid[k]},
+                                                                     L.gear >= 0 ? y.data() + L.gear : nullptr);
+  }
+  return E;
+}
+
+}  // namespace jointsim::sim

@@ -1,0 +1,166 @@
+// The UR5 with drives assembled into one ODE: rigid-gear joint torques equal RNEA of the simulated motion,
+// strain-wave-gear speed ratio 101, energy conservation of the torque-free frictionless system, and the
+// gravity-preloaded start at rest.
+#include <cmath>
+#include <memory>
+
+#include <gtest/gtest.h>
+
+#include "jointsim/drive/strain_wave_gear.hpp"
+#include "jointsim/drive/transmissions.hpp"
+#include "jointsim/multibody/algorithms.hpp"
+#include "jointsim/multibody/robot_loader.hpp"
+#include "jointsim/sim/cvode_integrator.hpp"
+#include "jointsim/sim/robot_system.hpp"
+#include "test_util.hpp"
+
+using namespace jointsim;
+
+namespace {
+const double kGains[6][5] = {{7400, 1.0, 0.1, 10, 10000}, {7500, 1.0, 0.2, 10, 10000}, {7500, 0.5, 0.1, 30, 10000},
+                             {2900, 0.8, 0.2, 30, 10000}, {3000, 1.0, 0.2, 30, 10000}, {3250, 1.0, 0.2, 30, 10000}};
+
+std::vector<sim::DriveSpec> ur5Drives(const multibody::Model& m, const std::function<std::shared_ptr<const drive::Transmission>(int)>& gear,
+                                      bool controlled) {
+  std::vector<sim::DriveSpec> drives;
+  for (int k = 0; k < 6; ++k) {
+    sim::DriveSpec d;
+    d.joint = m.joint_names[static_cast<size_t>(k)];
+    d.motor = drive::DcMotorParams::ur5(k + 1);
+    d.transmission = gear(k);
+    if (controlled) {
+      d.controller.type = control::ControllerType::Cascade002;
+      d.controller.P_pos = kGains[k][0];
+      d.controller.P_vel = kGains[k][1];
+      d.controller.I_vel = kGains[k][2];
+      d.controller.P_cur = kGains[k][3];
+      d.controller.I_cur = kGains[k][4];
+    } else {
+      d.electrics = false;
+    }
+    drives.push_back(d);
+  }
+  return drives;
+}
+
+// Smooth reference: q_set = q0 + A sin(ω t) with its derivatives.
+sim::SetpointFunction sineSetpoints(Eigen::VectorXd q0, double A, double w) {
+  return [q0, A, w](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
+    q = q0.array() + A * std::sin(w * t);
+    qd.setConstant(A * w * std::cos(w * t));
+    qdd.setConstant(-A * w * w * std::sin(w * t));
+  };
+}
+
+Eigen::VectorXd homePose() {
+  Eigen::VectorXd q(6);
+  q << 0.2, -1.2, 1.0, -0.8, 0.5, 0.1;
+  return q;
+}
+}  // namespace
+
+TEST(RobotSystem, RigidGearJointTorqueEqualsRneaOfSimulatedMotion) {
+  const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
+  sim::RobotSystem sys(ur5, ur5Drives(ur5, [](int) { return std::make_shared<drive::RigidGear>(101.0); }, true));
+  sys.setSetpoints(sineSetpoints(homePose(), 0.3, 2.0));
+  sim::CvodeOptions o;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  o.max_order = 2;
+  sim::CvodeIntegrator integ(sys.stateSize(), [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+    sys.derivatives(t, y, yd);
+  }, o);
+  Eigen::VectorXd y = sys.initialState(homePose());
+  integ.initialize(0.0, y);
+  multibody::Data data(ur5);
+  double max_track = 0;
+  for (double t = 0.1; t <= 1.0 + 1e-9; t += 0.1) {
+    integ.advance(t, y);
+    const auto& s = sys.signals(t, y);
+    // The drives' output torques are exactly what the rigid arm needs for the simulated motion.
+    const Eigen::VectorXd tau = multibody::rnea(ur5, data, y.head(6), y.segment(6, 6), s.qdd);
+    EXPECT_TRUE(test::MatricesNear(s.tau_gear, tau, 1e-9)) << "t = " << t;
+    max_track = std::max(max_track, (s.q_set - y.head(6)).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(max_track, 1e-3) << "the 002 cascade tracks the reference";
+}
+
+TEST(RobotSystem, StartsAtRestHoldingGravity) {
+  const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
+  sim::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
+    return std::make_shared<drive::StrainWaveGear>(k < 3 ? drive::StrainWaveGearParams::ur5SizeA() : drive::StrainWaveGearParams::ur5SizeB());
+  }, true));
+  const Eigen::VectorXd y0 = sys.initialState(homePose());
+  Eigen::VectorXd yd(sys.stateSize());
+  sys.derivatives(0.0, y0, yd);
+  // Every state derivative vanishes: joints at rest, gears in static equilibrium, currents and integrators steady.
+  EXPECT_LT(yd.cwiseAbs().maxCoeff(), 1e-6) << "max |ydot| at index " << [&] { Eigen::Index i; yd.cwiseAbs().maxCoeff(&i); return i; }();
+}
+
+TEST(RobotSystem, StrainWaveGearSpeedRatio101) {
+  const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
+  sim::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
+    auto p = k < 3 ? drive::StrainWaveGearParams::ur5SizeA() : drive::StrainWaveGearParams::ur5SizeB();
+    return std::make_shared<drive::StrainWaveGear>(p);
+  }, true));
+  // Base joint turns at a constant 0.5 rad/s after a smooth start; the others hold.
+  const Eigen::VectorXd q0 = homePose();
+  sys.setSetpoints([q0](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
+    q = q0;
+    qd.setZero();
+    qdd.setZero();
+    const double T = 0.2, v = 0.5;  // quadratic blend to 0.5 rad/s over 0.2 s
+    if (t < T) {
+      q[0] += 0.5 * v / T * t * t;
+      qd[0] = v / T * t;
+      qdd[0] = v / T;
+    } else {
+      q[0] += 0.5 * v * T + v * (t - T);
+      qd[0] = v;
+    }
+  });
+  sim::CvodeOptions o;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  o.max_order = 2;
+  o.max_step = 1e-3;
+  sim::CvodeIntegrator integ(sys.stateSize(), [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+    sys.derivatives(t, y, yd);
+  }, o);
+  Eigen::VectorXd y = sys.initialState(q0);
+  integ.initialize(0.0, y);
+  integ.setStopTime(0.2);
+  integ.advance(0.2, y);
+  integ.initialize(0.2, y);
+  integ.advance(1.0, y);
+  const auto& s = sys.signals(1.0, y);
+  EXPECT_NEAR(y[6], 0.5, 1e-4);
+  EXPECT_NEAR(s.qdm[0] / y[6], 101.0, 1e-4);
+}
+
+TEST(RobotSystem, TorqueFreeFrictionlessRunConservesEnergy) {
+  // Uncontrolled, frictionless, undamped elastic gears with rotor inertias: all energy is mechanical.
+  const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
+  sim::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
+    return std::make_shared<drive::ElasticGear>(drive::ElasticGearParams{101.0, k < 3 ? 1.4e5 : 2.6e4, 0.0, drive::ComplianceSide::Output});
+  }, false));
+  sim::CvodeOptions o;
+  o.method = sim::Method::Adams;
+  o.rtol = 1e-10;
+  o.atol = 1e-12;
+  sim::CvodeIntegrator integ(sys.stateSize(), [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+    sys.derivatives(t, y, yd);
+  }, o);
+  Eigen::VectorXd y = sys.initialState(homePose());
+  integ.initialize(0.0, y);
+  const double E0 = sys.mechanicalEnergy(y);
+  double max_dev = 0, max_T = 0;
+  multibody::Data data(sys.model());
+  for (int k = 1; k <= 200; ++k) {
+    integ.advance(0.01 * k, y);
+    max_dev = std::max(max_dev, std::abs(sys.mechanicalEnergy(y) - E0));
+    max_T = std::max(max_T, multibody::kineticEnergy(sys.model(), data, y.head(6), y.segment(6, 6)));
+  }
+  ASSERT_GT(max_T, 1.0) << "the arm really falls";
+  EXPECT_LT(max_dev / max_T, 1e-6) << "drift " << max_dev << " J, peak kinetic energy " << max_T << " J";
+}
