@@ -1,0 +1,453 @@
+#include "jointsim/control/trajectory.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "jointsim/common/error.hpp"
+
+namespace jointsim::control {
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586;
+
+std::string num(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+bool allFinite(const Eigen::VectorXd& v) { return v.allFinite(); }
+
+}  // namespace
+
+JointSetpoint JointTrajectory::setpoint(double t) const {
+  JointSetpoint s;
+  s.q.resize(dof());
+  s.qd.resize(dof());
+  s.qdd.resize(dof());
+  evaluate(t, s.q, s.qd, s.qdd);
+  return s;
+}
+
+// ------------------------------------------------------------------------------------------ limits
+
+void checkLimits(const JointTrajectory& trajectory, const std::vector<std::string>& joint_names,
+                 const std::vector<multibody::JointLimits>& limits) {
+  const int n = trajectory.dof();
+  if (joint_names.size() != static_cast<size_t>(n) || limits.size() != static_cast<size_t>(n))
+    throw InputError("checkLimits: the trajectory has " + std::to_string(n) + " joints but " +
+                     std::to_string(joint_names.size()) + " joint names and " + std::to_string(limits.size()) +
+                     " limits were given");
+  const double T = std::max(0.0, trajectory.duration());
+  const double step = std::max(1e-3, T / 1e7);
+  std::vector<double> times;
+  const auto count = static_cast<size_t>(std::floor(T / step));
+  times.reserve(count + 2);
+  for (size_t k = 0; k <= count; ++k) times.push_back(static_cast<double>(k) * step);
+  times.push_back(T);
+  for (double b : trajectory.breakpoints())
+    if (b >= 0.0 && b <= T) times.push_back(b);
+  std::sort(times.begin(), times.end());
+  times.erase(std::unique(times.begin(), times.end()), times.end());
+
+  constexpr double kTol = 1e-9;
+  Eigen::VectorXd q(n), qd(n), qdd(n);
+  for (double t : times) {
+    trajectory.evaluate(t, q, qd, qdd);
+    for (int i = 0; i < n; ++i) {
+      const auto& L = limits[static_cast<size_t>(i)];
+      if (!(q[i] >= L.lower - kTol && q[i] <= L.upper + kTol))
+        throw InputError("trajectory leaves the limits of joint " + joint_names[static_cast<size_t>(i)] +
+                         " at t = " + num(t) + " s: q = " + num(q[i]) + " rad outside [" + num(L.lower) + ", " +
+                         num(L.upper) + "]");
+      if (std::isfinite(L.velocity) && !(std::abs(qd[i]) <= L.velocity + kTol))
+        throw InputError("trajectory exceeds the velocity limit of joint " + joint_names[static_cast<size_t>(i)] +
+                         " at t = " + num(t) + " s: |qd| = " + num(std::abs(qd[i])) + " rad/s > " +
+                         num(L.velocity) + " rad/s");
+    }
+  }
+}
+
+// ------------------------------------------------------------------------------------------ point to point
+
+PointToPointTrajectory::PointToPointTrajectory(Eigen::VectorXd start, std::vector<PtpSegment> segments)
+    : start_(std::move(start)), spec_(std::move(segments)) {
+  const Eigen::Index n = start_.size();
+  if (n < 1) throw InputError("point_to_point: the start position needs at least one joint");
+  if (!allFinite(start_)) throw InputError("point_to_point: the start position must be finite");
+  double t = 0.0;
+  Eigen::VectorXd from = start_;
+  for (size_t k = 0; k < spec_.size(); ++k) {
+    const PtpSegment& s = spec_[k];
+    const std::string where = "point_to_point segment " + std::to_string(k) + ": ";
+    if (s.target.size() != n)
+      throw InputError(where + "target has " + std::to_string(s.target.size()) + " joint positions, expected " +
+                       std::to_string(n));
+    if (!allFinite(s.target)) throw InputError(where + "target must be finite");
+    if (!(s.dwell >= 0.0 && std::isfinite(s.dwell))) throw InputError(where + "dwell must be >= 0 s");
+    if (!(s.duration >= 0.0 && std::isfinite(s.duration))) throw InputError(where + "duration must be >= 0 s");
+    if (!(s.acceleration >= 0.0 && std::isfinite(s.acceleration)))
+      throw InputError(where + "acceleration must be > 0 rad/s^2");
+    Seg g;
+    g.t0 = t;
+    g.from = from;
+    g.to = s.target;
+    g.delta = g.to - g.from;
+    const double D = g.delta.cwiseAbs().maxCoeff();
+    if (s.duration > 0.0) {
+      if (s.velocity != 0.0)
+        throw InputError(where + "give either velocity (with acceleration) or duration, not both");
+      const double T = s.duration;
+      if (s.acceleration > 0.0 && D > 0.0) {
+        const double disc = T * T - 4.0 * D / s.acceleration;
+        if (disc < 0.0)
+          throw InputError(where + "acceleration " + num(s.acceleration) + " rad/s^2 is too low to move " + num(D) +
+                           " rad in " + num(T) + " s (needs at least 4 D / T^2 = " + num(4.0 * D / (T * T)) +
+                           " rad/s^2)");
+        g.ta = 0.5 * (T - std::sqrt(disc));
+      } else {
+        g.ta = 0.5 * T;
+      }
+      if (!(g.ta > 0.0)) g.ta = 0.5 * T;
+      g.tc = std::max(0.0, T - 2.0 * g.ta);
+    } else {
+      if (!(s.velocity > 0.0 && std::isfinite(s.velocity))) throw InputError(where + "velocity must be > 0 rad/s");
+      if (!(s.acceleration > 0.0)) throw InputError(where + "acceleration must be > 0 rad/s^2");
+      const double v = s.velocity, a = s.acceleration;
+      if (D == 0.0) {
+        g.ta = g.tc = 0.0;
+      } else if (D * a >= v * v) {
+        g.ta = v / a;
+        g.tc = std::max(0.0, D / v - v / a);
+      } else {
+        g.ta = std::sqrt(D / a);
+        g.tc = 0.0;
+      }
+    }
+    g.T = 2.0 * g.ta + g.tc;
+    if (g.T > 0.0) {
+      g.V = 1.0 / (g.ta + g.tc);
+      g.A = g.V / g.ta;
+    }
+    t += g.T + s.dwell;
+    from = g.to;
+    starts_.push_back(g.t0);
+    segs_.push_back(std::move(g));
+  }
+  duration_ = t;
+}
+
+double PointToPointTrajectory::segmentEnd(int k) const {
+  const Seg& g = segs_.at(static_cast<size_t>(k));
+  return g.t0 + g.T;
+}
+
+void PointToPointTrajectory::evaluate(double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
+                                      Eigen::Ref<Eigen::VectorXd> qdd) const {
+  if (segs_.empty() || t < 0.0) {
+    q = start_;
+    qd.setZero();
+    qdd.setZero();
+    return;
+  }
+  const auto it = std::upper_bound(starts_.begin(), starts_.end(), t);
+  const size_t k = it == starts_.begin() ? 0 : static_cast<size_t>(it - starts_.begin()) - 1;
+  const Seg& g = segs_[k];
+  const double tau = t - g.t0;
+  if (tau >= g.T) {
+    q = g.to;
+    qd.setZero();
+    qdd.setZero();
+    return;
+  }
+  if (tau < g.ta) {  // acceleration
+    q = g.from + (0.5 * g.A * tau * tau) * g.delta;
+    qd = (g.A * tau) * g.delta;
+    qdd = g.A * g.delta;
+  } else if (tau < g.ta + g.tc) {  // cruise
+    q = g.from + (0.5 * g.A * g.ta * g.ta + g.V * (tau - g.ta)) * g.delta;
+    qd = g.V * g.delta;
+    qdd.setZero();
+  } else {  // deceleration, measured back from the end so the target is reached exactly
+    const double u = g.T - tau;
+    q = g.to - (0.5 * g.A * u * u) * g.delta;
+    qd = (g.A * u) * g.delta;
+    qdd = -g.A * g.delta;
+  }
+}
+
+std::vector<double> PointToPointTrajectory::breakpoints() const {
+  std::vector<double> out;
+  for (const Seg& g : segs_) {
+    if (!(g.T > 0.0) || g.delta.isZero(0.0)) continue;
+    out.push_back(g.t0);
+    out.push_back(g.t0 + g.ta);
+    if (g.tc > 0.0) out.push_back(g.t0 + g.ta + g.tc);
+    out.push_back(g.t0 + g.T);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  out.erase(std::remove_if(out.begin(), out.end(), [](double x) { return !(x > 0.0); }), out.end());
+  return out;
+}
+
+std::string PointToPointTrajectory::describe() const {
+  std::ostringstream os;
+  os << "point_to_point(" << dof() << " joints, " << segs_.size() << " segments, duration " << duration_ << " s)";
+  return os.str();
+}
+
+// ------------------------------------------------------------------------------------------ Fourier
+
+FourierTrajectory::FourierTrajectory(FourierParams params) : p_(std::move(params)) {
+  const Eigen::Index n = p_.offset.size();
+  if (n < 1) throw InputError("fourier: the offset needs at least one joint");
+  if (!(p_.base_frequency > 0.0 && std::isfinite(p_.base_frequency)))
+    throw InputError("fourier: base_frequency must be > 0 Hz");
+  if (p_.a.rows() != n || p_.b.rows() != n || p_.a.cols() != p_.b.cols() || p_.a.cols() < 1)
+    throw InputError("fourier: a and b must both be " + std::to_string(n) + " x N (N >= 1 harmonics), got " +
+                     std::to_string(p_.a.rows()) + " x " + std::to_string(p_.a.cols()) + " and " +
+                     std::to_string(p_.b.rows()) + " x " + std::to_string(p_.b.cols()));
+  if (!p_.offset.allFinite() || !p_.a.allFinite() || !p_.b.allFinite())
+    throw InputError("fourier: offset and coefficients must be finite");
+  if (!(p_.fade_in >= 0.0 && std::isfinite(p_.fade_in))) throw InputError("fourier: fade_in must be >= 0 s");
+  if (p_.duration == 0.0) p_.duration = p_.fade_in + 1.0 / p_.base_frequency;
+  if (!(p_.duration > 0.0 && std::isfinite(p_.duration)) || p_.duration < p_.fade_in)
+    throw InputError("fourier: duration must be > 0 s and >= fade_in (" + num(p_.fade_in) + " s)");
+}
+
+void FourierTrajectory::evaluateSeries(double tau, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
+                                       Eigen::Ref<Eigen::VectorXd> qdd) const {
+  const double wf = kTwoPi * p_.base_frequency;
+  q = p_.offset;
+  qd.setZero();
+  qdd.setZero();
+  for (Eigen::Index k = 0; k < p_.a.cols(); ++k) {
+    const double wk = wf * static_cast<double>(k + 1);
+    const double s = std::sin(wk * tau), c = std::cos(wk * tau);
+    for (Eigen::Index i = 0; i < q.size(); ++i) {
+      const double a = p_.a(i, k), b = p_.b(i, k);
+      q[i] += (a * s - b * c) / wk;
+      qd[i] += a * c + b * s;
+      qdd[i] += wk * (b * c - a * s);
+    }
+  }
+}
+
+void FourierTrajectory::evaluate(double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
+                                 Eigen::Ref<Eigen::VectorXd> qdd) const {
+  const double T = p_.fade_in;
+  if (T > 0.0 && t <= 0.0) {
+    q = p_.offset;
+    qd.setZero();
+    qdd.setZero();
+    return;
+  }
+  evaluateSeries(t - T, q, qd, qdd);
+  if (T > 0.0 && t < T) {
+    // q = q0 + w F, qd = w' F + w F', qdd = w'' F + 2 w' F' + w F'' with F = q_F (series minus offset).
+    const double s = t / T, s1 = 1.0 - s;
+    const double w = s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
+    const double w1 = 30.0 * s * s * s1 * s1 / T;
+    const double w2 = 60.0 * s * s1 * (1.0 - 2.0 * s) / (T * T);
+    for (Eigen::Index i = 0; i < q.size(); ++i) {
+      const double F = q[i] - p_.offset[i], F1 = qd[i], F2 = qdd[i];
+      q[i] = p_.offset[i] + w * F;
+      qd[i] = w1 * F + w * F1;
+      qdd[i] = w2 * F + 2.0 * w1 * F1 + w * F2;
+    }
+  }
+}
+
+std::string FourierTrajectory::describe() const {
+  std::ostringstream os;
+  os << "fourier(" << dof() << " joints, " << harmonics() << " harmonics, base_frequency " << p_.base_frequency
+     << " Hz, fade_in " << p_.fade_in << " s, duration " << p_.duration << " s)";
+  return os.str();
+}
+
+// ------------------------------------------------------------------------------------------ sampled
+
+SampledTrajectory::SampledTrajectory(std::vector<double> times, Eigen::MatrixXd positions, std::string source)
+    : t_(std::move(times)), y_(std::move(positions)), source_(std::move(source)) {
+  const size_t K = t_.size();
+  if (K < 2) throw InputError(source_ + ": a sampled trajectory needs at least 2 samples, got " + std::to_string(K));
+  if (y_.rows() < 1 || static_cast<size_t>(y_.cols()) != K)
+    throw InputError(source_ + ": positions must be n x " + std::to_string(K) + " (one column per sample), got " +
+                     std::to_string(y_.rows()) + " x " + std::to_string(y_.cols()));
+  if (!y_.allFinite()) throw InputError(source_ + ": positions must be finite");
+  for (size_t k = 0; k < K; ++k) {
+    if (!std::isfinite(t_[k])) throw InputError(source_ + ": sample " + std::to_string(k) + ": time must be finite");
+    if (k > 0 && !(t_[k] > t_[k - 1]))
+      throw InputError(source_ + ": sample " + std::to_string(k) + ": time must increase strictly");
+  }
+  t_start_ = t_[0];
+  for (double& t : t_) t -= t_start_;
+  t_[0] = 0.0;
+
+  // Natural cubic spline: second derivatives M with M_0 = M_{K-1} = 0 and, for 0 < j < K-1,
+  // h_{j-1} M_{j-1} + 2 (h_{j-1} + h_j) M_j + h_j M_{j+1} = 6 (Δy_j / h_j − Δy_{j-1} / h_{j-1}).
+  // Thomas algorithm on all joints at once.
+  const Eigen::Index n = y_.rows();
+  m_ = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(K));
+  if (K > 2) {
+    std::vector<double> cprime(K, 0.0);
+    Eigen::MatrixXd d = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(K));
+    for (size_t j = 1; j + 1 < K; ++j) {
+      const double h0 = t_[j] - t_[j - 1], h1 = t_[j + 1] - t_[j];
+      const auto J = static_cast<Eigen::Index>(j);
+      const Eigen::VectorXd rhs = 6.0 * ((y_.col(J + 1) - y_.col(J)) / h1 - (y_.col(J) - y_.col(J - 1)) / h0);
+      const double lower = (j == 1) ? 0.0 : h0;  // M_0 = 0 is known
+      const double denom = 2.0 * (h0 + h1) - lower * cprime[j - 1];
+      cprime[j] = (j + 2 < K) ? h1 / denom : 0.0;  // M_{K-1} = 0 is known
+      d.col(J) = (rhs - lower * d.col(J - 1)) / denom;
+    }
+    for (size_t j = K - 2; j >= 1; --j) {
+      const auto J = static_cast<Eigen::Index>(j);
+      m_.col(J) = d.col(J) - cprime[j] * m_.col(J + 1);
+    }
+  }
+}
+
+void SampledTrajectory::evaluate(double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
+                                 Eigen::Ref<Eigen::VectorXd> qdd) const {
+  const Eigen::Index last = y_.cols() - 1;
+  if (t < 0.0 || t >= t_.back()) {
+    q = t < 0.0 ? y_.col(0) : y_.col(last);
+    qd.setZero();
+    qdd.setZero();
+    return;
+  }
+  const auto it = std::upper_bound(t_.begin(), t_.end(), t);
+  auto k = static_cast<Eigen::Index>(it - t_.begin()) - 1;
+  k = std::clamp<Eigen::Index>(k, 0, last - 1);
+  const double h = t_[static_cast<size_t>(k + 1)] - t_[static_cast<size_t>(k)];
+  const double A = (t_[static_cast<size_t>(k + 1)] - t) / h, B = 1.0 - A;
+  q = A * y_.col(k) + B * y_.col(k + 1) + ((A * A * A - A) * h * h / 6.0) * m_.col(k) +
+      ((B * B * B - B) * h * h / 6.0) * m_.col(k + 1);
+  qd = (y_.col(k + 1) - y_.col(k)) / h - ((3.0 * A * A - 1.0) * h / 6.0) * m_.col(k) +
+       ((3.0 * B * B - 1.0) * h / 6.0) * m_.col(k + 1);
+  qdd = A * m_.col(k) + B * m_.col(k + 1);
+}
+
+std::string SampledTrajectory::describe() const {
+  std::ostringstream os;
+  os << "csv(" << source_ << ", " << dof() << " joints, " << t_.size() << " samples, duration " << t_.back()
+     << " s)";
+  return os.str();
+}
+
+namespace {
+
+std::vector<std::string> splitCsv(const std::string& line) {
+  std::vector<std::string> cells;
+  std::string cur;
+  for (char ch : line) {
+    if (ch == ',') {
+      cells.push_back(cur);
+      cur.clear();
+    } else {
+      cur += ch;
+    }
+  }
+  cells.push_back(cur);
+  for (auto& c : cells) {
+    const size_t b = c.find_first_not_of(" \t\r");
+    c = b == std::string::npos ? std::string() : c.substr(b, c.find_last_not_of(" \t\r") - b + 1);
+  }
+  return cells;
+}
+
+}  // namespace
+
+SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, const std::vector<std::string>& columns,
+                                             double gap_factor) {
+  if (dof < 1) throw InputError(path + ": the number of joints must be >= 1");
+  if (!(gap_factor == 0.0 || (gap_factor > 1.0 && std::isfinite(gap_factor))))
+    throw InputError(path + ": gap_factor must be > 1 (or 0 to disable the gap check), got " + num(gap_factor));
+  if (!columns.empty() && columns.size() != static_cast<size_t>(dof))
+    throw InputError(path + ": " + std::to_string(columns.size()) + " column names given for " +
+                     std::to_string(dof) + " joints");
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open CSV file for reading");
+  auto rowError = [&](int row, const std::string& msg) {
+    return InputError(path + ": row " + std::to_string(row) + ": " + msg);
+  };
+  std::string line;
+  if (!std::getline(in, line)) throw rowError(1, "empty file, expected a header line (time, then one column per joint)");
+  const std::vector<std::string> header = splitCsv(line);
+  std::vector<size_t> cols;
+  if (columns.empty()) {
+    if (header.size() != static_cast<size_t>(dof) + 1)
+      throw rowError(1, "expected 1 + " + std::to_string(dof) + " = " + std::to_string(dof + 1) +
+                            " columns (time, then one per joint), got " + std::to_string(header.size()) +
+                            "; name the joint columns with `columns` to select them");
+    for (int i = 1; i <= dof; ++i) cols.push_back(static_cast<size_t>(i));
+  } else {
+    for (const std::string& name : columns) {
+      const auto it = std::find(header.begin(), header.end(), name);
+      if (it == header.end()) {
+        std::string list;
+        for (const auto& h : header) list += (list.empty() ? "" : ", ") + h;
+        throw rowError(1, "no column named '" + name + "' (columns: " + list + ")");
+      }
+      if (it == header.begin()) throw rowError(1, "column '" + name + "' is the time column");
+      cols.push_back(static_cast<size_t>(it - header.begin()));
+    }
+  }
+
+  std::vector<double> times;
+  std::vector<int> rows;
+  std::vector<double> values;  // row-major, dof per sample
+  int row = 1;
+  std::vector<double> cells;
+  while (std::getline(in, line)) {
+    ++row;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    const std::vector<std::string> text = splitCsv(line);
+    if (text.size() != header.size())
+      throw rowError(row, "expected " + std::to_string(header.size()) + " columns (as the header), got " +
+                              std::to_string(text.size()));
+    cells.clear();
+    for (size_t c = 0; c < text.size(); ++c) {
+      const std::string& cell = text[c];
+      char* end = nullptr;
+      const double x = std::strtod(cell.c_str(), &end);
+      if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(x))
+        throw rowError(row, "column '" + header[c] + "': expected a number, got '" + cell + "'");
+      cells.push_back(x);
+    }
+    if (!times.empty() && !(cells[0] > times.back()))
+      throw rowError(row, "time " + num(cells[0]) + " s is not after the previous row's " + num(times.back()) +
+                              " s (time must increase strictly)");
+    times.push_back(cells[0]);
+    rows.push_back(row);
+    for (size_t c : cols) values.push_back(cells[c]);
+  }
+  if (times.size() < 2)
+    throw InputError(path + ": expected at least 2 data rows, got " + std::to_string(times.size()));
+
+  if (gap_factor > 0.0) {
+    std::vector<double> dt(times.size() - 1);
+    for (size_t k = 1; k < times.size(); ++k) dt[k - 1] = times[k] - times[k - 1];
+    std::vector<double> sorted = dt;
+    std::sort(sorted.begin(), sorted.end());
+    const size_t m = sorted.size();
+    const double median = (m % 2 == 1) ? sorted[m / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
+    for (size_t k = 0; k < dt.size(); ++k)
+      if (dt[k] > gap_factor * median)
+        throw rowError(rows[k + 1], "time step " + num(dt[k]) + " s is more than " + num(gap_factor) +
+                                        "x the median " + num(median) + " s (a gap)");
+  }
+
+  Eigen::MatrixXd y(dof, static_cast<Eigen::Index>(times.size()));
+  for (size_t k = 0; k < times.size(); ++k)
+    for (int i = 0; i < dof; ++i) y(i, static_cast<Eigen::Index>(k)) = values[k * static_cast<size_t>(dof) + static_cast<size_t>(i)];
+  return SampledTrajectory(std::move(times), std::move(y), path);
+}
+
+}  // namespace jointsim::control
