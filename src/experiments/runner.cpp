@@ -4,6 +4,7 @@
 
 #include "experiments/config_common.hpp"
 #include "experiments/joint_rig_yaml.hpp"
+#include "experiments/tracking_internal.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/joint_rig.hpp"
 #include "jointsim/experiments/passive_robot.hpp"
@@ -108,7 +109,8 @@ RunReport runExperimentFile(const std::string& config_path, const RunOptions& op
   const std::string t = type.asString("an experiment type");
   if (t == "passive_robot") return runPassiveRobot(root, config_path, name, options);
   if (t == "joint_rig") return runJointRig(root, config_path, name, options);
-  type.failExpected("an experiment type (known: passive_robot, joint_rig)");
+  if (t == "tracking") return detail::runTracking(root, config_path, name, options);
+  type.failExpected("an experiment type (known: passive_robot, joint_rig, tracking)");
 }
 
 }  // namespace jointsim::experiments

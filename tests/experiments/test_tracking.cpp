@@ -1,0 +1,122 @@
+// The UR5 digital twin through `jointsim run` (library entry): the excitation run tracks within 0.5°,
+// and bad robot/trajectory input is rejected with file, key path or row, writing nothing.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <sys/wait.h>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/experiments/runner.hpp"
+#include "jointsim/experiments/tracking.hpp"
+#include "test_util.hpp"
+
+using namespace jointsim;
+using ::testing::HasSubstr;
+
+namespace {
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Column-wise maximum of |q_set − q| from the CSV.
+std::vector<double> maxErrors(const std::string& csv_path, int n) {
+  std::ifstream in(csv_path);
+  std::string line;
+  std::getline(in, line);
+  std::vector<double> err(static_cast<size_t>(n), 0.0);
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::vector<double> row;
+    for (std::string c; std::getline(ss, c, ',');) row.push_back(std::stod(c));
+    for (int k = 0; k < n; ++k) {
+      const size_t base = 1 + 11 * static_cast<size_t>(k);  // q_set, q, ... (11 columns per joint)
+      err[static_cast<size_t>(k)] = std::max(err[static_cast<size_t>(k)], std::abs(row[base] - row[base + 1]));
+    }
+  }
+  return err;
+}
+}  // namespace
+
+TEST(Tracking, Ur5ExcitationTracksWithinHalfADegree) {
+  const auto dir = std::filesystem::temp_directory_path() / "jointsim_ur5_excitation";
+  std::filesystem::remove_all(dir);
+  experiments::RunOptions o;
+  o.output_dir = dir.string();
+  const auto report = experiments::runExperimentFile(test::sourcePath("config/experiments/ur5_excitation.yaml"), o);
+  ASSERT_EQ(report.status, "ok");
+  const auto err = maxErrors(report.csv_path, 6);
+  for (int k = 0; k < 6; ++k) {
+    std::printf("joint %d: max tracking error %.4f deg\n", k + 1, err[static_cast<size_t>(k)] * 180 / M_PI);
+    EXPECT_LT(err[static_cast<size_t>(k)] * 180 / M_PI, 0.5) << "joint " << k + 1;
+    EXPECT_GT(err[static_cast<size_t>(k)], 0.0);
+  }
+  EXPECT_THAT(slurp(report.summary_path), HasSubstr("\"max_tracking_error_rad\""));
+}
+
+TEST(Tracking, RobotWithDrivesErrors) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string drives = slurp(test::sourcePath("config/robots/ur5_drives.yaml"));
+  const auto path = dir / "jointsim_bad_drives.yaml";
+  auto expectError = [&](std::string text, const std::string& expected) {
+    text.replace(text.find("multibody: ur5.yaml"), 19, "multibody: " + test::sourcePath("config/robots/ur5.yaml"));
+    std::ofstream(path) << text;
+    try {
+      experiments::loadRobotWithDrives(path.string());
+      ADD_FAILURE() << "no error for " << expected;
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(path.string()));
+      EXPECT_THAT(e.what(), HasSubstr(expected));
+    }
+  };
+  // A drive missing for a joint: drop the last drive (5 lines).
+  std::string missing = drives;
+  missing.erase(missing.find("  - joint: wrist_3_joint"));
+  expectError(missing, "drives: joint 'wrist_3_joint' has no drive");
+  // Gains of the wrong sign.
+  std::string negative = drives;
+  negative.replace(negative.find("P_vel: 1.0"), 10, "P_vel: -1.0");
+  expectError(negative, "controller.P_vel: expected a gain >= 0 A·s/rad");
+}
+
+TEST(Tracking, TrajectoryBeyondLimitsAndBadSetpointCsvExitTwoAndWriteNothing) {
+  const auto dir = std::filesystem::temp_directory_path() / "jointsim_tracking_bad";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string robot = test::sourcePath("config/robots/ur5_drives.yaml");
+  auto run = [&](const std::string& trajectory) {
+    const auto cfg = dir / "exp.yaml";
+    std::ofstream(cfg) << "experiment: {name: bad, type: tracking}\nrobot: " << robot << "\ntrajectory:\n" << trajectory;
+    const auto out = dir / "out";
+    const std::string cmd = std::string(JOINTSIM_CLI_PATH) + " run " + cfg.string() + " -o " + out.string() + " 2>" +
+                            (dir / "err").string();
+    const int rc = std::system(cmd.c_str());
+    EXPECT_FALSE(std::filesystem::exists(out / "bad.csv"));
+    EXPECT_FALSE(std::filesystem::exists(out / "summary.json"));
+    return std::make_pair(WEXITSTATUS(rc), slurp(dir / "err"));
+  };
+  // Beyond the ±2π joint limits of ur5.yaml.
+  auto [rc1, err1] = run("  type: point_to_point\n  start: [0, -1.5, 1.5, -1.5, -1.5, 0]\n"
+                         "  segments:\n    - {target: [0, -1.5, 1.5, -1.5, -1.5, 7.0], velocity: 3.0, acceleration: 8.0}\n");
+  EXPECT_EQ(rc1, 2);
+  EXPECT_THAT(err1, HasSubstr("exp.yaml:4: trajectory: trajectory leaves the limits of joint wrist_3_joint at t = "));
+  // Set-point CSV with a gap and with non-monotonic time.
+  std::ofstream(dir / "gap.csv") << "t,q1,q2,q3,q4,q5,q6\n0,0,-1.5,1.5,-1.5,-1.5,0\n0.008,0,-1.5,1.5,-1.5,-1.5,0\n"
+                                    "0.016,0,-1.5,1.5,-1.5,-1.5,0\n0.5,0,-1.5,1.5,-1.5,-1.5,0\n";
+  auto [rc2, err2] = run("  type: csv\n  file: gap.csv\n");
+  EXPECT_EQ(rc2, 2);
+  EXPECT_THAT(err2, HasSubstr("gap.csv: row 5: time step"));
+  EXPECT_THAT(err2, HasSubstr("(a gap)"));
+  std::ofstream(dir / "back.csv") << "t,q1,q2,q3,q4,q5,q6\n0,0,-1.5,1.5,-1.5,-1.5,0\n0.008,0,-1.5,1.5,-1.5,-1.5,0\n"
+                                     "0.004,0,-1.5,1.5,-1.5,-1.5,0\n";
+  auto [rc3, err3] = run("  type: csv\n  file: back.csv\n");
+  EXPECT_EQ(rc3, 2);
+  EXPECT_THAT(err3, HasSubstr("back.csv: row 4"));
+}
