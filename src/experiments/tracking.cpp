@@ -80,7 +80,7 @@ sim::RobotSystem loadRobotWithDrives(const std::string& path) {
   for (size_t k = 0; k < drives.size(); ++k) {
     const YamlValue d = drives.at(k);
     d.expectMap("a drive mapping {joint, motor, electrics, transmission, friction, controller}");
-    d.allowKeys({"joint", "motor", "electrics", "transmission", "friction", "controller"});
+    d.allowKeys({"joint", "motor", "electrics", "transmission", "friction", "controller", "sensors"});
     sim::DriveSpec s;
     const YamlValue joint = d.required("joint", "name of the joint this drive moves");
     s.joint = joint.asString("a joint name");
@@ -96,6 +96,21 @@ sim::RobotSystem loadRobotWithDrives(const std::string& path) {
     s.transmission = detail::readTransmission(d.required("transmission", "the transmission"));
     if (d.has("friction")) s.friction = detail::readFrictionModel(d["friction"]);
     s.controller = readController(d["controller"]);
+    if (const YamlValue sn = d["sensors"]; sn.defined()) {
+      sn.expectMap("a sensors mapping {joint_quantum, motor_quantum, current_quantum, joint_noise, motor_velocity_noise, current_noise}");
+      sn.allowKeys({"joint_quantum", "motor_quantum", "current_quantum", "joint_noise", "motor_velocity_noise", "current_noise"});
+      auto nonneg = [&](const char* key, const char* unit) {
+        const double v = sn[key].asDouble(0.0, std::string("a value in ") + unit);
+        if (v < 0.0) sn[key].failExpected(std::string("a value >= 0 ") + unit);
+        return v;
+      };
+      s.sensors.joint_quantum = nonneg("joint_quantum", "rad");
+      s.sensors.motor_quantum = nonneg("motor_quantum", "rad");
+      s.sensors.current_quantum = nonneg("current_quantum", "A");
+      s.sensors.joint_noise = nonneg("joint_noise", "rad");
+      s.sensors.motor_velocity_noise = nonneg("motor_velocity_noise", "rad/s");
+      s.sensors.current_noise = nonneg("current_noise", "A");
+    }
     s.electrics = d.has("electrics") ? d["electrics"].asBool("true or false")
                                      : s.controller.type == control::ControllerType::Cascade002;
     specs.push_back(std::move(s));
@@ -127,7 +142,8 @@ namespace detail {
 
 RunReport runTracking(const YamlValue& root, const std::string& config_path, const std::string& name,
                       const RunOptions& options) {
-  root.allowKeys({"experiment", "robot", "trajectory", "initial_state", "duration", "log_rate", "solver", "check_limits"});
+  root.allowKeys({"experiment", "robot", "trajectory", "initial_state", "duration", "log_rate", "solver", "check_limits",
+                  "control"});
   const std::string base_dir = std::filesystem::path(config_path).parent_path().string();
   const YamlValue robot = root.required("robot", "robot-with-drives file, relative to this file");
   std::filesystem::path robot_path = robot.asString("a file path");
@@ -140,6 +156,16 @@ RunReport runTracking(const YamlValue& root, const std::string& config_path, con
     }
   }();
   const int n = sys.dof();
+  double control_rate = 0.0;
+  if (const YamlValue c = root["control"]; c.defined()) {
+    c.expectMap("a mapping {rate: Hz, seed}");
+    c.allowKeys({"rate", "seed"});
+    const YamlValue rate = c.required("rate", "control sampling rate in Hz");
+    control_rate = rate.asDouble("a rate in Hz");
+    if (!(control_rate > 0.0)) rate.failExpected("a rate > 0 Hz");
+    const long seed = c["seed"].defined() ? c["seed"].asInt("an integer seed") : 1;
+    sys.setSampledControl(control_rate, static_cast<unsigned>(seed));
+  }
   const std::shared_ptr<const control::JointTrajectory> traj =
       control::trajectoryFromYaml(root.required("trajectory", "the reference trajectory"), n, base_dir);
   const bool check = !root.has("check_limits") || root["check_limits"].asBool("true or false");
@@ -190,8 +216,9 @@ RunReport runTracking(const YamlValue& root, const std::string& config_path, con
         size_t next = 0;
         const auto start = std::chrono::steady_clock::now();
         Eigen::VectorXd y = sys.initialState(q0);
+        if (sys.sampled()) sys.controlStep(0.0, y);  // the held outputs at t = 0
         integ.initialize(0.0, y);
-        if (next < breaks.size()) integ.setStopTime(breaks[next]);
+        if (!sys.sampled() && next < breaks.size()) integ.setStopTime(breaks[next]);
         auto emit = [&](double t) {
           const Eigen::VectorXd& row = logger.row(t, y);
           max_err = max_err.cwiseMax((sys.signals(t, y).q_set - y.head(n)).cwiseAbs());
@@ -200,6 +227,33 @@ RunReport runTracking(const YamlValue& root, const std::string& config_path, con
         emit(0.0);
         const auto steps = static_cast<long>(std::ceil(duration * log_rate - 1e-9));
         double t_reached = 0.0;
+        if (sys.sampled()) {
+          // Zero-order hold: one controller update per sample, CVODE restarted after each (held inputs
+          // jump), never stepping across a sample; logs interleaved at their own times.
+          const double Ts = 1.0 / control_rate;
+          long next_log = 1;
+          const auto samples = static_cast<long>(std::ceil(duration * control_rate - 1e-9));
+          for (long s_k = 0; s_k < samples; ++s_k) {
+            const double t_k = s_k * Ts, t_next = std::min(duration, (s_k + 1) * Ts);
+            if (s_k > 0) {  // the update at t = 0 was made before the first log row
+              sys.controlStep(t_k, y);
+              integ.initialize(t_k, y);
+            }
+            integ.setStopTime(t_next);
+            while (next_log <= steps && std::min(duration, next_log / log_rate) <= t_next + 1e-12) {
+              const double t_log = std::min(duration, next_log / log_rate);
+              t_reached = integ.advance(std::min(t_log, t_next), y);
+              emit(t_reached);
+              ++next_log;
+            }
+            if (t_reached < t_next) t_reached = integ.advance(t_next, y);
+          }
+          SimulationOutcome out;
+          out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+          out.sim_time_s = t_reached;
+          out.stats = integ.stats();
+          return out;
+        }
         for (long k = 1; k <= steps; ++k) {
           const double t_out = std::min(duration, static_cast<double>(k) / log_rate);
           while (next < breaks.size() && breaks[next] <= t_out) {
@@ -238,6 +292,7 @@ RunReport runTracking(const YamlValue& root, const std::string& config_path, con
         }
         w.endArray();
         w.key("max_tracking_error_rad"); w.value(max_err);
+        w.key("control_rate_hz"); w.value(control_rate);
         w.key("duration"); w.value(duration);
         w.key("log_rate"); w.value(log_rate);
         w.key("solver"); writeSolverOptions(w, solver);

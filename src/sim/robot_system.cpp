@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 #include <Eigen/LU>
 
@@ -9,6 +10,16 @@
 #include "jointsim/multibody/algorithms.hpp"
 
 namespace jointsim::sim {
+
+struct RobotSystem::Rng {
+  std::mt19937_64 engine;
+  std::normal_distribution<double> normal{0.0, 1.0};
+  double gauss(double sigma) { return sigma > 0.0 ? sigma * normal(engine) : 0.0; }
+};
+
+namespace {
+double quantise(double x, double quantum) { return quantum > 0.0 ? quantum * std::round(x / quantum) : x; }
+}  // namespace
 
 void RobotSignals::resize(int n) {
   for (Eigen::VectorXd* v : {&q_set, &qd_set, &qdd_set, &q_fb, &qm, &qdm, &current, &i_ref, &voltage, &tau_motor,
@@ -80,6 +91,9 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
       n_states_ += L.n_friction;
     }
     L.n_controller = controllers_.back().stateSize();
+  }
+  // Controller states come last, so that sampled control can take them out of the ODE state.
+  for (auto& L : layout_) {
     if (L.n_controller > 0) {
       L.controller = n_states_;
       n_states_ += L.n_controller;
@@ -103,10 +117,32 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
   llt_ = Eigen::LLT<Eigen::MatrixXd>(n);
 }
 
+void RobotSystem::setSampledControl(double rate, unsigned seed) {
+  if (!(rate > 0.0)) throw InputError("control rate: expected a sampling rate > 0 Hz");
+  if (sample_rate_ > 0.0) throw InputError("sampled control already set");
+  sample_rate_ = rate;
+  int first = n_states_;
+  for (const auto& L : layout_)
+    if (L.controller >= 0) first = std::min(first, L.controller);
+  ctrl_x_.assign(static_cast<size_t>(n_states_ - first), 0.0);
+  for (auto& L : layout_)
+    if (L.controller >= 0) L.controller -= first;  // now an index into ctrl_x_
+  n_states_ = first;
+  held_u_.setZero(model_.nq);
+  held_i_ref_.setZero(model_.nq);
+  held_q_fb_.setZero(model_.nq);
+  prev_qm_meas_.setZero(model_.nq);
+  tmp_.setZero(n_states_);
+  rng_ = std::make_shared<Rng>();
+  rng_->engine.seed(seed);
+}
+
 Eigen::VectorXd RobotSystem::initialState(const Eigen::VectorXd& q0, double t0) const {
   const int n = model_.nq;
   if (q0.size() != n) throw InputError("initial joint positions: expected " + std::to_string(n) + " values");
-  Eigen::VectorXd y = Eigen::VectorXd::Zero(n_states_);
+  // With sampled control the controller states live outside y: build the full vector, then split.
+  const int n_full = sampled() ? n_states_ + static_cast<int>(ctrl_x_.size()) : n_states_;
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(n_full);
   y.head(n) = q0;
   if (setpoints_) {
     setpoints_(t0, sig_.q_set, sig_.qd_set, sig_.qdd_set);
@@ -153,18 +189,57 @@ Eigen::VectorXd RobotSystem::initialState(const Eigen::VectorXd& q0, double t0) 
     if (L.current >= 0) y[L.current] = i;
     if (L.friction >= 0) d.friction->initialState(y.data() + L.friction);
     if (L.controller >= 0) {
+      const int c = sampled() ? n_states_ + L.controller : L.controller;
       control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q0[k], q_in, 0.0, i, L.ratio, d.motor.V_supply};
-      controllers_[static_cast<size_t>(k)].initialState(in, y.data() + L.controller);
+      controllers_[static_cast<size_t>(k)].initialState(in, y.data() + c);
       if (holds && d.controller.type == control::ControllerType::Cascade002) {
         // Integrators holding the static current and voltage: i_ref = I_vel ∫e_vel, V = I_cur ∫e_cur = R i.
-        if (d.controller.I_vel > 0) y[L.controller] = i / d.controller.I_vel;
-        if (d.controller.I_cur > 0) y[L.controller + 1] = d.motor.R * i / d.controller.I_cur;
+        if (d.controller.I_vel > 0) y[c] = i / d.controller.I_vel;
+        if (d.controller.I_cur > 0) y[c + 1] = d.motor.R * i / d.controller.I_cur;
       } else if (holds && d.controller.type == control::ControllerType::MotorPPI000 && d.controller.ks > 0) {
-        y[L.controller] += tau_M / d.controller.ks;
+        y[c] += tau_M / d.controller.ks;
       }
     }
   }
-  return y;
+  if (!sampled()) return y;
+  const_cast<RobotSystem*>(this)->ctrl_x_.assign(y.data() + n_states_, y.data() + n_full);
+  const_cast<RobotSystem*>(this)->first_sample_ = true;
+  return y.head(n_states_);
+}
+
+void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  if (!sampled()) throw InputError("controlStep: sampled control is not enabled");
+  const int n = model_.nq;
+  const double Ts = 1.0 / sample_rate_;
+  if (setpoints_) setpoints_(t, sig_.q_set, sig_.qd_set, sig_.qdd_set);
+  const Eigen::VectorXd phi = coupled_ ? Eigen::VectorXd(Ginv_ * y.head(n)) : Eigen::VectorXd(y.head(n));
+  const Eigen::VectorXd phid = coupled_ ? Eigen::VectorXd(Ginv_ * y.segment(n, n)) : Eigen::VectorXd(y.segment(n, n));
+  std::vector<double> xdot(4, 0.0);
+  for (int k = 0; k < n; ++k) {
+    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    const SensorSpec& S = d.sensors;
+    const double qm = L.rigid ? L.ratio * phi[k] : y[L.motor];
+    const double qdm = L.rigid ? L.ratio * phid[k] : y[L.motor + 1];
+    const double i = L.current >= 0 ? y[L.current] : 0.0;
+    // Measurements: noise first, then the sensor's quantiser; encoder speed by differencing.
+    const double q_meas = quantise(y[k] + rng_->gauss(S.joint_noise), S.joint_quantum);
+    const double qm_meas = quantise(qm, S.motor_quantum);
+    double qdm_meas = qdm;
+    if (S.motor_quantum > 0.0) qdm_meas = first_sample_ ? 0.0 : (qm_meas - prev_qm_meas_[k]) / Ts;
+    qdm_meas += rng_->gauss(S.motor_velocity_noise);
+    prev_qm_meas_[k] = qm_meas;
+    const double i_meas = quantise(i + rng_->gauss(S.current_noise), S.current_quantum);
+    const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q_meas, qm_meas, qdm_meas, i_meas, L.ratio,
+                                       d.motor.V_supply};
+    double* x = L.controller >= 0 ? ctrl_x_.data() + L.controller : nullptr;
+    const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(in, x, xdot.data());
+    for (int j = 0; j < L.n_controller; ++j) x[j] += Ts * xdot[static_cast<size_t>(j)];  // forward Euler
+    held_u_[k] = out.u;
+    held_i_ref_[k] = out.i_ref;
+    held_q_fb_[k] = q_meas;
+  }
+  first_sample_ = false;
 }
 
 void RobotSystem::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
@@ -188,13 +263,20 @@ void RobotSystem::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
     const double qm = L.rigid ? N * phi_[k] : y[L.motor];
     const double qdm = L.rigid ? N * phid_[k] : y[L.motor + 1];
     const double i = L.current >= 0 ? y[L.current] : 0.0;
-    sig_.q_fb[k] = q[k];
+    sig_.q_fb[k] = sampled() ? held_q_fb_[k] : q[k];
     sig_.qm[k] = qm;
     sig_.qdm[k] = qdm;
     sig_.current[k] = i;
-    const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q[k], qm, qdm, i, N, d.motor.V_supply};
-    const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(
-        in, L.controller >= 0 ? y.data() + L.controller : nullptr, L.controller >= 0 ? ydot + L.controller : nullptr);
+    control::ControllerOutputs out;
+    if (sampled()) {
+      out.voltage = d.controller.type == control::ControllerType::Cascade002;
+      out.u = held_u_[k];
+      out.i_ref = held_i_ref_[k];
+    } else {
+      const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q[k], qm, qdm, i, N, d.motor.V_supply};
+      out = controllers_[static_cast<size_t>(k)].evaluate(in, L.controller >= 0 ? y.data() + L.controller : nullptr,
+                                                          L.controller >= 0 ? ydot + L.controller : nullptr);
+    }
     sig_.i_ref[k] = out.i_ref;
     double tau_M = 0.0;
     if (L.current >= 0) {

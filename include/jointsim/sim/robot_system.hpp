@@ -27,6 +27,16 @@
 
 namespace jointsim::sim {
 
+/// Sensor imperfections, used only with sampled (discrete-time) control: ideal sensors otherwise.
+struct SensorSpec {
+  double joint_quantum = 0.0;          ///< joint encoder resolution [rad] (0: none)
+  double motor_quantum = 0.0;          ///< motor encoder resolution [rad]; > 0: speed = Δ(quantised angle)/T_s
+  double current_quantum = 0.0;        ///< current sensor resolution [A]
+  double joint_noise = 0.0;            ///< std of additive Gaussian noise on the joint angle [rad]
+  double motor_velocity_noise = 0.0;   ///< std on the motor speed [rad/s]
+  double current_noise = 0.0;          ///< std on the current [A]
+};
+
 struct DriveSpec {
   std::string joint;                                      ///< name of the joint this drive moves
   drive::DcMotorParams motor;                             ///< motor (J_M always used; electrics if `electrics`)
@@ -34,6 +44,7 @@ struct DriveSpec {
   std::shared_ptr<const drive::Transmission> transmission;
   std::shared_ptr<const drive::Friction> friction;        ///< on the gear output shaft; may be null
   control::JointControllerParams controller;
+  SensorSpec sensors;                                     ///< used with sampled control only
 };
 
 /// Joint-space reference at time t (writes q_set, q̇_set, q̈_set of size n).
@@ -73,6 +84,18 @@ class RobotSystem {
   int dof() const { return model_.nq; }
 
   void setSetpoints(SetpointFunction f) { setpoints_ = std::move(f); }
+
+  /// Switches to sampled (discrete-time) control at `rate` [Hz]: the controller states leave the ODE
+  /// state vector (stateSize() shrinks) and live in the sampled-control state; between samples the
+  /// controller outputs are held (zero-order hold). Call before initialState(). `seed` fixes the sensor
+  /// noise sequence.
+  void setSampledControl(double rate, unsigned seed);
+  bool sampled() const { return sample_rate_ > 0.0; }
+  double sampleRate() const { return sample_rate_; }
+  /// One control period at time t: measure (noise, quantisation, encoder-difference speed), advance the
+  /// discrete controllers by forward Euler over 1/rate and hold their outputs. The driver must restart the
+  /// integrator after each call (the held inputs jump).
+  void controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y);
   void setExternalWrenches(WrenchFunction f) { wrenches_ = std::move(f); }
 
   /// Initial state: joints at q0 (at rest), motors at N φ_out, gear internal states at static
@@ -105,6 +128,13 @@ class RobotSystem {
   int n_states_ = 0;
   SetpointFunction setpoints_;
   WrenchFunction wrenches_;
+  // Sampled control: discrete controller states, held outputs and sensor memory (not ODE states).
+  double sample_rate_ = 0.0;
+  std::vector<double> ctrl_x_;
+  Eigen::VectorXd held_u_, held_i_ref_, held_q_fb_, prev_qm_meas_;
+  bool first_sample_ = true;
+  struct Rng;
+  std::shared_ptr<Rng> rng_;
   // Workspace (mutable: the right-hand side is logically const).
   mutable multibody::Data data_;
   mutable RobotSignals sig_;
