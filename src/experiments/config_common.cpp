@@ -35,7 +35,7 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   return o;
 }
 
-control::Profile readProfile(const YamlValue& node, const std::string& base_dir, const std::string& unit) {
+control::Profile readProfile(const YamlValue& node, const std::string& unit) {
   node.expectMap("a profile mapping {type: constant|step|ramp|triangle|sine|piecewise|csv, ...}");
   const YamlValue type = node.required("type", "profile type");
   const std::string t = type.asString("a profile type");
@@ -74,9 +74,8 @@ control::Profile readProfile(const YamlValue& node, const std::string& base_dir,
     }
     if (t == "csv") {
       node.allowKeys({"type", "file", "column"});
-      std::filesystem::path file = node.required("file", "CSV file, relative to this file").asString("a file path");
-      if (file.is_relative()) file = std::filesystem::path(base_dir) / file;
-      return control::Profile::csv(file.lexically_normal().string(), node["column"].asString("", "a column name"));
+      return control::Profile::csv(node.required("file", "CSV file, relative to this file").asPath(),
+                                   node["column"].asString("", "a column name"));
     }
   } catch (const InputError& e) {
     if (std::string(e.what()).rfind(node.file(), 0) == 0) throw;  // already located

@@ -14,8 +14,8 @@ namespace jointsim::experiments::detail {
 
 /// `solver: {method, rtol, atol, max_step, max_order, stability_limit_detection, max_num_steps}`.
 sim::CvodeOptions readSolver(const io::YamlValue& node, sim::CvodeOptions defaults);
-/// `{type: constant|step|ramp|triangle|sine|piecewise|csv, ...}`; csv files are relative to `base_dir`.
-control::Profile readProfile(const io::YamlValue& node, const std::string& base_dir, const std::string& unit);
+/// `{type: constant|step|ramp|triangle|sine|piecewise|csv, ...}`; csv files are relative to the YAML file.
+control::Profile readProfile(const io::YamlValue& node, const std::string& unit);
 /// Applies `key.path=value` overrides to the document; throws InputError if a key does not exist.
 void applyOverrides(YAML::Node root, const std::vector<std::string>& overrides, const std::string& file);
 /// Writes a YAML node as JSON (scalars that parse as numbers or booleans become numbers/booleans).

@@ -83,10 +83,9 @@ std::shared_ptr<const drive::Transmission> readTransmission(const YamlValue& nod
   type.failExpected("rigid, elastic, elasto_backlash or strain_wave_gear");
 }
 
-JointRigSetup readJointRig(const YamlValue& root, const std::string& config_path, const std::string& name) {
+JointRigSetup readJointRig(const YamlValue& root, const std::string& name) {
   root.allowKeys({"experiment", "motor", "rotor_inertia", "transmission", "friction", "load", "input",
                   "initial_state", "duration", "log_rate", "solver"});
-  const std::string base_dir = std::filesystem::path(config_path).parent_path().string();
   JointRigSetup s;
   s.name = name;
   if (root.has("motor")) s.motor = readMotor(root["motor"]);
@@ -142,7 +141,7 @@ JointRigSetup readJointRig(const YamlValue& root, const std::string& config_path
   } else {
     itype.failExpected("torque, voltage or velocity_pi");
   }
-  s.profile = readProfile(input.required("profile", "the input profile"), base_dir, unit);
+  s.profile = readProfile(input.required("profile", "the input profile"), unit);
   if (const YamlValue init = root["initial_state"]; init.defined()) {
     init.expectMap("a mapping {motor_angle, motor_velocity, output_angle, output_velocity}");
     init.allowKeys({"motor_angle", "motor_velocity", "output_angle", "output_velocity"});

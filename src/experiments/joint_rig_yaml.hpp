@@ -13,7 +13,7 @@
 
 namespace jointsim::experiments::detail {
 
-JointRigSetup readJointRig(const io::YamlValue& root, const std::string& config_path, const std::string& name);
+JointRigSetup readJointRig(const io::YamlValue& root, const std::string& name);
 void writeJointRigParameters(io::JsonWriter& w, const JointRig& rig, const io::YamlValue& root,
                              const std::string& config_path);
 

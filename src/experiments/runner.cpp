@@ -25,11 +25,10 @@ RunReport runPassiveRobot(const YamlValue& root, const std::string& config_path,
                           const RunOptions& options) {
   root.allowKeys({"experiment", "robot", "initial_state", "joint_damping", "duration", "log_rate", "solver"});
   const YamlValue robot_node = root.required("robot", "robot description file, relative to this file");
-  std::filesystem::path robot_path = robot_node.asString("a file path");
-  if (robot_path.is_relative()) robot_path = std::filesystem::path(config_path).parent_path() / robot_path;
+  const std::string robot_path = robot_node.asPath();
   multibody::Model model;
   try {
-    model = multibody::loadRobot(robot_path.lexically_normal().string());
+    model = multibody::loadRobot(robot_path);
   } catch (const InputError& e) {
     robot_node.fail(std::string("cannot load robot: ") + e.what());
   }
@@ -65,7 +64,7 @@ RunReport runPassiveRobot(const YamlValue& root, const std::string& config_path,
       [&](io::JsonWriter& w) {
         w.beginObject();
         w.key("config_file"); w.value(config_path);
-        w.key("robot_file"); w.value(robot_path.lexically_normal().string());
+        w.key("robot_file"); w.value(robot_path);
         w.key("robot"); w.value(model.name);
         w.key("joints"); w.beginArray(); for (const auto& j : model.joint_names) w.value(j); w.endArray();
         w.key("gravity"); w.value(Eigen::VectorXd(model.gravity));
@@ -82,7 +81,7 @@ RunReport runPassiveRobot(const YamlValue& root, const std::string& config_path,
 
 RunReport runJointRig(const YamlValue& root, const std::string& config_path, const std::string& name,
                       const RunOptions& options) {
-  const JointRigSetup setup = detail::readJointRig(root, config_path, name);
+  const JointRigSetup setup = detail::readJointRig(root, name);
   const JointRig rig(setup);
   return detail::runAndRecord(
       name, "joint_rig", options, rig.columns(),

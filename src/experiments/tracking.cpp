@@ -64,11 +64,9 @@ sim::RobotSystem loadRobotWithDrives(const std::string& path) {
   root.expectMap("a robot-with-drives mapping {name, multibody, drives, coupling}");
   root.allowKeys({"name", "multibody", "drives", "coupling"});
   const YamlValue mb = root.required("multibody", "multibody description file, relative to this file");
-  std::filesystem::path mb_path = mb.asString("a file path");
-  if (mb_path.is_relative()) mb_path = std::filesystem::path(path).parent_path() / mb_path;
   multibody::Model model;
   try {
-    model = multibody::loadRobot(mb_path.lexically_normal().string());
+    model = multibody::loadRobot(mb.asPath());
   } catch (const InputError& e) {
     mb.fail(std::string("cannot load the multibody description: ") + e.what());
   }
@@ -146,11 +144,10 @@ RunReport runTracking(const YamlValue& root, const std::string& config_path, con
                   "control"});
   const std::string base_dir = std::filesystem::path(config_path).parent_path().string();
   const YamlValue robot = root.required("robot", "robot-with-drives file, relative to this file");
-  std::filesystem::path robot_path = robot.asString("a file path");
-  if (robot_path.is_relative()) robot_path = std::filesystem::path(base_dir) / robot_path;
+  const std::string robot_path = robot.asPath();
   sim::RobotSystem sys = [&] {
     try {
-      return loadRobotWithDrives(robot_path.lexically_normal().string());
+      return loadRobotWithDrives(robot_path);
     } catch (const InputError& e) {
       robot.fail(std::string("cannot load robot: ") + e.what());
     }
@@ -274,7 +271,7 @@ RunReport runTracking(const YamlValue& root, const std::string& config_path, con
       [&](io::JsonWriter& w) {
         w.beginObject();
         w.key("config_file"); w.value(config_path);
-        w.key("robot_file"); w.value(robot_path.lexically_normal().string());
+        w.key("robot_file"); w.value(robot_path);
         w.key("robot"); w.value(sys.model().name);
         w.key("joints"); w.beginArray(); for (const auto& j : sys.model().joint_names) w.value(j); w.endArray();
         w.key("trajectory"); w.value(traj->describe());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -183,6 +184,12 @@ std::vector<double> YamlValue::asDoubles(size_t expected_size, const std::string
 Eigen::Vector3d YamlValue::asVector3(const std::string& what) const {
   const auto v = asDoubles(3, what);
   return {v[0], v[1], v[2]};
+}
+
+std::string YamlValue::asPath(const std::string& what) const {
+  std::filesystem::path p = asString(what);
+  if (p.is_relative()) p = std::filesystem::path(*file_).parent_path() / p;
+  return p.lexically_normal().string();
 }
 
 void YamlValue::fail(const std::string& message) const {

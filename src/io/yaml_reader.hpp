@@ -47,6 +47,8 @@ class YamlValue {
   std::string asString(const std::string& fallback, const std::string& what) const;
   std::vector<double> asDoubles(size_t expected_size, const std::string& what) const;  // 0 = any size
   Eigen::Vector3d asVector3(const std::string& what) const;
+  /// A file path; a relative one is resolved against the directory of the YAML file it appears in.
+  std::string asPath(const std::string& what = "a file path") const;
 
   const std::string& path() const { return path_; }
   const std::string& file() const { return *file_; }
