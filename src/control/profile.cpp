@@ -59,7 +59,7 @@ Profile Profile::triangle(double amplitude, double period, double offset) {
   return p;
 }
 
-Profile Profile::sine(double amplitude, double frequency, double phase, double offset) {
+Profile Profile::sine(double amplitude, double frequency, double phase, double offset, double until) {
   requireFinite(amplitude, "amplitude");
   if (!(frequency >= 0.0)) throw InputError("profile: sine frequency must be >= 0 Hz");
   Profile p;
@@ -68,6 +68,7 @@ Profile Profile::sine(double amplitude, double frequency, double phase, double o
   p.b_ = frequency;
   p.c_ = phase;
   p.d_ = offset;
+  p.until_ = until;
   return p;
 }
 
@@ -154,7 +155,7 @@ double Profile::value(double t) const {
       const double tri = phase < 0.25 ? 4 * phase : (phase < 0.75 ? 2 - 4 * phase : 4 * phase - 4);
       return c_ + a_ * tri;
     }
-    case Kind::Sine: return d_ + a_ * std::sin(kTwoPi * b_ * t + c_);
+    case Kind::Sine: return t < until_ ? d_ + a_ * std::sin(kTwoPi * b_ * t + c_) : 0.0;
     case Kind::Piecewise:
     case Kind::Csv: {
       if (t <= times_.front()) return values_.front();
@@ -188,6 +189,7 @@ std::vector<double> Profile::breakpoints(double horizon) const {
       if (hold_ || kind_ == Kind::Piecewise)
         for (double t : times_) add(t);
       break;
+    case Kind::Sine: add(until_); break;
     default: break;
   }
   return out;

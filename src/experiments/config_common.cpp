@@ -1,6 +1,7 @@
 #include "experiments/config_common.hpp"
 
 #include <cmath>
+#include <limits>
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
@@ -62,9 +63,10 @@ control::Profile readProfile(const YamlValue& node, const std::string& unit) {
                                         opt("offset", 0.0, "a value in " + unit));
     }
     if (t == "sine") {
-      node.allowKeys({"type", "amplitude", "frequency", "phase", "offset"});
+      node.allowKeys({"type", "amplitude", "frequency", "phase", "offset", "until"});
       return control::Profile::sine(num("amplitude", "an amplitude in " + unit), num("frequency", "a frequency in Hz"),
-                                    opt("phase", 0.0, "a phase in rad"), opt("offset", 0.0, "a value in " + unit));
+                                    opt("phase", 0.0, "a phase in rad"), opt("offset", 0.0, "a value in " + unit),
+                                    opt("until", std::numeric_limits<double>::infinity(), "a time in s"));
     }
     if (t == "piecewise") {
       node.allowKeys({"type", "times", "values", "hold"});

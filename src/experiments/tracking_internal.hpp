@@ -31,6 +31,9 @@ class TrackingLogger {
   int tip_;
 };
 
+RunReport runDriveChain(const io::YamlValue& root, const std::string& config_path, const std::string& name,
+                        const RunOptions& options);
+
 RunReport runTracking(const io::YamlValue& root, const std::string& config_path, const std::string& name,
                       const RunOptions& options);
 

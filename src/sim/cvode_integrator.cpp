@@ -67,6 +67,10 @@ struct CvodeIntegrator::Impl {
   bool cvode_tstop_touched = false;   // CVodeSetStopTime was ever called (must be neutralised on clear)
 
   SolverStats base;                   // counters accumulated from earlier segments
+  int n_roots = 0;
+  RootFunction root_fn;
+  bool root_found = false;
+  std::vector<int> root_dirs;
 
   // Failure capture (filled from inside the C callbacks; no allocation on the success path).
   std::exception_ptr callback_exception;
@@ -219,6 +223,21 @@ struct CvodeIntegrator::Impl {
     return 0;
   }
 
+  static int rootCallback(realtype t, N_Vector yv, realtype* gout, void* user_data) noexcept {
+    auto* self = static_cast<Impl*>(user_data);
+    const Eigen::Map<const Eigen::VectorXd> ym(N_VGetArrayPointer(yv), self->n);
+    Eigen::Map<Eigen::VectorXd> gm(gout, self->n_roots);
+    try {
+      self->root_fn(t, ym, gm);
+    } catch (...) {
+      self->callback_exception = std::current_exception();
+      self->callback_exception_time = t;
+      self->callback_exception_source = "root function";
+      return -1;
+    }
+    return 0;
+  }
+
   static int jacCallback(realtype t, N_Vector yv, N_Vector fyv, SUNMatrix J, void* user_data, N_Vector,
                          N_Vector, N_Vector) noexcept {
     auto* self = static_cast<Impl*>(user_data);
@@ -274,6 +293,7 @@ struct CvodeIntegrator::Impl {
   // ------------------------------------------------------------------ setup
   void firstInit(double t, N_Vector y0) {
     check(CVodeInit(mem, &Impl::rhsCallback, t, y0), "CVodeInit");
+    if (n_roots > 0) check(CVodeRootInit(mem, n_roots, &Impl::rootCallback), "CVodeRootInit");
     if (opts.atol_vector.size() > 0) {
       N_Vector abstol = N_VNew_Serial(n, ctx);
       if (abstol == nullptr) throw Error(prefix() + ": allocation of the tolerance vector failed");
@@ -472,6 +492,8 @@ double CvodeIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out)
 
   double t_ret = m.t_last;
   const int flag = CVode(m.mem, t_out, m.y, &t_ret, CV_NORMAL);
+  m.root_found = flag == CV_ROOT_RETURN;
+  if (m.root_found) m.check(CVodeGetRootInfo(m.mem, m.root_dirs.data()), "CVodeGetRootInfo");
   m.fresh = false;
   if (flag < 0 || m.callback_exception) {
     m.t_last = m.cvodeTime();
@@ -521,5 +543,18 @@ SolverStats CvodeIntegrator::stats() const {
 }
 
 const CvodeOptions& CvodeIntegrator::options() const { return impl_->opts; }
+
+void CvodeIntegrator::setRootFunction(int n_roots, RootFunction g) {
+  Impl& m = *impl_;
+  if (m.initialized) throw InputError(m.prefix() + ": setRootFunction() must be called before initialize()");
+  if (n_roots < 0 || (n_roots > 0 && !g)) throw InputError(m.prefix() + ": invalid root function");
+  m.n_roots = n_roots;
+  m.root_fn = std::move(g);
+  m.root_dirs.assign(static_cast<size_t>(n_roots), 0);
+}
+
+bool CvodeIntegrator::rootFound() const { return impl_->root_found; }
+
+const std::vector<int>& CvodeIntegrator::rootDirections() const { return impl_->root_dirs; }
 
 }  // namespace jointsim::sim

@@ -618,3 +618,26 @@ TEST(StopTimeRegression, ReachedAsOutputTimeIsCleared) {
   EXPECT_DOUBLE_EQ(integ.advance(1.0, y), 1.0);
   EXPECT_NEAR(y[0], std::exp(-1.0), 1e-6);
 }
+
+TEST(RootFinding, LocatesCrossingWithinTolerance) {
+  // y' = cos t from y(0) = 0: g = y − 0.5 crosses upward at t = asin(0.5) = π/6, and downward at 5π/6.
+  CvodeOptions o;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  CvodeIntegrator integ(1, [](double t, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::VectorXd> yd) { yd[0] = std::cos(t); }, o);
+  integ.setRootFunction(1, [](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) { g[0] = y[0] - 0.5; });
+  Eigen::VectorXd y(1);
+  integ.initialize(0.0, Eigen::VectorXd::Zero(1));
+  double t = integ.advance(3.0, y);
+  ASSERT_TRUE(integ.rootFound());
+  EXPECT_EQ(integ.rootDirections()[0], 1);
+  EXPECT_NEAR(t, M_PI / 6, 1e-6);
+  t = integ.advance(3.0, y);
+  ASSERT_TRUE(integ.rootFound());
+  EXPECT_EQ(integ.rootDirections()[0], -1);
+  EXPECT_NEAR(t, 5 * M_PI / 6, 1e-6);
+  t = integ.advance(3.0, y);
+  EXPECT_FALSE(integ.rootFound());
+  EXPECT_DOUBLE_EQ(t, 3.0);
+  EXPECT_THROW(integ.setRootFunction(1, nullptr), jointsim::InputError);
+}

@@ -4,6 +4,7 @@
 /// (linear or hold) and CSV time series (linear interpolation). value(t) is pure and allocation-free.
 /// Units are those of the signal it drives (N·m, V, rad/s, ...); times in s.
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -21,8 +22,10 @@ class Profile {
   /// Symmetric triangle: offset + amplitude·tri(t/period), starting at offset and rising first
   /// (0 → +A at T/4 → −A at 3T/4 → 0 at T).
   static Profile triangle(double amplitude, double period, double offset = 0.0);
-  /// offset + amplitude sin(2π f t + phase).
-  static Profile sine(double amplitude, double frequency, double phase = 0.0, double offset = 0.0);
+  /// offset + amplitude sin(2π f t + phase) for t < until, 0 from `until` on (a sine switched off by a
+  /// step, as in the MSL Friction example); until = +inf: never switched off.
+  static Profile sine(double amplitude, double frequency, double phase = 0.0, double offset = 0.0,
+                      double until = std::numeric_limits<double>::infinity());
   /// Through the points (times[k], values[k]) (times strictly increasing), linear or held, constant
   /// outside the range.
   static Profile piecewise(std::vector<double> times, std::vector<double> values, bool hold = false);
@@ -40,6 +43,7 @@ class Profile {
  private:
   Kind kind_ = Kind::Constant;
   double a_ = 0, b_ = 0, c_ = 0, d_ = 0;  // meaning depends on kind (see the factories)
+  double until_ = std::numeric_limits<double>::infinity();
   std::vector<double> times_, values_;
   bool hold_ = false;
   std::string source_;

@@ -14,6 +14,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace jointsim::sim {
 
@@ -101,6 +102,10 @@ using RhsFunction = std::function<void(double t, const Eigen::Ref<const Eigen::V
 /// Dense Jacobian J = df/dy (n x n, column-major; J(i, j) = d ydot_i / d y_j) at (t, y), with
 /// `ydot` = f(t, y) already evaluated. J is zero on entry, so only non-zeros need to be written.
 /// May throw like RhsFunction.
+/// Root (event) functions g(t, y) (size n_roots): CVODE locates sign changes of each component to its
+/// tolerance and stops there. Must be pure like the right-hand side.
+using RootFunction = std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g)>;
+
 using JacobianFunction =
     std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                        const Eigen::Ref<const Eigen::VectorXd>& ydot, Eigen::Ref<Eigen::MatrixXd> J)>;
@@ -155,6 +160,13 @@ class CvodeIntegrator {
   void setStopTime(double t_stop);
   /// Remove a stop time set with setStopTime().
   void clearStopTime();
+
+  /// Installs root functions (call before initialize(); they persist across restarts). advance() then
+  /// returns early at a located root: rootFound() is true and rootDirections() gives, per function,
+  /// +1 (rising), −1 (falling) or 0 (no crossing).
+  void setRootFunction(int n_roots, RootFunction g);
+  bool rootFound() const;
+  const std::vector<int>& rootDirections() const;
 
   /// Time of the last result [s]: t0 after initialize(), the value returned by advance(), or after a
   /// failure CVODE's internal time at the failure. NaN before initialize().

@@ -1,0 +1,419 @@
+#include "jointsim/experiments/drive_chain.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/drive/transmissions.hpp"
+
+namespace jointsim::experiments {
+
+namespace {
+// Linear interpolation in a [v, y] table, extrapolating through the last two points; one row = constant.
+double interp(const std::vector<std::array<double, 2>>& t, double v) {
+  if (t.size() == 1) return t[0][1];
+  size_t k = 1;
+  while (k + 1 < t.size() && v > t[k][0]) ++k;
+  const auto& p0 = t[k - 1];
+  const auto& p1 = t[k];
+  return p0[1] + (p1[1] - p0[1]) * (v - p0[0]) / (p1[0] - p0[0]);
+}
+
+int modeNumber(FrictionMode m) {
+  switch (m) {
+    case FrictionMode::Forward: return 1;
+    case FrictionMode::Backward: return -1;
+    case FrictionMode::Free: return 2;
+    default: return 0;  // stuck and start phases
+  }
+}
+}  // namespace
+
+bool ChainElement::isFriction() const {
+  return type == ChainElementType::Clutch || type == ChainElementType::Brake || type == ChainElementType::BearingFriction;
+}
+
+sim::CvodeOptions DriveChainSetup::defaultSolver() {
+  sim::CvodeOptions o;
+  o.method = sim::Method::BDF;
+  o.max_order = 2;
+  o.rtol = 1e-6;
+  o.atol = 1e-8;
+  return o;
+}
+
+void DriveChainSetup::validate() const {
+  if (inertias.empty()) throw InputError("inertias: expected at least one inertia");
+  const int n = static_cast<int>(inertias.size());
+  for (const auto& in : inertias)
+    if (!(in.J > 0.0)) throw InputError("inertia '" + in.name + "': J must be > 0 kg·m²");
+  for (const auto& e : elements) {
+    const std::string where = "element '" + e.name + "'";
+    if (e.a < -1 || e.a >= n || e.b < -1 || e.b >= n) throw InputError(where + ": node out of range");
+    if (e.type == ChainElementType::TorqueSource) {
+      if (e.b < 0) throw InputError(where + ": a torque source needs an inertia");
+      continue;
+    }
+    if (e.a == e.b) throw InputError(where + ": both flanges on the same node");
+    if ((e.type == ChainElementType::SpringDamper || e.type == ChainElementType::ElastoBacklash) && !(e.c >= 0.0 && e.d >= 0.0))
+      throw InputError(where + ": c and d must be >= 0");
+    if (e.type == ChainElementType::ElastoBacklash && !(e.backlash >= 0.0)) throw InputError(where + ": backlash must be >= 0");
+    if (e.isFriction()) {
+      if (e.table.empty()) throw InputError(where + ": empty friction table");
+      if (!(e.peak >= 1.0)) throw InputError(where + ": peak must be >= 1");
+      if (e.type != ChainElementType::BearingFriction && !(e.fn_max >= 0.0)) throw InputError(where + ": fn_max must be >= 0");
+    }
+  }
+  if (!(duration > 0.0)) throw InputError("duration: expected a time > 0 s");
+  if (!(log_rate > 0.0)) throw InputError("log_rate: expected a rate > 0 Hz");
+}
+
+DriveChain::DriveChain(DriveChainSetup setup) : s_(std::move(setup)) {
+  s_.validate();
+  const auto n = static_cast<Eigen::Index>(s_.inertias.size());
+  const auto ne = static_cast<Eigen::Index>(s_.elements.size());
+  modes_.assign(s_.elements.size(), FrictionMode::Stuck);
+  acc_.setZero(n);
+  known_.setZero(n);
+  tau_el_.setZero(ne);
+  A_.setZero(ne, ne);
+  rhs_.setZero(ne);
+  stuck_.reserve(s_.elements.size());
+  columns_.emplace_back("time[s]");
+  for (const auto& in : s_.inertias) {
+    columns_.push_back(in.name + ".phi[rad]");
+    columns_.push_back(in.name + ".w[rad/s]");
+  }
+  for (const auto& e : s_.elements) {
+    if (e.type == ChainElementType::TorqueSource) {
+      columns_.push_back(e.name + ".tau[N·m]");
+      continue;
+    }
+    columns_.push_back(e.name + ".phi_rel[rad]");
+    columns_.push_back(e.name + ".w_rel[rad/s]");
+    columns_.push_back(e.name + ".tau[N·m]");
+    if (e.isFriction()) {
+      columns_.push_back(e.name + ".mode[-]");
+      columns_.push_back(e.name + ".startForward[-]");
+      columns_.push_back(e.name + ".startBackward[-]");
+    }
+  }
+}
+
+Eigen::VectorXd DriveChain::initialState() const {
+  Eigen::VectorXd y(stateSize());
+  for (size_t i = 0; i < s_.inertias.size(); ++i) {
+    y[static_cast<Eigen::Index>(2 * i)] = s_.inertias[i].phi0;
+    y[static_cast<Eigen::Index>(2 * i + 1)] = s_.inertias[i].w0;
+  }
+  return y;
+}
+
+double DriveChain::relSpeed(int e, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const auto& el = s_.elements[static_cast<size_t>(e)];
+  const double wa = el.a >= 0 ? y[2 * el.a + 1] : 0.0, wb = el.b >= 0 ? y[2 * el.b + 1] : 0.0;
+  return wb - wa;
+}
+
+double DriveChain::relAccel(int e) const {
+  const auto& el = s_.elements[static_cast<size_t>(e)];
+  return (el.b >= 0 ? acc_[el.b] : 0.0) - (el.a >= 0 ? acc_[el.a] : 0.0);
+}
+
+double DriveChain::tau0(int e, double t) const {
+  const auto& el = s_.elements[static_cast<size_t>(e)];
+  if (el.type == ChainElementType::BearingFriction) return interp(el.table, 0.0);
+  return el.cgeo * el.fn_max * el.normalized.value(t) * interp(el.table, 0.0);
+}
+
+double DriveChain::slidingTorque(int e, double t, double w) const {
+  const auto& el = s_.elements[static_cast<size_t>(e)];
+  const double mag = el.type == ChainElementType::BearingFriction
+                         ? interp(el.table, std::abs(w))
+                         : el.cgeo * el.fn_max * el.normalized.value(t) * interp(el.table, std::abs(w));
+  return mag;
+}
+
+void DriveChain::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  known_.setZero();
+  stuck_.clear();
+  for (size_t k = 0; k < s_.elements.size(); ++k) {
+    const auto& el = s_.elements[k];
+    const int e = static_cast<int>(k);
+    double tau = 0.0;
+    if (el.type == ChainElementType::TorqueSource) {
+      tau_el_[e] = el.torque.value(t);
+      known_[el.b] += tau_el_[e];
+      continue;
+    }
+    const double phi_rel = (el.b >= 0 ? y[2 * el.b] : 0.0) - (el.a >= 0 ? y[2 * el.a] : 0.0);
+    const double w_rel = relSpeed(e, y);
+    switch (el.type) {
+      case ChainElementType::SpringDamper: tau = el.c * phi_rel + el.d * w_rel; break;
+      case ChainElementType::ElastoBacklash: {
+        const drive::ElastoBacklash eb({1.0, std::max(el.c, 1e-300), el.d, el.backlash, drive::ComplianceSide::Motor});
+        tau = el.c > 0.0 ? eb.contactTorque(phi_rel, w_rel) : 0.0;
+        break;
+      }
+      default: {  // friction
+        switch (modes_[k]) {
+          case FrictionMode::Free: tau = 0.0; break;
+          case FrictionMode::Forward:
+          case FrictionMode::StartForward: tau = slidingTorque(e, t, w_rel); break;
+          case FrictionMode::Backward:
+          case FrictionMode::StartBackward: tau = -slidingTorque(e, t, w_rel); break;
+          case FrictionMode::Stuck: stuck_.push_back(e); continue;
+        }
+      }
+    }
+    tau_el_[e] = tau;
+    if (el.a >= 0) known_[el.a] += tau;
+    if (el.b >= 0) known_[el.b] -= tau;
+  }
+  // Stuck elements: find their torques S with B^T J⁻¹ (known + B S) = 0 (zero relative acceleration).
+  const auto m = static_cast<Eigen::Index>(stuck_.size());
+  auto Jinv = [&](int i) { return 1.0 / s_.inertias[static_cast<size_t>(i)].J; };
+  auto bcol = [&](int e, int i) {
+    const auto& el = s_.elements[static_cast<size_t>(e)];
+    return (el.a == i ? 1.0 : 0.0) - (el.b == i ? 1.0 : 0.0);
+  };
+  const int n = static_cast<int>(s_.inertias.size());
+  for (Eigen::Index r = 0; r < m; ++r) {
+    const int er = stuck_[static_cast<size_t>(r)];
+    double rhs = 0.0;
+    for (int i = 0; i < n; ++i) rhs -= bcol(er, i) * Jinv(i) * known_[i];
+    rhs_[r] = rhs;
+    for (Eigen::Index c = 0; c < m; ++c) {
+      const int ec = stuck_[static_cast<size_t>(c)];
+      double a = 0.0;
+      for (int i = 0; i < n; ++i) a += bcol(er, i) * Jinv(i) * bcol(ec, i);
+      A_(r, c) = a;
+    }
+  }
+  // Gaussian elimination with partial pivoting on the m×m block (allocation-free).
+  for (Eigen::Index c = 0; c < m; ++c) {
+    Eigen::Index piv = c;
+    for (Eigen::Index r = c + 1; r < m; ++r)
+      if (std::abs(A_(r, c)) > std::abs(A_(piv, c))) piv = r;
+    if (piv != c) {
+      A_.row(c).head(m).swap(A_.row(piv).head(m));
+      std::swap(rhs_[c], rhs_[piv]);
+    }
+    if (A_(c, c) == 0.0) continue;  // redundant constraint (e.g. a loop of stuck elements)
+    for (Eigen::Index r = c + 1; r < m; ++r) {
+      const double f = A_(r, c) / A_(c, c);
+      A_.row(r).head(m) -= f * A_.row(c).head(m);
+      rhs_[r] -= f * rhs_[c];
+    }
+  }
+  for (Eigen::Index c = m; c-- > 0;) {
+    double v = rhs_[c];
+    for (Eigen::Index k = c + 1; k < m; ++k) v -= A_(c, k) * rhs_[k];
+    rhs_[c] = A_(c, c) != 0.0 ? v / A_(c, c) : 0.0;
+  }
+  for (Eigen::Index r = 0; r < m; ++r) {
+    const int e = stuck_[static_cast<size_t>(r)];
+    const auto& el = s_.elements[static_cast<size_t>(e)];
+    tau_el_[e] = rhs_[r];
+    if (el.a >= 0) known_[el.a] += rhs_[r];
+    if (el.b >= 0) known_[el.b] -= rhs_[r];
+  }
+  for (int i = 0; i < n; ++i) acc_[i] = known_[i] * Jinv(i);
+}
+
+void DriveChain::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+  solve(t, y);
+  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(s_.inertias.size()); ++i) {
+    ydot[2 * i] = y[2 * i + 1];
+    ydot[2 * i + 1] = acc_[i];
+  }
+}
+
+void DriveChain::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
+  solve(t, y);
+  for (size_t k = 0; k < s_.elements.size(); ++k) {
+    const auto& el = s_.elements[k];
+    const int e = static_cast<int>(k);
+    double g0 = 1.0, g1 = 1.0;
+    if (el.type == ChainElementType::ElastoBacklash && el.backlash > 1e-10) {
+      const double phi_rel = (el.b >= 0 ? y[2 * el.b] : 0.0) - (el.a >= 0 ? y[2 * el.a] : 0.0);
+      g0 = phi_rel - 0.5 * el.backlash;  // contact edges: restart the integrator at the kink
+      g1 = phi_rel + 0.5 * el.backlash;
+    } else if (el.isFriction()) {
+      const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(e);
+      switch (modes_[k]) {
+        case FrictionMode::Stuck: g0 = tau_el_[e] - t0max; g1 = tau_el_[e] + t0max; break;
+        case FrictionMode::StartForward: g0 = w; g1 = a + t0max - t0; break;   // MSL: sa = a + τ0max stays > τ0
+        case FrictionMode::StartBackward: g0 = w; g1 = a - t0max + t0; break;
+        case FrictionMode::Forward:
+        case FrictionMode::Backward: g0 = w; break;
+        case FrictionMode::Free: break;
+      }
+    }
+    g[2 * e] = g0;
+    g[2 * e + 1] = g1;
+  }
+}
+
+void DriveChain::initializeModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  for (size_t k = 0; k < s_.elements.size(); ++k) {
+    const auto& el = s_.elements[k];
+    if (!el.isFriction()) continue;
+    const double w = relSpeed(static_cast<int>(k), y);
+    if (el.type != ChainElementType::BearingFriction && el.fn_max * el.normalized.value(t) <= 0.0)
+      modes_[k] = FrictionMode::Free;
+    else
+      modes_[k] = w > 0 ? FrictionMode::Forward : (w < 0 ? FrictionMode::Backward : FrictionMode::Stuck);
+  }
+  updateModes(t, y, {});
+}
+
+bool DriveChain::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+  bool any = false;
+  for (int iter = 0; iter < 20; ++iter) {
+    solve(t, y);
+    bool changed = false;
+    for (size_t k = 0; k < s_.elements.size(); ++k) {
+      const auto& el = s_.elements[k];
+      if (!el.isFriction()) continue;
+      const int e = static_cast<int>(k);
+      // Crossings CVODE reported at this event (first pass only): the located point may sit exactly on
+      // the threshold, so the decision follows the reported crossing rather than a strict comparison
+      // (a root function that restarts at exactly zero is not reported again).
+      const bool w_fired = iter == 0 && fired.size() > 2 * k && fired[2 * k] != 0;
+      const bool up_fired = iter == 0 && fired.size() > 2 * k && fired[2 * k] > 0;
+      const bool down_fired = iter == 0 && fired.size() > 2 * k + 1 && fired[2 * k + 1] < 0;
+      const bool second_fired = iter == 0 && fired.size() > 2 * k + 1 && fired[2 * k + 1] != 0;
+      const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(e), S = tau_el_[e];
+      const bool free = el.type != ChainElementType::BearingFriction && el.fn_max * el.normalized.value(t) <= 0.0;
+      FrictionMode m = modes_[k];
+      if (free) {
+        m = FrictionMode::Free;
+      } else {
+        switch (m) {
+          case FrictionMode::Free: m = w > 0 ? FrictionMode::Forward : (w < 0 ? FrictionMode::Backward : FrictionMode::Stuck); break;
+          case FrictionMode::Stuck:
+            if (S > t0max || up_fired) m = w > 0 ? FrictionMode::Forward : FrictionMode::StartForward;
+            else if (S < -t0max || down_fired) m = w < 0 ? FrictionMode::Backward : FrictionMode::StartBackward;
+            break;
+          case FrictionMode::StartForward:
+            if (w > 0 || (w_fired && w >= 0)) m = FrictionMode::Forward;
+            else if (a + t0max < t0 || second_fired) m = FrictionMode::Stuck;
+            break;
+          case FrictionMode::StartBackward:
+            if (w < 0 || (w_fired && w <= 0)) m = FrictionMode::Backward;
+            else if (a - t0max > -t0 || second_fired) m = FrictionMode::Stuck;
+            break;
+          case FrictionMode::Forward:
+            if (w_fired || w <= 0) m = FrictionMode::Stuck;
+            break;
+          case FrictionMode::Backward:
+            if (w_fired || w >= 0) m = FrictionMode::Stuck;
+            break;
+        }
+      }
+      if (m != modes_[k]) {
+        modes_[k] = m;
+        changed = true;
+      }
+    }
+    any = any || changed;
+    if (!changed) break;
+  }
+  return any;
+}
+
+double DriveChain::elementTorque(int e, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  solve(t, y);
+  return tau_el_[e];
+}
+
+void DriveChain::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
+  solve(t, y);
+  Eigen::Index c = 0;
+  row[c++] = t;
+  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(s_.inertias.size()); ++i) {
+    row[c++] = y[2 * i];
+    row[c++] = y[2 * i + 1];
+  }
+  for (size_t k = 0; k < s_.elements.size(); ++k) {
+    const auto& el = s_.elements[k];
+    const int e = static_cast<int>(k);
+    if (el.type == ChainElementType::TorqueSource) {
+      row[c++] = tau_el_[e];
+      continue;
+    }
+    row[c++] = (el.b >= 0 ? y[2 * el.b] : 0.0) - (el.a >= 0 ? y[2 * el.a] : 0.0);
+    row[c++] = relSpeed(e, y);
+    row[c++] = tau_el_[e];
+    if (el.isFriction()) {
+      row[c++] = modeNumber(modes_[k]);
+      row[c++] = modes_[k] == FrictionMode::StartForward ? 1.0 : 0.0;
+      row[c++] = modes_[k] == FrictionMode::StartBackward ? 1.0 : 0.0;
+    }
+  }
+}
+
+ChainRunResult simulateDriveChain(DriveChain& chain, const std::function<void(const Eigen::VectorXd&)>& sink) {
+  const DriveChainSetup& s = chain.setup();
+  sim::CvodeOptions options = s.solver;
+  if (options.component.empty()) options.component = "drive chain '" + s.name + "'";
+  if (options.max_step == 0.0) options.max_step = 1.0 / s.log_rate;
+  sim::CvodeIntegrator integ(chain.stateSize(), [&chain](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+    chain.derivatives(t, y, yd);
+  }, options);
+  integ.setRootFunction(chain.rootCount(), [&chain](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) {
+    chain.roots(t, y, g);
+  });
+  // Time events: discontinuities of the torque sources and normal forces, and the end.
+  std::vector<double> breaks{s.duration};
+  for (const auto& el : s.elements) {
+    for (double b : el.torque.breakpoints(s.duration)) breaks.push_back(b);
+    for (double b : el.normalized.breakpoints(s.duration)) breaks.push_back(b);
+  }
+  std::sort(breaks.begin(), breaks.end());
+  breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
+  size_t next_break = 0;
+
+  ChainRunResult result;
+  const auto start = std::chrono::steady_clock::now();
+  Eigen::VectorXd y = chain.initialState();
+  Eigen::VectorXd row(static_cast<Eigen::Index>(chain.columns().size()));
+  chain.initializeModes(0.0, y);
+  integ.initialize(0.0, y);
+  integ.setStopTime(breaks[0]);
+  chain.signals(0.0, y, row);
+  sink(row);
+  const auto steps = static_cast<long>(std::ceil(s.duration * s.log_rate - 1e-9));
+  double t = 0.0;
+  long events_here = 0;
+  for (long k = 1; k <= steps; ++k) {
+    const double t_out = std::min(s.duration, static_cast<double>(k) / s.log_rate);
+    while (t < t_out) {
+      const double target = std::min(t_out, breaks[next_break]);
+      t = integ.advance(target, y);
+      const bool at_break = t >= breaks[next_break] && next_break + 1 < breaks.size();
+      if (integ.rootFound() || at_break) {
+        if (at_break) ++next_break;
+        chain.updateModes(t, y, integ.rootFound() ? integ.rootDirections() : std::vector<int>{});
+        integ.initialize(t, y);
+        integ.setStopTime(breaks[next_break]);
+        ++result.events;
+        if (++events_here > 100000)
+          throw SolverError("drive chain '" + s.name + "': more than 100000 events in one output interval (chattering) at t = " +
+                                std::to_string(t) + " s",
+                            t, "EVENT_CHATTERING", s.name);
+      }
+    }
+    events_here = 0;
+    chain.signals(t, y, row);
+    sink(row);
+  }
+  result.sim_time_s = t;
+  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.stats = integ.stats();
+  return result;
+}
+
+}  // namespace jointsim::experiments

