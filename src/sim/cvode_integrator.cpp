@@ -1,5 +1,7 @@
 #include "jointsim/sim/cvode_integrator.hpp"
 
+#include <Eigen/LU>
+
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
@@ -23,6 +25,67 @@ static_assert(std::is_same<realtype, double>::value, "SUNDIALS must be built in 
 namespace jointsim::sim {
 
 namespace {
+
+// ------------------------------------------------------------------ Eigen dense linear solver
+// A SUNLinearSolver (matrix-based, direct) over SUNDenseMatrix storage: setup factorises the Newton
+// matrix with Eigen::PartialPivLU (blocked, vectorised), solve applies it. No allocation after creation.
+struct EigenDenseContent {
+  explicit EigenDenseContent(Eigen::Index n) : lu(n), rhs(n) {}
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  Eigen::VectorXd rhs;
+  sunindextype last_flag = 0;
+};
+
+EigenDenseContent* eigenContent(SUNLinearSolver S) { return static_cast<EigenDenseContent*>(S->content); }
+
+SUNLinearSolver_Type eigenGetType(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
+SUNLinearSolver_ID eigenGetId(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
+int eigenInitialize(SUNLinearSolver) { return SUNLS_SUCCESS; }
+int eigenSetup(SUNLinearSolver S, SUNMatrix A) {
+  EigenDenseContent* c = eigenContent(S);
+  const auto n = static_cast<Eigen::Index>(SM_ROWS_D(A));
+  c->lu.compute(Eigen::Map<const Eigen::MatrixXd>(SM_DATA_D(A), n, n));
+  // A zero pivot means a singular Newton matrix: report it as recoverable, as SUNLinSol_Dense does.
+  const auto& m = c->lu.matrixLU();
+  for (Eigen::Index k = 0; k < n; ++k)
+    if (m(k, k) == 0.0) {
+      c->last_flag = k + 1;
+      return static_cast<int>(k + 1);
+    }
+  c->last_flag = 0;
+  return SUNLS_SUCCESS;
+}
+int eigenSolve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, realtype) {
+  EigenDenseContent* c = eigenContent(S);
+  const auto n = static_cast<Eigen::Index>(SM_ROWS_D(A));
+  c->rhs = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(b), n);
+  Eigen::Map<Eigen::VectorXd> xm(N_VGetArrayPointer(x), n);
+  xm.noalias() = c->lu.solve(c->rhs);
+  c->last_flag = 0;
+  return SUNLS_SUCCESS;
+}
+sunindextype eigenLastFlag(SUNLinearSolver S) { return eigenContent(S)->last_flag; }
+int eigenFree(SUNLinearSolver S) {
+  if (S == nullptr) return SUNLS_SUCCESS;
+  delete eigenContent(S);
+  S->content = nullptr;
+  SUNLinSolFreeEmpty(S);
+  return SUNLS_SUCCESS;
+}
+
+SUNLinearSolver makeEigenDenseSolver(Eigen::Index n, SUNContext ctx) {
+  SUNLinearSolver S = SUNLinSolNewEmpty(ctx);
+  if (S == nullptr) return nullptr;
+  S->ops->gettype = eigenGetType;
+  S->ops->getid = eigenGetId;
+  S->ops->initialize = eigenInitialize;
+  S->ops->setup = eigenSetup;
+  S->ops->solve = eigenSolve;
+  S->ops->lastflag = eigenLastFlag;
+  S->ops->free = eigenFree;
+  S->content = new EigenDenseContent(n);
+  return S;
+}
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -307,7 +370,8 @@ struct CvodeIntegrator::Impl {
     if (opts.method == Method::BDF) {
       A = SUNDenseMatrix(n, n, ctx);
       if (A == nullptr) throw Error(prefix() + ": allocation of the dense Jacobian matrix failed");
-      LS = SUNLinSol_Dense(y, A, ctx);
+      LS = opts.dense_solver == CvodeOptions::DenseSolver::Eigen ? makeEigenDenseSolver(n, ctx)
+                                                                  : SUNLinSol_Dense(y, A, ctx);
       if (LS == nullptr) throw Error(prefix() + ": creation of the dense linear solver failed");
       check(CVodeSetLinearSolver(mem, LS, A), "CVodeSetLinearSolver");
       if (jac) check(CVodeSetJacFn(mem, &Impl::jacCallback), "CVodeSetJacFn");

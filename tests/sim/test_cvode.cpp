@@ -641,3 +641,28 @@ TEST(RootFinding, LocatesCrossingWithinTolerance) {
   EXPECT_DOUBLE_EQ(t, 3.0);
   EXPECT_THROW(integ.setRootFunction(1, nullptr), jointsim::InputError);
 }
+
+TEST(DenseSolvers, EigenAndSundialsAgreeOnRobertson) {
+  auto robertson = [](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+    yd[0] = -0.04 * y[0] + 1.0e4 * y[1] * y[2];
+    yd[2] = 3.0e7 * y[1] * y[1];
+    yd[1] = -yd[0] - yd[2];
+  };
+  Eigen::Vector3d results[2];
+  long steps[2];
+  for (int k = 0; k < 2; ++k) {
+    CvodeOptions o;
+    o.rtol = 1e-8;
+    o.atol_vector = Eigen::Vector3d(1e-12, 1e-18, 1e-10);
+    o.dense_solver = k == 0 ? CvodeOptions::DenseSolver::Eigen : CvodeOptions::DenseSolver::Sundials;
+    CvodeIntegrator integ(3, robertson, o);
+    Eigen::VectorXd y(3);
+    integ.initialize(0.0, Eigen::Vector3d(1, 0, 0));
+    integ.advance(4.0e5, y);
+    results[k] = y;
+    steps[k] = integ.stats().steps;
+  }
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(results[0][i], results[1][i], 1e-6 * std::abs(results[1][i]) + 1e-16);
+  EXPECT_NEAR(static_cast<double>(steps[0]), static_cast<double>(steps[1]), 0.05 * static_cast<double>(steps[1]))
+      << "same method, same step-size control";
+}
