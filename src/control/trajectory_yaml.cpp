@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/control/kinematic_ptp.hpp"
 
 namespace jointsim::control {
 
@@ -142,6 +143,24 @@ std::unique_ptr<JointTrajectory> readCsv(const YamlValue& node, int dof, const s
   }
 }
 
+// type: kinematic_ptp — MSL KinematicPTP2 (kinematic_ptp.hpp). Keys as the MSL parameters, SI units:
+// q_begin, q_end [rad], qd_max [rad/s] (> 0), qdd_max [rad/s^2] (> 0): lists of dof; start_time [s] >= 0,
+// default 0.
+std::unique_ptr<JointTrajectory> readKinematicPtp(const YamlValue& node, int dof) {
+  node.allowKeys({"type", "q_begin", "q_end", "qd_max", "qdd_max", "start_time"});
+  const Eigen::VectorXd qb = positions(node.required("q_begin", "start joint positions in rad"), dof, "joint positions in rad");
+  const Eigen::VectorXd qe = positions(node.required("q_end", "end joint positions in rad"), dof, "joint positions in rad");
+  const YamlValue vn = node.required("qd_max", "max joint speeds in rad/s");
+  const Eigen::VectorXd v = positions(vn, dof, "max joint speeds in rad/s");
+  if (!(v.array() > 0.0).all()) vn.failExpected("a list of " + std::to_string(dof) + " max joint speeds in rad/s, each > 0");
+  const YamlValue an = node.required("qdd_max", "max joint accelerations in rad/s^2");
+  const Eigen::VectorXd a = positions(an, dof, "max joint accelerations in rad/s^2");
+  if (!(a.array() > 0.0).all())
+    an.failExpected("a list of " + std::to_string(dof) + " max joint accelerations in rad/s^2, each > 0");
+  const double t0 = nonNegative(node["start_time"], 0.0, "a start time in s");
+  return std::make_unique<KinematicPtpTrajectory>(qb, qe, v, a, t0);
+}
+
 }  // namespace
 
 std::unique_ptr<JointTrajectory> trajectoryFromYaml(const YamlValue& node, int dof, const std::string& base_dir) {
@@ -153,6 +172,7 @@ std::unique_ptr<JointTrajectory> trajectoryFromYaml(const YamlValue& node, int d
     if (t == "point_to_point") return readPointToPoint(node, dof);
     if (t == "fourier") return readFourier(node, dof);
     if (t == "csv") return readCsv(node, dof, base_dir);
+    if (t == "kinematic_ptp") return readKinematicPtp(node, dof);
   } catch (const InputError& e) {
     if (std::string(e.what()).rfind(node.file(), 0) == 0) throw;  // already located
     node.fail(e.what());
