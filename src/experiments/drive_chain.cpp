@@ -30,6 +30,41 @@ int modeNumber(FrictionMode m) {
 }
 }  // namespace
 
+FrictionMode nextFrictionMode(FrictionMode m, bool free, double S, double w, double a, double t0, double t0max,
+                              const FrictionEventFlags& fired) {
+  if (free) return FrictionMode::Free;
+  switch (m) {
+    case FrictionMode::Free: return w > 0 ? FrictionMode::Forward : (w < 0 ? FrictionMode::Backward : FrictionMode::Stuck);
+    case FrictionMode::Stuck:
+      if (S > t0max || fired.up) return w > 0 ? FrictionMode::Forward : FrictionMode::StartForward;
+      if (S < -t0max || fired.down) return w < 0 ? FrictionMode::Backward : FrictionMode::StartBackward;
+      return m;
+    case FrictionMode::StartForward:
+      if (w > 0 || (fired.w && w >= 0)) return FrictionMode::Forward;
+      if (a + t0max < t0 || fired.second) return FrictionMode::Stuck;  // MSL: sa = a + τ0max must stay > τ0
+      return m;
+    case FrictionMode::StartBackward:
+      if (w < 0 || (fired.w && w <= 0)) return FrictionMode::Backward;
+      if (a - t0max > -t0 || fired.second) return FrictionMode::Stuck;
+      return m;
+    case FrictionMode::Forward: return (fired.w || w <= 0) ? FrictionMode::Stuck : m;
+    case FrictionMode::Backward: return (fired.w || w >= 0) ? FrictionMode::Stuck : m;
+  }
+  return m;
+}
+
+void frictionRoots(FrictionMode m, double S, double w, double a, double t0, double t0max, double& g0, double& g1) {
+  g0 = g1 = 1.0;
+  switch (m) {
+    case FrictionMode::Stuck: g0 = S - t0max; g1 = S + t0max; break;
+    case FrictionMode::StartForward: g0 = w; g1 = a + t0max - t0; break;
+    case FrictionMode::StartBackward: g0 = w; g1 = a - t0max + t0; break;
+    case FrictionMode::Forward:
+    case FrictionMode::Backward: g0 = w; break;
+    case FrictionMode::Free: break;
+  }
+}
+
 bool ChainElement::isFriction() const {
   return type == ChainElementType::Clutch || type == ChainElementType::Brake || type == ChainElementType::BearingFriction;
 }
@@ -242,14 +277,7 @@ void DriveChain::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eig
       g1 = phi_rel + 0.5 * el.backlash;
     } else if (el.isFriction()) {
       const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(e);
-      switch (modes_[k]) {
-        case FrictionMode::Stuck: g0 = tau_el_[e] - t0max; g1 = tau_el_[e] + t0max; break;
-        case FrictionMode::StartForward: g0 = w; g1 = a + t0max - t0; break;   // MSL: sa = a + τ0max stays > τ0
-        case FrictionMode::StartBackward: g0 = w; g1 = a - t0max + t0; break;
-        case FrictionMode::Forward:
-        case FrictionMode::Backward: g0 = w; break;
-        case FrictionMode::Free: break;
-      }
+      frictionRoots(modes_[k], tau_el_[e], w, a, t0, t0max, g0, g1);
     }
     g[2 * e] = g0;
     g[2 * e + 1] = g1;
@@ -287,32 +315,8 @@ bool DriveChain::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& 
       const bool second_fired = iter == 0 && fired.size() > 2 * k + 1 && fired[2 * k + 1] != 0;
       const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(e), S = tau_el_[e];
       const bool free = el.type != ChainElementType::BearingFriction && el.fn_max * el.normalized.value(t) <= 0.0;
-      FrictionMode m = modes_[k];
-      if (free) {
-        m = FrictionMode::Free;
-      } else {
-        switch (m) {
-          case FrictionMode::Free: m = w > 0 ? FrictionMode::Forward : (w < 0 ? FrictionMode::Backward : FrictionMode::Stuck); break;
-          case FrictionMode::Stuck:
-            if (S > t0max || up_fired) m = w > 0 ? FrictionMode::Forward : FrictionMode::StartForward;
-            else if (S < -t0max || down_fired) m = w < 0 ? FrictionMode::Backward : FrictionMode::StartBackward;
-            break;
-          case FrictionMode::StartForward:
-            if (w > 0 || (w_fired && w >= 0)) m = FrictionMode::Forward;
-            else if (a + t0max < t0 || second_fired) m = FrictionMode::Stuck;
-            break;
-          case FrictionMode::StartBackward:
-            if (w < 0 || (w_fired && w <= 0)) m = FrictionMode::Backward;
-            else if (a - t0max > -t0 || second_fired) m = FrictionMode::Stuck;
-            break;
-          case FrictionMode::Forward:
-            if (w_fired || w <= 0) m = FrictionMode::Stuck;
-            break;
-          case FrictionMode::Backward:
-            if (w_fired || w >= 0) m = FrictionMode::Stuck;
-            break;
-        }
-      }
+      const FrictionEventFlags flags{w_fired, up_fired, down_fired, second_fired};
+      const FrictionMode m = nextFrictionMode(modes_[k], free, S, w, a, t0, t0max, flags);
       if (m != modes_[k]) {
         modes_[k] = m;
         changed = true;

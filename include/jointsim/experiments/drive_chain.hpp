@@ -68,6 +68,18 @@ struct DriveChainSetup {
 /// Friction mode (MSL numbering in the logs: −1 backward, 0 stuck/start, +1 forward, 2 free).
 enum class FrictionMode { Stuck, StartForward, StartBackward, Forward, Backward, Free };
 
+/// One step of the MSL friction mode logic (ROBOTR3.md §5.2/§5.5) for one element: current mode m,
+/// `free` (normal force <= 0), stuck torque S (valid when m is Stuck), sliding speed w and acceleration a,
+/// τ0 and τ0max; the *_fired flags report the root crossings CVODE located at this event (a located
+/// root may sit exactly on its threshold). Root slots: 0 = (S − τ0max | w), 1 = (S + τ0max | start exit).
+struct FrictionEventFlags {
+  bool w = false, up = false, down = false, second = false;
+};
+FrictionMode nextFrictionMode(FrictionMode m, bool free, double S, double w, double a, double tau0, double tau0max,
+                              const FrictionEventFlags& fired);
+/// Root functions of one friction element in mode m (two slots, see nextFrictionMode).
+void frictionRoots(FrictionMode m, double S, double w, double a, double tau0, double tau0max, double& g0, double& g1);
+
 class DriveChain {
  public:
   explicit DriveChain(DriveChainSetup setup);
