@@ -110,7 +110,8 @@ RunReport runExperimentFile(const std::string& config_path, const RunOptions& op
   if (t == "joint_rig") return runJointRig(root, config_path, name, options);
   if (t == "tracking") return detail::runTracking(root, config_path, name, options);
   if (t == "drive_chain") return detail::runDriveChain(root, config_path, name, options);
-  type.failExpected("an experiment type (known: passive_robot, joint_rig, tracking, drive_chain)");
+  if (t == "robotr3_axis") return detail::runRobotR3Axis(root, config_path, name, options);
+  type.failExpected("an experiment type (known: passive_robot, joint_rig, tracking, drive_chain, robotr3_axis)");
 }
 
 }  // namespace jointsim::experiments

@@ -34,6 +34,9 @@ class TrackingLogger {
 RunReport runDriveChain(const io::YamlValue& root, const std::string& config_path, const std::string& name,
                         const RunOptions& options);
 
+RunReport runRobotR3Axis(const io::YamlValue& root, const std::string& config_path, const std::string& name,
+                         const RunOptions& options);
+
 RunReport runTracking(const io::YamlValue& root, const std::string& config_path, const std::string& name,
                       const RunOptions& options);
 

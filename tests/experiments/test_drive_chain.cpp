@@ -146,3 +146,51 @@ TEST(DriveChainMsl, FrictionExampleRunsAndEndsWithTheBrakeHolding) {
                           "brake.startBackward[-]", "clutch.startForward[-]"})
     EXPECT_NE(header.find(col), std::string::npos) << col;
 }
+
+TEST(RobotR3OneAxis, RunsToTheTerminationTimeAndClosesItsEnergyBalance) {
+  // MSL OneAxis: terminates at path end + swing = 1.4981317 s (ROBOTR3.md §4.5); the amplifier's work on
+  // the armature equals the stored energy (load, rotor, spring, inductance) plus the resistor, damper and
+  // friction losses (energy integrals carried as ODE states), to 1e-4 relative.
+  const auto dir = std::filesystem::temp_directory_path() / "jointsim_one_axis";
+  std::filesystem::remove_all(dir);
+  RunOptions o;
+  o.output_dir = dir.string();
+  const auto report = runExperimentFile(test::sourcePath("config/experiments/robotr3_one_axis.yaml"), o);
+  ASSERT_EQ(report.status, "ok");
+  EXPECT_NEAR(report.sim_time_s, 1.4981317007977317, 1e-9);
+  std::ifstream in(report.csv_path);
+  std::string header, line;
+  std::getline(in, header);
+  std::vector<std::string> cols;
+  {
+    std::stringstream hs(header);
+    for (std::string c; std::getline(hs, c, ',');) cols.push_back(c);
+  }
+  auto col = [&](const std::string& name) {
+    const auto it = std::find(cols.begin(), cols.end(), name);
+    EXPECT_NE(it, cols.end()) << name;
+    return static_cast<size_t>(it - cols.begin());
+  };
+  const size_t iW = col("energy.amplifier_work[J]"), iS = col("energy.stored[J]"), iR = col("energy.resistor_loss[J]"),
+               iD = col("energy.damper_loss[J]"), iF = col("energy.friction_loss[J]"), iq = col("axis.initializeFlange.phi_flange[rad]"),
+               iMode = col("axis.gear.bearingFriction.mode[-]");
+  double max_residual = 0, max_work = 0, E0 = 0;
+  bool first = true, slid = false;
+  std::vector<double> last;
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::vector<double> r;
+    for (std::string c; std::getline(ss, c, ',');) r.push_back(std::stod(c));
+    if (first) E0 = r[iS];
+    first = false;
+    const double residual = r[iW] - (r[iS] - E0) - r[iR] - r[iD] - r[iF];
+    max_residual = std::max(max_residual, std::abs(residual));
+    max_work = std::max(max_work, std::abs(r[iW]));
+    slid = slid || r[iMode] != 0.0;
+    last = r;
+  }
+  ASSERT_GT(max_work, 1.0);
+  EXPECT_LT(max_residual / max_work, 1e-4) << "energy balance residual " << max_residual << " J of " << max_work << " J";
+  EXPECT_TRUE(slid) << "the bearing friction broke away";
+  EXPECT_NEAR(last[iq], 2.0943951023931953, 1e-3) << "the load reaches 120°";
+}

@@ -1,0 +1,208 @@
+#include "jointsim/experiments/robotr3_axis.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "jointsim/common/error.hpp"
+
+namespace jointsim::experiments {
+
+namespace {
+Eigen::VectorXd one(double v) { return Eigen::VectorXd::Constant(1, v); }
+}  // namespace
+
+void RobotR3AxisSetup::validate() const {
+  motor.validate();
+  if (ratio == 0.0 || !std::isfinite(ratio)) throw InputError("ratio: expected a non-zero gear ratio");
+  if (!(c > 0.0) || !(d >= 0.0)) throw InputError("c, d: expected c > 0 N·m/rad and d >= 0 N·m·s/rad");
+  if (!(Rv0 >= 0.0) || !(Rv1 >= 0.0) || !(peak >= 1.0)) throw InputError("friction: expected Rv0, Rv1 >= 0 and peak >= 1");
+  if (!(kp >= 0.0) || !(ks >= 0.0) || !(Ts > 0.0)) throw InputError("controller: expected kp, ks >= 0 and Ts > 0");
+  if (!(load_inertia > 0.0)) throw InputError("load_inertia: expected a value > 0 kg·m²");
+  if (!(stop_time > 0.0) || !(log_interval > 0.0)) throw InputError("stop_time, log_interval: expected values > 0 s");
+  if (std::abs(sa0) > peak * Rv0) throw InputError("sa0: the initial friction torque must lie within ±peak·Rv0");
+}
+
+RobotR3Axis::RobotR3Axis(RobotR3AxisSetup setup)
+    : s_((setup.validate(), std::move(setup))),
+      motor_(s_.motor),
+      path_(one(s_.q_begin), one(s_.q_end), one(s_.qd_max), one(s_.qdd_max), s_.start_time) {
+  const std::string& p = s_.prefix;
+  columns_ = {"time[s]",
+              p + ".controller.PI.x[rad/s]",
+              p + ".gear.spring.phi_rel[rad]",
+              p + ".gear.spring.w_rel[rad/s]",
+              p + ".initializeFlange.phi_flange[rad]",
+              p + ".initializeFlange.w_flange[rad/s]",
+              p + ".motor.C.v[V]",
+              p + ".motor.La.i[A]",
+              p + ".gear.bearingFriction.mode[-]",
+              p + ".gear.bearingFriction.startBackward[-]",
+              p + ".gear.bearingFriction.startForward[-]",
+              p + ".gear.bearingFriction.tau[N·m]",
+              p + ".motor.i_ref[A]",
+              "energy.amplifier_work[J]",
+              "energy.stored[J]",
+              "energy.resistor_loss[J]",
+              "energy.damper_loss[J]",
+              "energy.friction_loss[J]"};
+}
+
+double RobotR3Axis::endTime() const { return std::min(s_.stop_time, path_.endTime() + s_.swing_time); }
+
+Eigen::VectorXd RobotR3Axis::initialState() const {
+  // ROBOTR3.md §9.1 with the load static torque G = 0 (no gravity on a 1-D load): q = q_begin, q̇ = 0,
+  // ω_rel = 0, φ_rel = −G/(ratio c) = 0, ω_m = 0; the rotor balance k i = τ_f(0) − τ_s with τ_f(0) = sa0
+  // (§9.2); electrical steady state v_C = −(Ra i + k ω_m)/5; PI steady state x = i/ks − e(0).
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(kStates);
+  const auto& m = s_.motor;
+  y[0] = s_.q_begin;
+  const double phi_rel = 0.0, tau_s = s_.c * phi_rel;
+  const double i = (s_.sa0 - tau_s) / m.k;
+  const double e0 = s_.kp * phi_rel;
+  y[2] = phi_rel;
+  y[4] = s_.ks > 0.0 ? i / s_.ks - e0 : 0.0;
+  y[5] = -(m.Ra * i) / m.amp_gain;
+  y[6] = i;
+  return y;
+}
+
+RobotR3Axis::Eval RobotR3Axis::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  Eval ev{};
+  const auto& m = s_.motor;
+  const double q = y[0], qd = y[1], phi_rel = y[2], w_rel = y[3], x = y[4], i = y[6];
+  double qr = 0, qdr = 0, qddr = 0;
+  {
+    Eigen::Matrix<double, 1, 1> a, b, c;
+    path_.evaluate(t, a, b, c);
+    qr = a[0];
+    qdr = b[0];
+    qddr = c[0];
+    (void)qddr;
+  }
+  ev.q_ref = qr;
+  ev.qd_ref = qdr;
+  const double N = s_.ratio;
+  const double phi_m = N * q - phi_rel;
+  ev.wm = N * qd - w_rel;
+  ev.e = s_.kp * (N * qr - phi_m) + N * qdr - ev.wm;
+  ev.i_ref = s_.ks * (x + ev.e);
+  ev.tau_s = s_.c * phi_rel + s_.d * w_rel;
+  // Load: J_L q̈ = −ratio τ_s (the spring pulls the gear input with −τ_s).
+  ev.qdd = -N * ev.tau_s / s_.load_inertia;
+  const double tau_motor = m.k * i;
+  ev.stuck_torque = tau_motor + ev.tau_s;  // the friction that keeps dω_m/dt = 0
+  switch (mode_) {
+    case FrictionMode::Stuck: ev.tau_f = ev.stuck_torque; break;
+    case FrictionMode::Forward:
+    case FrictionMode::StartForward: ev.tau_f = s_.Rv0 + s_.Rv1 * std::abs(ev.wm); break;
+    case FrictionMode::Backward:
+    case FrictionMode::StartBackward: ev.tau_f = -(s_.Rv0 + s_.Rv1 * std::abs(ev.wm)); break;
+    case FrictionMode::Free: ev.tau_f = 0.0; break;
+  }
+  ev.wm_dot = mode_ == FrictionMode::Stuck ? 0.0 : (tau_motor - ev.tau_f + ev.tau_s) / m.J;
+  return ev;
+}
+
+void RobotR3Axis::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+  const Eval ev = evaluate(t, y);
+  const auto& m = s_.motor;
+  ydot[0] = y[1];
+  ydot[1] = ev.qdd;
+  ydot[2] = y[3];
+  ydot[3] = s_.ratio * ev.qdd - ev.wm_dot;
+  ydot[4] = ev.e / s_.Ts;
+  ydot[5] = (y[6] - ev.i_ref) / (m.Ri * m.C());
+  ydot[6] = (-m.amp_gain * y[5] - m.Ra * y[6] - m.k * ev.wm) / m.La();
+  ydot[7] = -m.amp_gain * y[5] * y[6];
+  ydot[8] = m.Ra * y[6] * y[6];
+  ydot[9] = s_.d * y[3] * y[3];
+  ydot[10] = ev.tau_f * ev.wm;
+}
+
+double RobotR3Axis::storedEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const double wm = s_.ratio * y[1] - y[3];
+  return 0.5 * s_.load_inertia * y[1] * y[1] + 0.5 * s_.motor.J * wm * wm + 0.5 * s_.c * y[2] * y[2] +
+         0.5 * s_.motor.La() * y[6] * y[6];
+}
+
+void RobotR3Axis::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
+  const Eval ev = evaluate(t, y);
+  const double t0 = s_.Rv0, t0max = s_.peak * s_.Rv0;
+  double g0 = 1, g1 = 1;
+  frictionRoots(mode_, ev.stuck_torque, ev.wm, ev.wm_dot, t0, t0max, g0, g1);
+  g[0] = g0;
+  g[1] = g1;
+}
+
+void RobotR3Axis::updateMode(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+  for (int iter = 0; iter < 20; ++iter) {
+    const Eval ev = evaluate(t, y);
+    FrictionEventFlags f;
+    if (iter == 0 && fired.size() >= 2) f = {fired[0] != 0, fired[0] > 0, fired[1] < 0, fired[1] != 0};
+    const FrictionMode m = nextFrictionMode(mode_, false, ev.stuck_torque, ev.wm, ev.wm_dot, s_.Rv0, s_.peak * s_.Rv0, f);
+    if (m == mode_) break;
+    mode_ = m;
+  }
+}
+
+void RobotR3Axis::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
+  const Eval ev = evaluate(t, y);
+  const int mode = mode_ == FrictionMode::Forward ? 1 : (mode_ == FrictionMode::Backward ? -1 : (mode_ == FrictionMode::Free ? 2 : 0));
+  row << t, y[4], y[2], y[3], y[0], y[1], y[5], y[6], mode, mode_ == FrictionMode::StartBackward ? 1.0 : 0.0,
+      mode_ == FrictionMode::StartForward ? 1.0 : 0.0, ev.tau_f, ev.i_ref, y[7], storedEnergy(y), y[8], y[9], y[10];
+}
+
+AxisRunResult simulateRobotR3Axis(RobotR3Axis& axis, const std::function<void(const Eigen::VectorXd&)>& sink) {
+  const RobotR3AxisSetup& s = axis.setup();
+  sim::CvodeOptions options = s.solver;
+  if (options.component.empty()) options.component = "RobotR3 axis '" + s.name + "'";
+  if (options.max_step == 0.0) options.max_step = s.log_interval;
+  sim::CvodeIntegrator integ(RobotR3Axis::kStates, [&axis](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+    axis.derivatives(t, y, yd);
+  }, options);
+  integ.setRootFunction(2, [&axis](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) {
+    axis.roots(t, y, g);
+  });
+  const double t_end = axis.endTime();
+  std::vector<double> breaks;
+  for (double b : control::KinematicPtpTrajectory(one(s.q_begin), one(s.q_end), one(s.qd_max), one(s.qdd_max), s.start_time)
+                      .breakpoints())
+    if (b > 0 && b < t_end) breaks.push_back(b);
+  breaks.push_back(t_end);
+  size_t next = 0;
+  AxisRunResult r;
+  const auto start = std::chrono::steady_clock::now();
+  Eigen::VectorXd y = axis.initialState();
+  Eigen::VectorXd row(static_cast<Eigen::Index>(axis.columns().size()));
+  axis.updateMode(0.0, y, {});
+  integ.initialize(0.0, y);
+  integ.setStopTime(breaks[0]);
+  axis.signals(0.0, y, row);
+  sink(row);
+  double t = 0.0;
+  for (long k = 1;; ++k) {
+    const double t_out = std::min(t_end, static_cast<double>(k) * s.log_interval);
+    while (t < t_out) {
+      const double target = std::min(t_out, breaks[next]);
+      t = integ.advance(target, y);
+      const bool at_break = t >= breaks[next] && next + 1 < breaks.size();
+      if (integ.rootFound() || at_break) {
+        if (at_break) ++next;
+        axis.updateMode(t, y, integ.rootFound() ? integ.rootDirections() : std::vector<int>{});
+        integ.initialize(t, y);
+        integ.setStopTime(breaks[next]);
+        ++r.events;
+      }
+    }
+    axis.signals(t, y, row);
+    sink(row);
+    if (t_out >= t_end) break;
+  }
+  r.sim_time_s = t;
+  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.stats = integ.stats();
+  return r;
+}
+
+}  // namespace jointsim::experiments
