@@ -36,6 +36,14 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   return o;
 }
 
+void readDurationAndLogRate(const YamlValue& root, double& duration, double& log_rate) {
+  const YamlValue d = root.required("duration", "simulated time in s");
+  duration = d.asDouble("a time in s");
+  if (!(duration > 0)) d.failExpected("a time > 0 s");
+  log_rate = root["log_rate"].asDouble(log_rate, "a rate in Hz");
+  if (!(log_rate > 0)) root["log_rate"].failExpected("a rate > 0 Hz");
+}
+
 control::Profile readProfile(const YamlValue& node, const std::string& unit) {
   node.expectMap("a profile mapping {type: constant|step|ramp|triangle|sine|piecewise|csv, ...}");
   const YamlValue type = node.required("type", "profile type");

@@ -14,6 +14,8 @@ namespace jointsim::experiments::detail {
 
 /// `solver: {method, rtol, atol, max_step, max_order, stability_limit_detection, max_num_steps}`.
 sim::CvodeOptions readSolver(const io::YamlValue& node, sim::CvodeOptions defaults);
+/// Required `duration` [s] > 0 and optional `log_rate` [Hz] > 0 (log_rate keeps its value when absent).
+void readDurationAndLogRate(const io::YamlValue& root, double& duration, double& log_rate);
 /// `{type: constant|step|ramp|triangle|sine|piecewise|csv, ...}`; csv files are relative to the YAML file.
 control::Profile readProfile(const io::YamlValue& node, const std::string& unit);
 /// Applies `key.path=value` overrides to the document; throws InputError if a key does not exist.

@@ -98,11 +98,7 @@ RunReport runDriveChain(const YamlValue& root, const std::string& config_path, c
     }
     s.elements.push_back(std::move(e));
   }
-  const YamlValue duration = root.required("duration", "simulated time in s");
-  s.duration = duration.asDouble("a time in s");
-  if (!(s.duration > 0)) duration.failExpected("a time > 0 s");
-  s.log_rate = root["log_rate"].asDouble(s.log_rate, "a rate in Hz");
-  if (!(s.log_rate > 0)) root["log_rate"].failExpected("a rate > 0 Hz");
+  readDurationAndLogRate(root, s.duration, s.log_rate);
   s.solver = readSolver(root["solver"], s.solver);
   try {
     s.validate();

@@ -150,11 +150,7 @@ JointRigSetup readJointRig(const YamlValue& root, const std::string& name) {
     s.q_l0 = init["output_angle"].asDouble(0.0, "an angle in rad");
     s.qd_l0 = init["output_velocity"].asDouble(0.0, "a velocity in rad/s");
   }
-  const YamlValue duration = root.required("duration", "simulated time in s");
-  s.duration = duration.asDouble("a time in s");
-  if (!(s.duration > 0)) duration.failExpected("a time > 0 s");
-  s.log_rate = root["log_rate"].asDouble(s.log_rate, "a rate in Hz");
-  if (!(s.log_rate > 0)) root["log_rate"].failExpected("a rate > 0 Hz");
+  readDurationAndLogRate(root, s.duration, s.log_rate);
   s.solver = readSolver(root["solver"], s.solver);
   try {
     s.validate();

@@ -47,11 +47,7 @@ RunReport runPassiveRobot(const YamlValue& root, const std::string& config_path,
   p.damping = readVector(root["joint_damping"], "a list of damping coefficients in N·m·s/rad");
   if (p.damping.size() && (p.damping.size() != model.nq || p.damping.minCoeff() < 0))
     root["joint_damping"].failExpected(std::to_string(model.nq) + " damping coefficients >= 0 N·m·s/rad");
-  const YamlValue duration = root.required("duration", "simulated time in s");
-  p.duration = duration.asDouble("a time in s");
-  if (!(p.duration > 0)) duration.failExpected("a time > 0 s");
-  p.log_rate = root["log_rate"].asDouble(p.log_rate, "a rate in Hz");
-  if (!(p.log_rate > 0)) root["log_rate"].failExpected("a rate > 0 Hz");
+  detail::readDurationAndLogRate(root, p.duration, p.log_rate);
   p.solver = detail::readSolver(root["solver"], p.solver);
   p.validate(model);
 
