@@ -97,3 +97,73 @@ RunReport runRobotR3Axis(const YamlValue& root, const std::string& config_path, 
 }
 
 }  // namespace jointsim::experiments::detail
+
+#include "jointsim/experiments/robotr3_full.hpp"
+#include "jointsim/multibody/robot_loader.hpp"
+
+namespace jointsim::experiments::detail {
+
+RunReport runRobotR3Full(const YamlValue& root, const std::string& config_path, const std::string& name,
+                         const RunOptions& options) {
+  root.allowKeys({"experiment", "robot", "axes", "path", "stop_time", "log_interval", "solver"});
+  RobotR3FullSetup s;
+  s.name = name;
+  const YamlValue robot_node = root.required("robot", "multibody description of the arm");
+  try {
+    s.arm = multibody::loadRobot(robot_node.asPath());
+  } catch (const InputError& e) {
+    robot_node.fail(std::string("cannot load robot: ") + e.what());
+  }
+  const YamlValue axes = root.required("axes", "one axis per joint: {preset: robotr3_axis1..6}");
+  axes.expectSequence("a list of axes");
+  for (size_t k = 0; k < axes.size(); ++k) {
+    const YamlValue a = axes.at(k);
+    a.expectMap("an axis mapping {preset}");
+    a.allowKeys({"preset"});
+    const std::string p = a.required("preset", "robotr3_axis1..6").asString("robotr3_axis1..6");
+    if (p.size() != 13 || p.rfind("robotr3_axis", 0) != 0 || p[12] < '1' || p[12] > '6') a["preset"].failExpected("robotr3_axis1..6");
+    s.axes.push_back(RobotR3AxisParams::fullRobot(p[12] - '0'));
+  }
+  const YamlValue path = root.required("path", "KinematicPTP2 path {q_begin, q_end, qd_max, qdd_max, start_time, swing_time}");
+  path.expectMap("a path mapping");
+  path.allowKeys({"q_begin", "q_end", "qd_max", "qdd_max", "start_time", "swing_time"});
+  auto vec = [&](const char* key) {
+    const auto v = path.required(key, "one value per joint").asDoubles(static_cast<size_t>(s.arm.nq), "one value per joint");
+    return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+  };
+  s.q_begin = vec("q_begin");
+  s.q_end = vec("q_end");
+  s.qd_max = vec("qd_max");
+  s.qdd_max = vec("qdd_max");
+  s.start_time = path["start_time"].asDouble(0.0, "a time in s");
+  s.swing_time = path["swing_time"].asDouble(0.5, "a time in s");
+  s.stop_time = root["stop_time"].asDouble(s.stop_time, "a time in s");
+  s.log_interval = root["log_interval"].asDouble(s.log_interval, "an output interval in s");
+  s.solver = readSolver(root["solver"], s.solver);
+  try {
+    s.validate();
+  } catch (const InputError& e) {
+    root.fail(e.what());
+  }
+  RobotR3Full robot(s);
+  size_t events = 0;
+  return runAndRecord(
+      name, "robotr3_full", options, robot.columns(),
+      [&](const std::function<void(const Eigen::VectorXd&)>& sink) {
+        const FullRunResult r = simulateRobotR3Full(robot, sink);
+        events = r.events;
+        return SimulationOutcome{r.stats, r.sim_time_s, r.wall_time_s};
+      },
+      [&](io::JsonWriter& w) {
+        w.beginObject();
+        w.key("config_file"); w.value(config_path);
+        w.key("end_time"); w.value(robot.endTime());
+        w.key("events"); w.value(static_cast<long>(events));
+        w.key("state_size"); w.value(robot.stateSize());
+        w.key("solver"); writeSolverOptions(w, s.solver);
+        w.key("config"); writeYamlAsJson(w, root.node());
+        w.endObject();
+      });
+}
+
+}  // namespace jointsim::experiments::detail

@@ -37,6 +37,9 @@ RunReport runDriveChain(const io::YamlValue& root, const std::string& config_pat
 RunReport runRobotR3Axis(const io::YamlValue& root, const std::string& config_path, const std::string& name,
                          const RunOptions& options);
 
+RunReport runRobotR3Full(const io::YamlValue& root, const std::string& config_path, const std::string& name,
+                         const RunOptions& options);
+
 RunReport runTracking(const io::YamlValue& root, const std::string& config_path, const std::string& name,
                       const RunOptions& options);
 

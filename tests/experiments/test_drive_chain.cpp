@@ -194,3 +194,53 @@ TEST(RobotR3OneAxis, RunsToTheTerminationTimeAndClosesItsEnergyBalance) {
   EXPECT_TRUE(slid) << "the bearing friction broke away";
   EXPECT_NEAR(last[iq], 2.0943951023931953, 1e-3) << "the load reaches 120°";
 }
+
+TEST(RobotR3FullRobot, StartsFromTheDocumentedStateAndReachesTheTarget) {
+  // ROBOTR3.md §9.2 (sa(0) = 0): i(0), v_C(0), x(0) per axis; termination at 1.8560450 s (§4.5); the
+  // joints end near the path's end angles.
+  const auto dir = std::filesystem::temp_directory_path() / "jointsim_full_robot";
+  std::filesystem::remove_all(dir);
+  RunOptions o;
+  o.output_dir = dir.string();
+  const auto report = runExperimentFile(test::sourcePath("config/experiments/robotr3_full_robot.yaml"), o);
+  ASSERT_EQ(report.status, "ok");
+  EXPECT_NEAR(report.sim_time_s, 1.8560450019, 1e-9);
+  std::ifstream in(report.csv_path);
+  std::string header, line;
+  std::getline(in, header);
+  std::vector<std::string> cols;
+  {
+    std::stringstream hs(header);
+    for (std::string c; std::getline(hs, c, ',');) cols.push_back(c.substr(0, c.rfind('[')));
+  }
+  auto read = [](const std::string& l) {
+    std::vector<double> r;
+    std::stringstream ss(l);
+    for (std::string c; std::getline(ss, c, ',');) r.push_back(std::stod(c));
+    return r;
+  };
+  auto col = [&](const std::string& name) {
+    const auto it = std::find(cols.begin(), cols.end(), name);
+    EXPECT_NE(it, cols.end()) << name;
+    return static_cast<size_t>(it - cols.begin());
+  };
+  std::getline(in, line);
+  const auto first = read(line);
+  const double i0[6] = {0, -1.888091, -3.678835, -0.6004244, -0.7242793, 0};
+  const double v0[6] = {0, 94.40457, 183.9417, 30.02122, 36.21397, 0};
+  const double x0[6] = {0, -5.146937, -7.726060, -1.200849, -1.448559, 0};
+  for (int j = 1; j <= 6; ++j) {
+    const std::string a = "axis" + std::to_string(j);
+    EXPECT_NEAR(first[col(a + ".motor.La.i")], i0[j - 1], 1e-6) << a;
+    EXPECT_NEAR(first[col(a + ".motor.C.v")], v0[j - 1], 1e-4) << a;
+    EXPECT_NEAR(first[col(a + ".controller.PI.x")], x0[j - 1], 1e-6) << a;
+  }
+  EXPECT_NEAR(first[col("axis2.gear.spring.phi_rel")], 0.2741509, 1e-7);
+  std::string last_line;
+  while (std::getline(in, line)) last_line = line;
+  const auto last = read(last_line);
+  const double q_end[6] = {1.0471975511965976, -1.2217304763960306, -0.6108652381980153, 0.7853981633974483,
+                           1.9198621771937625, 0.7853981633974483};
+  for (int j = 1; j <= 6; ++j)
+    EXPECT_NEAR(last[col("mechanics.r" + std::to_string(j) + ".phi")], q_end[j - 1], 0.02) << "joint " << j;
+}
