@@ -96,6 +96,16 @@ void DriveChainSetup::validate() const {
       continue;
     }
     if (e.a == e.b) throw InputError(where + ": both flanges on the same node");
+    if (e.type == ChainElementType::Gear) {
+      if (e.a < 0 || e.b < 0) throw InputError(where + ": a gear joins two inertias");
+      if (!(e.ratio != 0.0) || !std::isfinite(e.ratio)) throw InputError(where + ": ratio must be non-zero");
+      const auto& ia = inertias[static_cast<size_t>(e.a)];
+      const auto& ib = inertias[static_cast<size_t>(e.b)];
+      if (std::abs(ia.phi0 - e.ratio * ib.phi0) > 1e-12 * (1 + std::abs(ia.phi0)) ||
+          std::abs(ia.w0 - e.ratio * ib.w0) > 1e-12 * (1 + std::abs(ia.w0)))
+        throw InputError(where + ": initial angles/speeds violate φ_in = ratio·φ_out");
+      continue;
+    }
     if ((e.type == ChainElementType::SpringDamper || e.type == ChainElementType::ElastoBacklash) && !(e.c >= 0.0 && e.d >= 0.0))
       throw InputError(where + ": c and d must be >= 0");
     if (e.type == ChainElementType::ElastoBacklash && !(e.backlash >= 0.0)) throw InputError(where + ": backlash must be >= 0");
@@ -187,6 +197,10 @@ void DriveChain::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) con
       known_[el.b] += tau_el_[e];
       continue;
     }
+    if (el.type == ChainElementType::Gear) {
+      stuck_.push_back(e);  // always-active constraint
+      continue;
+    }
     const double phi_rel = (el.b >= 0 ? y[2 * el.b] : 0.0) - (el.a >= 0 ? y[2 * el.a] : 0.0);
     const double w_rel = relSpeed(e, y);
     switch (el.type) {
@@ -214,9 +228,12 @@ void DriveChain::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) con
   // Stuck elements: find their torques S with B^T J⁻¹ (known + B S) = 0 (zero relative acceleration).
   const auto m = static_cast<Eigen::Index>(stuck_.size());
   auto Jinv = [&](int i) { return 1.0 / s_.inertias[static_cast<size_t>(i)].J; };
+  // Constraint row of element e: +1 at its input, −1 (friction) or −ratio (gear) at its output; the
+  // constraint torque acts along the same row (+τ on the input, −1 or −ratio × τ on the output).
   auto bcol = [&](int e, int i) {
     const auto& el = s_.elements[static_cast<size_t>(e)];
-    return (el.a == i ? 1.0 : 0.0) - (el.b == i ? 1.0 : 0.0);
+    const double out = el.type == ChainElementType::Gear ? el.ratio : 1.0;
+    return (el.a == i ? 1.0 : 0.0) - (el.b == i ? out : 0.0);
   };
   const int n = static_cast<int>(s_.inertias.size());
   for (Eigen::Index r = 0; r < m; ++r) {
@@ -257,7 +274,7 @@ void DriveChain::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) con
     const auto& el = s_.elements[static_cast<size_t>(e)];
     tau_el_[e] = rhs_[r];
     if (el.a >= 0) known_[el.a] += rhs_[r];
-    if (el.b >= 0) known_[el.b] -= rhs_[r];
+    if (el.b >= 0) known_[el.b] -= (el.type == ChainElementType::Gear ? el.ratio : 1.0) * rhs_[r];
   }
   for (int i = 0; i < n; ++i) acc_[i] = known_[i] * Jinv(i);
 }

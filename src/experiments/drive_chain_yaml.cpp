@@ -61,7 +61,7 @@ RunReport runDriveChain(const YamlValue& root, const std::string& config_path, c
     el.expectMap("an element {name, type, ...}");
     ChainElement e;
     e.name = el.required("name", "element name").asString("a name");
-    const YamlValue type = el.required("type", "spring_damper, elasto_backlash, clutch, brake, bearing_friction or torque");
+    const YamlValue type = el.required("type", "spring_damper, elasto_backlash, clutch, brake, bearing_friction, gear or torque");
     const std::string t = type.asString("an element type");
     if (t == "torque") {
       el.allowKeys({"name", "type", "on", "profile"});
@@ -87,13 +87,17 @@ RunReport runDriveChain(const YamlValue& root, const std::string& config_path, c
         if (el.has("mu")) e.table = readTable(el["mu"], "a table [[v rad/s, mu], ...]");
         e.peak = el["peak"].asDouble(1.0, "a peak factor >= 1");
         e.cgeo = el["cgeo"].asDouble(1.0, "a geometry constant in m");
+      } else if (t == "gear") {
+        el.allowKeys({"name", "type", "from", "to", "ratio"});
+        e.type = ChainElementType::Gear;
+        e.ratio = el.required("ratio", "gear ratio φ_from/φ_to").asDouble("a gear ratio");
       } else if (t == "bearing_friction") {
         el.allowKeys({"name", "type", "from", "to", "tau_pos", "peak"});
         e.type = ChainElementType::BearingFriction;
         e.table = readTable(el.required("tau_pos", "table [[w rad/s, tau N·m], ...]"), "a table [[w rad/s, tau N·m], ...]");
         e.peak = el["peak"].asDouble(1.0, "a peak factor >= 1");
       } else {
-        type.failExpected("spring_damper, elasto_backlash, clutch, brake, bearing_friction or torque");
+        type.failExpected("spring_damper, elasto_backlash, clutch, brake, bearing_friction, gear or torque");
       }
     }
     s.elements.push_back(std::move(e));

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "jointsim/common/error.hpp"
 #include "jointsim/experiments/drive_chain.hpp"
 #include "jointsim/experiments/runner.hpp"
 #include "test_util.hpp"
@@ -243,4 +244,54 @@ TEST(RobotR3FullRobot, StartsFromTheDocumentedStateAndReachesTheTarget) {
                            1.9198621771937625, 0.7853981633974483};
   for (int j = 1; j <= 6; ++j)
     EXPECT_NEAR(last[col("mechanics.r" + std::to_string(j) + ".phi")], q_end[j - 1], 0.02) << "joint " << j;
+}
+
+TEST(DriveChainGear, IdealGearReflectsInertiaAndTorque) {
+  // Motor J1 = 0.01 driven by 2 N·m, gear ratio 10 to a load J2 = 1: a_out = τN/(J1N² + J2) = 10 rad/s²,
+  // a_in = 100 rad/s²; the gear's input torque is J1 a_in − τ = −1 N·m (it takes 1 N·m from the motor).
+  // Then a load-side bearing friction of 5 N·m stalls it: 2·10 = 20 N·m > 5 → slides with a_out = 7.5.
+  for (bool with_friction : {false, true}) {
+    DriveChainSetup s;
+    s.inertias = {{"motor", 0.01, 0.0, 0.0}, {"load", 1.0, 0.0, 0.0}};
+    ChainElement src;
+    src.name = "tau";
+    src.type = ChainElementType::TorqueSource;
+    src.b = 0;
+    src.torque = control::Profile::constant(2.0);
+    ChainElement gear;
+    gear.name = "gear";
+    gear.type = ChainElementType::Gear;
+    gear.a = 0;
+    gear.b = 1;
+    gear.ratio = 10.0;
+    s.elements = {src, gear};
+    if (with_friction) {
+      ChainElement f;
+      f.name = "bearing";
+      f.type = ChainElementType::BearingFriction;
+      f.a = -1;
+      f.b = 1;
+      f.table = {{{0.0, 5.0}}};
+      s.elements.push_back(f);
+    }
+    s.duration = 1.0;
+    s.log_rate = 10;
+    DriveChain chain(s);
+    const auto rows = run(chain);
+    const double a_out = with_friction ? (20.0 - 5.0) / 2.0 : 10.0;
+    const auto& last = rows.back();
+    EXPECT_NEAR(last[4], a_out * 1.0, 1e-6) << "load speed, friction " << with_friction;
+    EXPECT_NEAR(last[2], 10 * a_out * 1.0, 1e-5) << "motor speed = ratio × load speed";
+    EXPECT_NEAR(last[1], 10 * last[3], 1e-6) << "constraint φ_in = N φ_out holds";
+  }
+  DriveChainSetup bad;
+  bad.inertias = {{"a", 1, 0, 0}, {"b", 1, 0.1, 0}};
+  ChainElement g;
+  g.name = "g";
+  g.type = ChainElementType::Gear;
+  g.a = 0;
+  g.b = 1;
+  g.ratio = 2;
+  bad.elements = {g};
+  EXPECT_THROW(DriveChain{bad}, jointsim::InputError);
 }

@@ -10,7 +10,9 @@
 ///
 /// Two-flange conventions (MSL): an element joins input node `a` and output node `b` (−1 = ground);
 /// φ_rel = φ_b − φ_a, w_rel = ω_b − ω_a; its torque τ acts with +τ on the input body and −τ on the output
-/// body. A torque source applies +τ(t) to its node `b`.
+/// body. A torque source applies +τ(t) to its node `b`. An ideal gear (MSL IdealGear) couples two inertias
+/// by φ_a = ratio·φ_b: it is a kinematic constraint solved together with the stuck friction elements; it
+/// exerts τ on the input and −ratio·τ on the output (lossless). Initial states must satisfy it.
 
 #include <functional>
 #include <memory>
@@ -31,7 +33,7 @@ struct ChainInertia {
   double w0 = 0.0;    ///< initial speed [rad/s]
 };
 
-enum class ChainElementType { SpringDamper, ElastoBacklash, Clutch, Brake, BearingFriction, TorqueSource };
+enum class ChainElementType { SpringDamper, ElastoBacklash, Clutch, Brake, BearingFriction, TorqueSource, Gear };
 
 struct ChainElement {
   std::string name;
@@ -51,6 +53,8 @@ struct ChainElement {
   double peak = 1.0;                                     ///< stiction factor, τ0max = peak·τ0, >= 1
   // TorqueSource
   control::Profile torque = control::Profile::constant(0.0);  ///< [N·m]
+  // Gear: ideal, lossless, φ_a = ratio·φ_b; its torque is the constraint torque on the input flange [N·m]
+  double ratio = 1.0;
   bool isFriction() const;
 };
 
