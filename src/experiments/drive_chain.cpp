@@ -1,10 +1,10 @@
 #include "jointsim/experiments/drive_chain.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/sim/hybrid_run.hpp"
 #include "jointsim/drive/transmissions.hpp"
 
 namespace jointsim::experiments {
@@ -386,60 +386,32 @@ ChainRunResult simulateDriveChain(DriveChain& chain, const std::function<void(co
   sim::CvodeOptions options = s.solver;
   if (options.component.empty()) options.component = "drive chain '" + s.name + "'";
   if (options.max_step == 0.0) options.max_step = 1.0 / s.log_rate;
-  sim::CvodeIntegrator integ(chain.stateSize(), [&chain](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-    chain.derivatives(t, y, yd);
-  }, options);
-  integ.setRootFunction(chain.rootCount(), [&chain](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) {
-    chain.roots(t, y, g);
-  });
-  // Time events: discontinuities of the torque sources and normal forces, and the end.
-  std::vector<double> breaks{s.duration};
-  for (const auto& el : s.elements) {
-    for (double b : el.torque.breakpoints(s.duration)) breaks.push_back(b);
-    for (double b : el.normalized.breakpoints(s.duration)) breaks.push_back(b);
-  }
-  std::sort(breaks.begin(), breaks.end());
-  breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
-  size_t next_break = 0;
-
-  ChainRunResult result;
-  const auto start = std::chrono::steady_clock::now();
-  Eigen::VectorXd y = chain.initialState();
   Eigen::VectorXd row(static_cast<Eigen::Index>(chain.columns().size()));
-  chain.initializeModes(0.0, y);
-  integ.initialize(0.0, y);
-  integ.setStopTime(breaks[0]);
-  chain.signals(0.0, y, row);
-  sink(row);
-  const auto steps = static_cast<long>(std::ceil(s.duration * s.log_rate - 1e-9));
-  double t = 0.0;
-  long events_here = 0;
-  for (long k = 1; k <= steps; ++k) {
-    const double t_out = std::min(s.duration, static_cast<double>(k) / s.log_rate);
-    while (t < t_out) {
-      const double target = std::min(t_out, breaks[next_break]);
-      t = integ.advance(target, y);
-      const bool at_break = t >= breaks[next_break] && next_break + 1 < breaks.size();
-      if (integ.rootFound() || at_break) {
-        if (at_break) ++next_break;
-        chain.updateModes(t, y, integ.rootFound() ? integ.rootDirections() : std::vector<int>{});
-        integ.initialize(t, y);
-        integ.setStopTime(breaks[next_break]);
-        ++result.events;
-        if (++events_here > 100000)
-          throw SolverError("drive chain '" + s.name + "': more than 100000 events in one output interval (chattering) at t = " +
-                                std::to_string(t) + " s",
-                            t, "EVENT_CHATTERING", s.name);
-      }
-    }
-    events_here = 0;
+  sim::HybridSystem sys;
+  sys.n_states = chain.stateSize();
+  sys.n_roots = chain.rootCount();
+  sys.rhs = [&chain](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) { chain.derivatives(t, y, yd); };
+  sys.roots = [&chain](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) { chain.roots(t, y, g); };
+  sys.on_event = [&chain](double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+    chain.updateModes(t, y, fired);
+  };
+  sys.output = [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
     chain.signals(t, y, row);
     sink(row);
+  };
+  // Time events: discontinuities of the torque sources and normal forces.
+  sim::HybridRunSettings run;
+  run.t_end = s.duration;
+  for (const auto& el : s.elements) {
+    for (double b : el.torque.breakpoints(s.duration)) run.time_events.push_back(b);
+    for (double b : el.normalized.breakpoints(s.duration)) run.time_events.push_back(b);
   }
-  result.sim_time_s = t;
-  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  result.stats = integ.stats();
-  return result;
+  run.n_outputs = static_cast<long>(std::ceil(s.duration * s.log_rate - 1e-9));
+  run.output_time = [&s](long k) { return std::min(s.duration, static_cast<double>(k) / s.log_rate); };
+  Eigen::VectorXd y = chain.initialState();
+  chain.initializeModes(0.0, y);
+  const sim::HybridRunResult r = sim::runHybrid(sys, options, y, run);
+  return {r.stats, r.sim_time_s, r.wall_time_s, r.events};
 }
 
 }  // namespace jointsim::experiments

@@ -1,10 +1,10 @@
 #include "jointsim/experiments/robotr3_axis.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/sim/hybrid_run.hpp"
 
 namespace jointsim::experiments {
 
@@ -158,51 +158,28 @@ AxisRunResult simulateRobotR3Axis(RobotR3Axis& axis, const std::function<void(co
   sim::CvodeOptions options = s.solver;
   if (options.component.empty()) options.component = "RobotR3 axis '" + s.name + "'";
   if (options.max_step == 0.0) options.max_step = s.log_interval;
-  sim::CvodeIntegrator integ(RobotR3Axis::kStates, [&axis](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-    axis.derivatives(t, y, yd);
-  }, options);
-  integ.setRootFunction(2, [&axis](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) {
-    axis.roots(t, y, g);
-  });
-  const double t_end = axis.endTime();
-  std::vector<double> breaks;
-  for (double b : control::KinematicPtpTrajectory(one(s.q_begin), one(s.q_end), one(s.qd_max), one(s.qdd_max), s.start_time)
-                      .breakpoints())
-    if (b > 0 && b < t_end) breaks.push_back(b);
-  breaks.push_back(t_end);
-  size_t next = 0;
-  AxisRunResult r;
-  const auto start = std::chrono::steady_clock::now();
-  Eigen::VectorXd y = axis.initialState();
   Eigen::VectorXd row(static_cast<Eigen::Index>(axis.columns().size()));
-  axis.updateMode(0.0, y, {});
-  integ.initialize(0.0, y);
-  integ.setStopTime(breaks[0]);
-  axis.signals(0.0, y, row);
-  sink(row);
-  double t = 0.0;
-  for (long k = 1;; ++k) {
-    const double t_out = std::min(t_end, static_cast<double>(k) * s.log_interval);
-    while (t < t_out) {
-      const double target = std::min(t_out, breaks[next]);
-      t = integ.advance(target, y);
-      const bool at_break = t >= breaks[next] && next + 1 < breaks.size();
-      if (integ.rootFound() || at_break) {
-        if (at_break) ++next;
-        axis.updateMode(t, y, integ.rootFound() ? integ.rootDirections() : std::vector<int>{});
-        integ.initialize(t, y);
-        integ.setStopTime(breaks[next]);
-        ++r.events;
-      }
-    }
+  sim::HybridSystem sys;
+  sys.n_states = RobotR3Axis::kStates;
+  sys.n_roots = 2;
+  sys.rhs = [&axis](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) { axis.derivatives(t, y, yd); };
+  sys.roots = [&axis](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) { axis.roots(t, y, g); };
+  sys.on_event = [&axis](double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+    axis.updateMode(t, y, fired);
+  };
+  sys.output = [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
     axis.signals(t, y, row);
     sink(row);
-    if (t_out >= t_end) break;
-  }
-  r.sim_time_s = t;
-  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  r.stats = integ.stats();
-  return r;
+  };
+  sim::HybridRunSettings run;
+  run.t_end = axis.endTime();
+  run.time_events =
+      control::KinematicPtpTrajectory(one(s.q_begin), one(s.q_end), one(s.qd_max), one(s.qdd_max), s.start_time).breakpoints();
+  run.output_time = [&s, &run](long k) { return std::min(run.t_end, static_cast<double>(k) * s.log_interval); };
+  Eigen::VectorXd y = axis.initialState();
+  axis.updateMode(0.0, y, {});
+  const sim::HybridRunResult r = sim::runHybrid(sys, options, y, run);
+  return {r.stats, r.sim_time_s, r.wall_time_s, r.events};
 }
 
 }  // namespace jointsim::experiments

@@ -1,12 +1,12 @@
 #include "jointsim/experiments/robotr3_full.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include <Eigen/Cholesky>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/sim/hybrid_run.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 
 namespace jointsim::experiments {
@@ -279,54 +279,27 @@ FullRunResult simulateRobotR3Full(RobotR3Full& robot, const std::function<void(c
   sim::CvodeOptions options = s.solver;
   if (options.component.empty()) options.component = "RobotR3 '" + s.name + "'";
   if (options.max_step == 0.0) options.max_step = s.log_interval;
-  sim::CvodeIntegrator integ(robot.stateSize(), [&robot](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-    robot.derivatives(t, y, yd);
-  }, options);
-  integ.setRootFunction(robot.rootCount(), [&robot](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) {
-    robot.roots(t, y, g);
-  });
-  const double t_end = robot.endTime();
-  std::vector<double> breaks;
-  for (double b : control::KinematicPtpTrajectory(s.q_begin, s.q_end, s.qd_max, s.qdd_max, s.start_time).breakpoints())
-    if (b > 0 && b < t_end) breaks.push_back(b);
-  breaks.push_back(t_end);
-  size_t next = 0;
-  FullRunResult r;
-  const auto start = std::chrono::steady_clock::now();
-  Eigen::VectorXd y = robot.initialState();
   Eigen::VectorXd row(static_cast<Eigen::Index>(robot.columns().size()));
-  robot.updateModes(0.0, y, {});
-  integ.initialize(0.0, y);
-  integ.setStopTime(breaks[0]);
-  robot.signals(0.0, y, row);
-  sink(row);
-  double t = 0.0;
-  long events_here = 0;
-  for (long k = 1;; ++k) {
-    const double t_out = std::min(t_end, static_cast<double>(k) * s.log_interval);
-    while (t < t_out) {
-      const double target = std::min(t_out, breaks[next]);
-      t = integ.advance(target, y);
-      const bool at_break = t >= breaks[next] && next + 1 < breaks.size();
-      if (integ.rootFound() || at_break) {
-        if (at_break) ++next;
-        robot.updateModes(t, y, integ.rootFound() ? integ.rootDirections() : std::vector<int>{});
-        integ.initialize(t, y);
-        integ.setStopTime(breaks[next]);
-        ++r.events;
-        if (++events_here > 100000)
-          throw SolverError("RobotR3: event chattering at t = " + std::to_string(t) + " s", t, "EVENT_CHATTERING", s.name);
-      }
-    }
-    events_here = 0;
+  sim::HybridSystem sys;
+  sys.n_states = robot.stateSize();
+  sys.n_roots = robot.rootCount();
+  sys.rhs = [&robot](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) { robot.derivatives(t, y, yd); };
+  sys.roots = [&robot](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) { robot.roots(t, y, g); };
+  sys.on_event = [&robot](double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+    robot.updateModes(t, y, fired);
+  };
+  sys.output = [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
     robot.signals(t, y, row);
     sink(row);
-    if (t_out >= t_end) break;
-  }
-  r.sim_time_s = t;
-  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  r.stats = integ.stats();
-  return r;
+  };
+  sim::HybridRunSettings run;
+  run.t_end = robot.endTime();
+  run.time_events = control::KinematicPtpTrajectory(s.q_begin, s.q_end, s.qd_max, s.qdd_max, s.start_time).breakpoints();
+  run.output_time = [&s, &run](long k) { return std::min(run.t_end, static_cast<double>(k) * s.log_interval); };
+  Eigen::VectorXd y = robot.initialState();
+  robot.updateModes(0.0, y, {});
+  const sim::HybridRunResult r = sim::runHybrid(sys, options, y, run);
+  return {r.stats, r.sim_time_s, r.wall_time_s, r.events};
 }
 
 }  // namespace jointsim::experiments
