@@ -1,10 +1,10 @@
 #include "jointsim/experiments/joint_rig.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/sim/hybrid_run.hpp"
 
 namespace jointsim::experiments {
 
@@ -226,43 +226,26 @@ RigRunResult simulateJointRig(const JointRig& rig, const std::function<void(cons
   // slip phase in between: the error test sees nothing. Measured on the seed-001 clamping rig: one 40 s
   // BDF1 step skipped a break-away.
   if (options.max_step == 0.0) options.max_step = 1.0 / s.log_rate;
-  sim::CvodeIntegrator integ(rig.stateSize(),
-                             [&rig](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-                               rig.derivatives(t, y, yd);
-                             },
-                             options);
-  Eigen::VectorXd y = rig.initialState();
   Eigen::VectorXd row(static_cast<Eigen::Index>(rig.columns().size()));
-  std::vector<double> breaks = s.profile.breakpoints(s.duration);
-  breaks.push_back(s.duration);  // never integrate (or evaluate inputs) beyond the end
-  std::sort(breaks.begin(), breaks.end());
-  size_t next_break = 0;
-
   RigRunResult result;
-  const auto start = std::chrono::steady_clock::now();
-  integ.initialize(0.0, y);
-  if (next_break < breaks.size()) integ.setStopTime(breaks[next_break]);
-  rig.signals(0.0, y, row);
-  sink(row);
-  result.samples = 1;
-  const auto steps = static_cast<long>(std::ceil(s.duration * s.log_rate - 1e-9));
-  for (long k = 1; k <= steps; ++k) {
-    const double t_out = std::min(s.duration, static_cast<double>(k) / s.log_rate);
-    // Restart at every input discontinuity before this output time (the solver never steps across one).
-    while (next_break < breaks.size() && breaks[next_break] <= t_out) {
-      const double tb = breaks[next_break++];
-      integ.advance(tb, y);
-      integ.clearStopTime();  // reached (CVODE may report it as a normal return when tb is an output time)
-      integ.initialize(tb, y);
-      if (next_break < breaks.size()) integ.setStopTime(breaks[next_break]);
-    }
-    result.sim_time_s = integ.advance(t_out, y);
-    rig.signals(result.sim_time_s, y, row);
+  sim::HybridSystem sys;  // no discrete modes: only the input's time events restart the integrator
+  sys.n_states = rig.stateSize();
+  sys.rhs = [&rig](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) { rig.derivatives(t, y, yd); };
+  sys.on_event = [](double, const Eigen::Ref<const Eigen::VectorXd>&, const std::vector<int>&) {};
+  sys.output = [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
+    rig.signals(t, y, row);
     sink(row);
     ++result.samples;
-  }
-  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  result.stats = integ.stats();
+  };
+  sim::HybridRunSettings run;
+  run.t_end = s.duration;
+  run.time_events = s.profile.breakpoints(s.duration);
+  run.n_outputs = static_cast<long>(std::ceil(s.duration * s.log_rate - 1e-9));
+  run.output_time = [&s](long k) { return std::min(s.duration, static_cast<double>(k) / s.log_rate); };
+  const sim::HybridRunResult r = sim::runHybrid(sys, options, rig.initialState(), run);
+  result.stats = r.stats;
+  result.sim_time_s = r.sim_time_s;
+  result.wall_time_s = r.wall_time_s;
   return result;
 }
 
