@@ -11,6 +11,7 @@
 #include "experiments/joint_rig_yaml.hpp"
 #include "experiments/tracking_internal.hpp"
 #include "jointsim/common/error.hpp"
+#include "jointsim/sim/hybrid_run.hpp"
 #include "jointsim/control/trajectory.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
@@ -203,28 +204,39 @@ RunReport runTracking(const YamlValue& root, const std::string& config_path, con
   const RunReport report = runAndRecord(
       name, "tracking", options, logger.columns(),
       [&](const std::function<void(const Eigen::VectorXd&)>& sink) {
-        sim::CvodeIntegrator integ(sys.stateSize(), [&sys](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-          sys.derivatives(t, y, yd);
-        }, solver);
-        std::vector<double> breaks = traj->breakpoints();
-        breaks.push_back(duration);
-        std::sort(breaks.begin(), breaks.end());
-        breaks.erase(std::remove_if(breaks.begin(), breaks.end(), [&](double b) { return b <= 0.0 || b > duration; }), breaks.end());
-        size_t next = 0;
-        const auto start = std::chrono::steady_clock::now();
         Eigen::VectorXd y = sys.initialState(q0);
-        if (sys.sampled()) sys.controlStep(0.0, y);  // the held outputs at t = 0
-        integ.initialize(0.0, y);
-        if (!sys.sampled() && next < breaks.size()) integ.setStopTime(breaks[next]);
-        auto emit = [&](double t) {
-          const Eigen::VectorXd& row = logger.row(t, y);
-          max_err = max_err.cwiseMax((sys.signals(t, y).q_set - y.head(n)).cwiseAbs());
+        auto emit = [&](double t, const Eigen::Ref<const Eigen::VectorXd>& yy) {
+          const Eigen::VectorXd& row = logger.row(t, yy);
+          max_err = max_err.cwiseMax((sys.signals(t, yy).q_set - yy.head(n)).cwiseAbs());
           sink(row);
         };
-        emit(0.0);
         const auto steps = static_cast<long>(std::ceil(duration * log_rate - 1e-9));
+        if (!sys.sampled()) {
+          // Continuous control: restart only at the trajectory's acceleration jumps.
+          sim::HybridSystem hs;
+          hs.n_states = sys.stateSize();
+          hs.rhs = [&sys](double t, const Eigen::Ref<const Eigen::VectorXd>& yy, Eigen::Ref<Eigen::VectorXd> yd) {
+            sys.derivatives(t, yy, yd);
+          };
+          hs.on_event = [](double, const Eigen::Ref<const Eigen::VectorXd>&, const std::vector<int>&) {};
+          hs.output = emit;
+          sim::HybridRunSettings run;
+          run.t_end = duration;
+          run.time_events = traj->breakpoints();
+          run.n_outputs = steps;
+          run.output_time = [&](long k) { return std::min(duration, static_cast<double>(k) / log_rate); };
+          const sim::HybridRunResult r = sim::runHybrid(hs, solver, y, run);
+          return SimulationOutcome{r.stats, r.sim_time_s, r.wall_time_s};
+        }
+        sim::CvodeIntegrator integ(sys.stateSize(), [&sys](double t, const Eigen::Ref<const Eigen::VectorXd>& yy, Eigen::Ref<Eigen::VectorXd> yd) {
+          sys.derivatives(t, yy, yd);
+        }, solver);
+        const auto start = std::chrono::steady_clock::now();
+        sys.controlStep(0.0, y);  // the held outputs at t = 0
+        integ.initialize(0.0, y);
+        emit(0.0, y);
         double t_reached = 0.0;
-        if (sys.sampled()) {
+        {
           // Zero-order hold: one controller update per sample, CVODE restarted after each (held inputs
           // jump), never stepping across a sample; logs interleaved at their own times.
           const double Ts = 1.0 / control_rate;
@@ -240,7 +252,7 @@ RunReport runTracking(const YamlValue& root, const std::string& config_path, con
             while (next_log <= steps && std::min(duration, next_log / log_rate) <= t_next + 1e-12) {
               const double t_log = std::min(duration, next_log / log_rate);
               t_reached = integ.advance(std::min(t_log, t_next), y);
-              emit(t_reached);
+              emit(t_reached, y);
               ++next_log;
             }
             if (t_reached < t_next) t_reached = integ.advance(t_next, y);
@@ -251,22 +263,6 @@ RunReport runTracking(const YamlValue& root, const std::string& config_path, con
           out.stats = integ.stats();
           return out;
         }
-        for (long k = 1; k <= steps; ++k) {
-          const double t_out = std::min(duration, static_cast<double>(k) / log_rate);
-          while (next < breaks.size() && breaks[next] <= t_out) {
-            const double tb = breaks[next++];
-            integ.advance(tb, y);
-            integ.initialize(tb, y);
-            if (next < breaks.size()) integ.setStopTime(breaks[next]);
-          }
-          t_reached = integ.advance(t_out, y);
-          emit(t_reached);
-        }
-        SimulationOutcome out;
-        out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        out.sim_time_s = t_reached;
-        out.stats = integ.stats();
-        return out;
       },
       [&](io::JsonWriter& w) {
         w.beginObject();
