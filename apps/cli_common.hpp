@@ -15,5 +15,9 @@ Eigen::VectorXd parseList(const std::string& text, const std::string& option, Ei
 
 void addDynamicsCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
+void addIdentifyCommand(CLI::App& app);
+/// `jointsim identify clamping` and `jointsim identify friction` (added to the `identify` subcommand).
+void addIdentifyClampingCommand(CLI::App& identify);
+void addIdentifyFrictionCommand(CLI::App& identify);
 
 }  // namespace jointsim::cli

@@ -1,5 +1,6 @@
 // jointsim command-line interface: parses arguments and dispatches to library calls.
-// Exit status: 0 success, 1 simulation/solver failure, 2 bad input (files, keys, values, options).
+// Exit status: 0 success, 1 simulation/solver failure, 2 bad input (files, keys, values, options),
+// 3 data that cannot identify a requested parameter (jointsim identify).
 #include <exception>
 #include <iostream>
 
@@ -12,6 +13,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "jointsim 0.1.0");
   jointsim::cli::addDynamicsCommand(app);
   jointsim::cli::addRunCommand(app);
+  jointsim::cli::addIdentifyCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -26,6 +28,9 @@ int main(int argc, char** argv) {
   } catch (const jointsim::InputError& e) {
     std::cerr << "jointsim: error: " << e.what() << '\n';
     return 2;
+  } catch (const jointsim::UnidentifiableError& e) {
+    std::cerr << "jointsim: cannot identify: " << e.what() << '\n';
+    return 3;
   } catch (const jointsim::Error& e) {
     std::cerr << "jointsim: failed: " << e.what() << '\n';
     return 1;

@@ -1,8 +1,8 @@
 #pragma once
 /// \file
 /// Exception hierarchy of jointsim. Every error a user can cause derives from jointsim::Error, so a
-/// caller (and the CLI) can catch one type. The CLI maps InputError to exit status 2 and every other
-/// Error to exit status 1.
+/// caller (and the CLI) can catch one type. The CLI maps InputError to exit status 2,
+/// UnidentifiableError to 3 and every other Error to exit status 1.
 
 #include <stdexcept>
 #include <string>
@@ -19,6 +19,13 @@ class Error : public std::runtime_error {
 /// value, an argument of the wrong size. The message names the file, the key path (and line when the
 /// parser gives one) and what was expected.
 class InputError : public Error {
+ public:
+  using Error::Error;
+};
+
+/// Data that parse and validate but cannot determine a requested quantity (e.g. a clamping curve that
+/// never crosses zero torque, so the backlash is unobservable). The CLI maps it to exit status 3.
+class UnidentifiableError : public Error {
  public:
   using Error::Error;
 };
