@@ -108,7 +108,9 @@ RunReport runExperimentFile(const std::string& config_path, const RunOptions& op
   if (t == "drive_chain") return detail::runDriveChain(root, config_path, name, options);
   if (t == "robotr3_axis") return detail::runRobotR3Axis(root, config_path, name, options);
   if (t == "robotr3_full") return detail::runRobotR3Full(root, config_path, name, options);
-  type.failExpected("an experiment type (known: passive_robot, joint_rig, tracking, drive_chain, robotr3_axis, robotr3_full)");
+  if (t == "clamping") return detail::runClamping(root, config_path, name, options);
+  type.failExpected(
+      "an experiment type (known: passive_robot, joint_rig, tracking, drive_chain, robotr3_axis, robotr3_full, clamping)");
 }
 
 }  // namespace jointsim::experiments

@@ -40,6 +40,9 @@ RunReport runRobotR3Axis(const io::YamlValue& root, const std::string& config_pa
 RunReport runRobotR3Full(const io::YamlValue& root, const std::string& config_path, const std::string& name,
                          const RunOptions& options);
 
+RunReport runClamping(const io::YamlValue& root, const std::string& config_path, const std::string& name,
+                      const RunOptions& options);
+
 RunReport runTracking(const io::YamlValue& root, const std::string& config_path, const std::string& name,
                       const RunOptions& options);
 
