@@ -246,7 +246,7 @@ TEST(ClampingPath, Seed000TimingsAndTruncatedSwings) {
   EXPECT_THROW(control::ClampingPath({0.1, 0.0, 0.8, 3.0, 5}), InputError);
 }
 
-TEST(ClampingCurve, SlopeEqualsDerivedSeriesStiffnessStiffAndSoftClamp) {
+TEST(ClampedRobotCurve, SlopeEqualsDerivedSeriesStiffnessStiffAndSoftClamp) {
   // Stiff clamp (000's 2e7) and stiff bending springs. The derived slope is 9.58, not 10: the clamp fixes
   // the flange, but joint 3 and the wrist can rotate to keep it there, so joint 2 also works against
   // the braked drives' springs of those joints (N² c ≈ 1e5 N·m/rad for joint 3).
@@ -265,7 +265,7 @@ TEST(ClampingCurve, SlopeEqualsDerivedSeriesStiffnessStiffAndSoftClamp) {
               slope_stiff, k_stiff, slope_soft, k_soft);
 }
 
-TEST(ClampingCurve, DoublingTheSpringNearlyDoublesTheSlope) {
+TEST(ClampedRobotCurve, DoublingTheSpringNearlyDoublesTheSlope) {
   const double s10 = meanSlope(simulate(setup("joint1", 10.0, 0.0, 0.1, 2e7), 0));
   const double s20 = meanSlope(simulate(setup("joint1", 20.0, 0.0, 0.1, 2e7), 0));
   // 000 §4.4: 9.24 and 17.08 (ratio 1.85). The other compliances in series keep the ratio just below 2.
@@ -274,7 +274,7 @@ TEST(ClampingCurve, DoublingTheSpringNearlyDoublesTheSlope) {
   std::printf("joint 1 slopes: c = 10: %.4f, c = 20: %.4f N·m/rad (ratio %.4f)\n", s10, s20, s20 / s10);
 }
 
-TEST(ClampingCurve, BacklashIsAFlatSegmentOfItsWidth) {
+TEST(ClampedRobotCurve, BacklashIsAFlatSegmentOfItsWidth) {
   const double b = 0.05;  // rad, motor side
   // d = 0.5 N·m·s/rad (Table 4.1's joint 1): with a lighter damper the motor rings on its spring (4.3 Hz)
   // after it lands on the far side of the gap, and J ω̇ then bends the curve.
@@ -306,7 +306,7 @@ TEST(ClampingCurve, BacklashIsAFlatSegmentOfItsWidth) {
   EXPECT_GE(n, 2);  // the full swings +q → −q and −q → +q (the first segment starts from zero torque)
 }
 
-TEST(ClampingCurve, FrictionWidensTheLoopByTwiceItsLevel) {
+TEST(ClampedRobotCurve, FrictionWidensTheLoopByTwiceItsLevel) {
   // Loop width = vertical distance between the loading (ω > 0) and unloading (ω < 0) branches at the same
   // motor angle. Raising the Coulomb level from 0.05 to 0.30 N·m must widen it by 2·0.25 N·m.
   auto width = [](double F) {
