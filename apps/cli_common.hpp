@@ -16,6 +16,7 @@ Eigen::VectorXd parseList(const std::string& text, const std::string& option, Ei
 void addDynamicsCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addIdentifyCommand(CLI::App& app);
+void addBatchCommand(CLI::App& app);
 /// `jointsim identify clamping` and `jointsim identify friction` (added to the `identify` subcommand).
 void addIdentifyClampingCommand(CLI::App& identify);
 void addIdentifyFrictionCommand(CLI::App& identify);

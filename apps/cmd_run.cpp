@@ -2,6 +2,8 @@
 #include <cstdio>
 #include <memory>
 
+#include <unistd.h>
+
 #include "cli_common.hpp"
 #include "jointsim/experiments/runner.hpp"
 
@@ -23,6 +25,7 @@ void addRunCommand(CLI::App& app) {
     experiments::RunOptions options;
     options.output_dir = opt->output_dir;
     options.overrides = opt->overrides;
+    options.progress = ::isatty(2) != 0;  // progress on stderr only when a person is watching
     const experiments::RunReport r = experiments::runExperimentFile(opt->config, options);
     std::printf("%s: %s\n  log:     %s\n  summary: %s\n  simulated %.6g s in %.3g s wall time: real-time factor %.4g\n"
                 "  solver: %ld steps, %ld RHS evaluations, %ld error-test failures\n",

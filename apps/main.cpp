@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   jointsim::cli::addDynamicsCommand(app);
   jointsim::cli::addRunCommand(app);
   jointsim::cli::addIdentifyCommand(app);
+  jointsim::cli::addBatchCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -243,7 +243,8 @@ RunReport runClamping(const YamlValue& root, const std::string& config_path, con
         w.key("solver"); writeSolverOptions(w, s.solver);
         w.key("config"); writeYamlAsJson(w, root.node());
         w.endObject();
-      });
+      },
+      s.duration);
   if (curves && report.status == "ok") {
     // One identify-ready clamping curve per axis: time[s], motor_angle[rad], motor_torque[N·m].
     const std::string dir = std::filesystem::path(report.csv_path).parent_path().string();

@@ -1,6 +1,8 @@
 #include "experiments/config_common.hpp"
 
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <cstdlib>
 #include <filesystem>
@@ -191,7 +193,7 @@ void writeSolverOptions(io::JsonWriter& w, const sim::CvodeOptions& o) {
 RunReport runAndRecord(const std::string& name, const std::string& type, const RunOptions& options,
                        const std::vector<std::string>& columns,
                        const std::function<SimulationOutcome(const std::function<void(const Eigen::VectorXd&)>&)>& simulate,
-                       const std::function<void(io::JsonWriter&)>& write_parameters) {
+                       const std::function<void(io::JsonWriter&)>& write_parameters, double t_end) {
   RunReport report;
   report.experiment = name;
   const std::string dir = options.output_dir.empty() ? "out/" + name : options.output_dir;
@@ -224,7 +226,28 @@ RunReport runAndRecord(const std::string& name, const std::string& type, const R
 
   io::CsvWriter csv(report.csv_path, columns);
   try {
-    const SimulationOutcome r = simulate([&](const Eigen::VectorXd& row) { csv.writeRow(row); });
+    // Progress on stderr (RunOptions::progress, set by the CLI when stderr is a terminal): from 2 s of wall
+    // time on, at most 4 updates per second; the first column of every row is the simulated time.
+    const auto start = std::chrono::steady_clock::now();
+    auto last = start;
+    bool shown = false;
+    const SimulationOutcome r = simulate([&](const Eigen::VectorXd& row) {
+      csv.writeRow(row);
+      if (!options.progress) return;
+      const auto now = std::chrono::steady_clock::now();
+      const double wall = std::chrono::duration<double>(now - start).count();
+      if (wall < 2.0 || std::chrono::duration<double>(now - last).count() < 0.25) return;
+      last = now;
+      shown = true;
+      const double t = row[0], rtf = t / wall;
+      if (t_end > 0.0 && rtf > 0.0)
+        std::fprintf(stderr, "\r  %s: t = %.4g / %.4g s (%3.0f %%), real-time factor %.3g, ETA %.1f s   ", name.c_str(), t,
+                     t_end, 100.0 * t / t_end, rtf, (t_end - t) / rtf);
+      else
+        std::fprintf(stderr, "\r  %s: t = %.4g s, real-time factor %.3g   ", name.c_str(), t, rtf);
+      std::fflush(stderr);
+    });
+    if (shown) std::fprintf(stderr, "\n");
     report.stats = r.stats;
     report.sim_time_s = r.sim_time_s;
     report.wall_time_s = r.wall_time_s;

@@ -27,7 +27,8 @@ void writeSolverOptions(io::JsonWriter& w, const sim::CvodeOptions& o);
 
 /// Runs `simulate` (which streams rows to the sink and returns its statistics), writing
 /// `<dir>/<name>.csv` and `<dir>/summary.json` atomically; on SolverError writes a failed summary and
-/// rethrows. `write_parameters` adds the resolved parameters to the summary.
+/// rethrows. `write_parameters` adds the resolved parameters to the summary. `t_end` [s] (0: unknown) is the
+/// end of the simulated interval, for the progress display's ETA (RunOptions::progress).
 struct SimulationOutcome {
   sim::SolverStats stats;
   double sim_time_s = 0.0, wall_time_s = 0.0;
@@ -35,6 +36,6 @@ struct SimulationOutcome {
 RunReport runAndRecord(const std::string& name, const std::string& type, const RunOptions& options,
                        const std::vector<std::string>& columns,
                        const std::function<SimulationOutcome(const std::function<void(const Eigen::VectorXd&)>&)>& simulate,
-                       const std::function<void(io::JsonWriter&)>& write_parameters);
+                       const std::function<void(io::JsonWriter&)>& write_parameters, double t_end = 0.0);
 
 }  // namespace jointsim::experiments::detail

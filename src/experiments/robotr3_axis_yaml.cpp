@@ -163,7 +163,8 @@ RunReport runRobotR3Full(const YamlValue& root, const std::string& config_path, 
         w.key("solver"); writeSolverOptions(w, s.solver);
         w.key("config"); writeYamlAsJson(w, root.node());
         w.endObject();
-      });
+      },
+      robot.endTime());
 }
 
 }  // namespace jointsim::experiments::detail

@@ -72,7 +72,8 @@ RunReport runPassiveRobot(const YamlValue& root, const std::string& config_path,
         w.key("solver"); detail::writeSolverOptions(w, p.solver);
         w.key("config"); detail::writeYamlAsJson(w, root.node());
         w.endObject();
-      });
+      },
+      p.duration);
 }
 
 RunReport runJointRig(const YamlValue& root, const std::string& config_path, const std::string& name,
@@ -85,7 +86,7 @@ RunReport runJointRig(const YamlValue& root, const std::string& config_path, con
         const RigRunResult r = simulateJointRig(rig, sink);
         return detail::SimulationOutcome{r.stats, r.sim_time_s, r.wall_time_s};
       },
-      [&](io::JsonWriter& w) { detail::writeJointRigParameters(w, rig, root, config_path); });
+      [&](io::JsonWriter& w) { detail::writeJointRigParameters(w, rig, root, config_path); }, setup.duration);
 }
 
 }  // namespace
@@ -102,6 +103,9 @@ RunReport runExperimentFile(const std::string& config_path, const RunOptions& op
     exp["name"].failExpected("a non-empty name without path separators");
   const YamlValue type = exp.required("type", "experiment type");
   const std::string t = type.asString("an experiment type");
+  if (!options.faults.empty() && t != "tracking")
+    type.fail("faults (" + sim::describe(options.faults.front()) + ", ...) apply to experiments with a robot with drives "
+              "(type tracking), not to type '" + t + "'");
   if (t == "passive_robot") return runPassiveRobot(root, config_path, name, options);
   if (t == "joint_rig") return runJointRig(root, config_path, name, options);
   if (t == "tracking") return detail::runTracking(root, config_path, name, options);

@@ -60,7 +60,7 @@ control::JointControllerParams readController(const YamlValue& node) {
 
 }  // namespace
 
-sim::RobotSystem loadRobotWithDrives(const std::string& path) {
+sim::RobotSystem loadRobotWithDrives(const std::string& path, const std::vector<sim::Fault>& faults) {
   const YamlValue root = YamlValue::loadFile(path);
   root.expectMap("a robot-with-drives mapping {name, multibody, drives, coupling}");
   root.allowKeys({"name", "multibody", "drives", "coupling"});
@@ -97,7 +97,9 @@ sim::RobotSystem loadRobotWithDrives(const std::string& path) {
     s.controller = readController(d["controller"]);
     if (const YamlValue sn = d["sensors"]; sn.defined()) {
       sn.expectMap("a sensors mapping {joint_quantum, motor_quantum, current_quantum, joint_noise, motor_velocity_noise, current_noise}");
-      sn.allowKeys({"joint_quantum", "motor_quantum", "current_quantum", "joint_noise", "motor_velocity_noise", "current_noise"});
+      sn.allowKeys({"joint_quantum", "motor_quantum", "current_quantum", "joint_noise", "motor_velocity_noise", "current_noise",
+                    "joint_bias"});
+      s.sensors.joint_bias = sn["joint_bias"].asDouble(0.0, "a joint-angle bias in rad");
       auto nonneg = [&](const char* key, const char* unit) {
         const double v = sn[key].asDouble(0.0, std::string("a value in ") + unit);
         if (v < 0.0) sn[key].failExpected(std::string("a value >= 0 ") + unit);
@@ -130,6 +132,7 @@ sim::RobotSystem loadRobotWithDrives(const std::string& path) {
       for (size_t col = 0; col < n; ++col) G(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(col)) = row[col];
     }
   }
+  sim::applyFaults(specs, faults);  // InputError names the fault
   try {
     return sim::RobotSystem(std::move(model), std::move(specs), G);
   } catch (const InputError& e) {
@@ -148,7 +151,7 @@ RunReport runTracking(const YamlValue& root, const std::string& config_path, con
   const std::string robot_path = robot.asPath();
   sim::RobotSystem sys = [&] {
     try {
-      return loadRobotWithDrives(robot_path);
+      return loadRobotWithDrives(robot_path, options.faults);
     } catch (const InputError& e) {
       robot.fail(std::string("cannot load robot: ") + e.what());
     }
@@ -291,7 +294,8 @@ RunReport runTracking(const YamlValue& root, const std::string& config_path, con
         w.key("solver"); writeSolverOptions(w, solver);
         w.key("config"); writeYamlAsJson(w, root.node());
         w.endObject();
-      });
+      },
+      duration);
   return report;
 }
 

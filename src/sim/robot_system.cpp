@@ -223,7 +223,7 @@ void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>&
     const double qdm = L.rigid ? L.ratio * phid[k] : y[L.motor + 1];
     const double i = L.current >= 0 ? y[L.current] : 0.0;
     // Measurements: noise first, then the sensor's quantiser; encoder speed by differencing.
-    const double q_meas = quantise(y[k] + rng_->gauss(S.joint_noise), S.joint_quantum);
+    const double q_meas = quantise(y[k] + S.joint_bias + rng_->gauss(S.joint_noise), S.joint_quantum);
     const double qm_meas = quantise(qm, S.motor_quantum);
     double qdm_meas = qdm;
     if (S.motor_quantum > 0.0) qdm_meas = first_sample_ ? 0.0 : (qm_meas - prev_qm_meas_[k]) / Ts;
@@ -263,7 +263,7 @@ void RobotSystem::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
     const double qm = L.rigid ? N * phi_[k] : y[L.motor];
     const double qdm = L.rigid ? N * phid_[k] : y[L.motor + 1];
     const double i = L.current >= 0 ? y[L.current] : 0.0;
-    sig_.q_fb[k] = sampled() ? held_q_fb_[k] : q[k];
+    sig_.q_fb[k] = sampled() ? held_q_fb_[k] : q[k] + d.sensors.joint_bias;
     sig_.qm[k] = qm;
     sig_.qdm[k] = qdm;
     sig_.current[k] = i;
@@ -273,7 +273,7 @@ void RobotSystem::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
       out.u = held_u_[k];
       out.i_ref = held_i_ref_[k];
     } else {
-      const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q[k], qm, qdm, i, N, d.motor.V_supply};
+      const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], sig_.q_fb[k], qm, qdm, i, N, d.motor.V_supply};
       out = controllers_[static_cast<size_t>(k)].evaluate(in, L.controller >= 0 ? y.data() + L.controller : nullptr,
                                                           L.controller >= 0 ? ydot + L.controller : nullptr);
     }

@@ -9,12 +9,19 @@
 #include <vector>
 
 #include "jointsim/sim/cvode_integrator.hpp"
+#include "jointsim/sim/faults.hpp"
 
 namespace jointsim::experiments {
 
 struct RunOptions {
   std::string output_dir;              ///< empty: out/<experiment name>/ relative to the working directory
   std::vector<std::string> overrides;  ///< "key.path=value" (e.g. "load.inertia=2", "input.profile.values[1]=3")
+  /// Faults injected into the drives (sim/faults.hpp); only experiments with a robot with drives
+  /// (`tracking`) accept them, the others reject a non-empty list with InputError.
+  std::vector<sim::Fault> faults;
+  /// Progress on stderr (simulated time, real-time factor, ETA) for runs longer than ~2 s; the CLI sets it
+  /// when stderr is a terminal.
+  bool progress = false;
 };
 
 struct RunReport {

@@ -18,12 +18,14 @@
 
 #include <string>
 
+#include "jointsim/sim/faults.hpp"
 #include "jointsim/sim/robot_system.hpp"
 
 namespace jointsim::experiments {
 
 /// Loads a robot-with-drives file. Throws InputError (file:line: key.path) on bad input, including a
-/// joint without a drive and gains of the wrong sign.
-sim::RobotSystem loadRobotWithDrives(const std::string& path);
+/// joint without a drive and gains of the wrong sign. `faults` are applied to the drives before the
+/// system is assembled (InputError if one does not apply).
+sim::RobotSystem loadRobotWithDrives(const std::string& path, const std::vector<sim::Fault>& faults = {});
 
 }  // namespace jointsim::experiments

@@ -27,8 +27,10 @@
 
 namespace jointsim::sim {
 
-/// Sensor imperfections, used only with sampled (discrete-time) control: ideal sensors otherwise.
+/// Sensor imperfections. Quantisation and noise are used only with sampled (discrete-time) control; the
+/// joint-angle bias (a fault, sim/faults.hpp) applies in both modes.
 struct SensorSpec {
+  double joint_bias = 0.0;             ///< constant offset of the measured joint angle [rad]
   double joint_quantum = 0.0;          ///< joint encoder resolution [rad] (0: none)
   double motor_quantum = 0.0;          ///< motor encoder resolution [rad]; > 0: speed = Δ(quantised angle)/T_s
   double current_quantum = 0.0;        ///< current sensor resolution [A]

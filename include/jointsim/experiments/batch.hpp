@@ -1,0 +1,71 @@
+#pragma once
+/// \file
+/// Batch runs and fault-injection sweeps (the library side of `jointsim batch`). A sweep file names a base
+/// experiment and a set of runs: an explicit list, a grid of `--set`-style overrides, and fault scenarios
+/// (sim/faults.hpp) applied to chosen joints. Each run executes in its own child process (a crash or a
+/// solver failure only fails that run) and writes into `<output_dir>/<run name>/`; `manifest.csv` lists
+/// every run with its overrides, status, wall time and output folder, and is rewritten atomically after
+/// each run, so an interrupted batch leaves a consistent manifest. Re-running skips runs whose folder
+/// already holds a summary.json with status "ok" (resume). `shard_index/shard_count` selects every
+/// shard_count-th run starting at shard_index, so a scheduler's job array can spread one sweep over many
+/// machines sharing a file system; each shard writes `manifest.shard-I-of-N.csv`, and `collect` rebuilds
+/// the full `manifest.csv` from the run folders. Format: docs/batch.md.
+
+#include <string>
+#include <vector>
+
+#include "jointsim/sim/faults.hpp"
+
+namespace jointsim::experiments {
+
+struct BatchRun {
+  std::string name;                    ///< unique; also the run's folder name
+  std::vector<std::string> overrides;  ///< "key.path=value", the sweep's common overrides first
+  std::vector<sim::Fault> faults;
+  std::string describe() const;        ///< overrides and faults joined by "; "
+};
+
+struct Sweep {
+  std::string name;
+  std::string file;        ///< the sweep file (for messages)
+  std::string experiment;  ///< base experiment file (absolute or relative to the working directory)
+  std::vector<BatchRun> runs;
+};
+
+/// Reads a sweep file. Throws InputError (file:line: key.path: ...) on bad input, duplicate run names
+/// or an empty sweep.
+Sweep loadSweep(const std::string& path);
+
+struct BatchOptions {
+  std::string output_dir;   ///< empty: out/<sweep name>/
+  int jobs = 1;             ///< runs executed at the same time (>= 1)
+  int shard_index = 0;      ///< this shard, 0 <= index < count
+  int shard_count = 1;
+  bool progress = false;    ///< "runs done/failed/total" on stderr
+};
+
+struct BatchRecord {
+  std::string run, status;  ///< status: ok, failed (solver), error (bad input or crash), pending (not run)
+  double wall_time_s = 0.0, sim_time_s = 0.0, real_time_factor = 0.0;
+  std::string output_dir, overrides;
+  bool skipped = false;     ///< finished in an earlier invocation
+};
+
+struct BatchResult {
+  std::string manifest_path;
+  std::vector<BatchRecord> records;  ///< the runs of this shard, in sweep order
+  int ok = 0, failed = 0, skipped = 0;
+  double wall_time_s = 0.0;
+};
+
+/// Indices of the runs of shard `index` of `count`: index, index + count, ...
+std::vector<size_t> shardRuns(size_t n_runs, int index, int count);
+
+/// Executes the shard's runs (skipping those already ok) with up to `jobs` child processes.
+BatchResult runBatch(const Sweep& sweep, const BatchOptions& options);
+
+/// Rebuilds `<output_dir>/manifest.csv` over all runs of the sweep from their folders (status pending for
+/// runs not finished yet), e.g. after the shards of a job array have finished.
+BatchResult collectBatch(const Sweep& sweep, const BatchOptions& options);
+
+}  // namespace jointsim::experiments

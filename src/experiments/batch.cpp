@@ -1,0 +1,360 @@
+#include "jointsim/experiments/batch.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "io/yaml_reader.hpp"
+#include "jointsim/common/error.hpp"
+#include "jointsim/experiments/runner.hpp"
+#include "jointsim/io/output.hpp"
+
+namespace jointsim::experiments {
+namespace {
+
+using io::YamlValue;
+namespace fs = std::filesystem;
+
+std::string scalarText(const YamlValue& v, const std::string& what) {
+  if (!v.defined() || !v.node().IsScalar()) v.failExpected(what);
+  return v.node().Scalar();
+}
+
+std::string sanitize(const std::string& s) {
+  std::string out;
+  for (char c : s) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_') ? c : '_';
+  return out;
+}
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+// `set: {key.path: value, ...}` as "key.path=value" strings, in file order.
+std::vector<std::string> readSet(const YamlValue& node) {
+  std::vector<std::string> out;
+  if (!node.defined()) return out;
+  node.expectMap("a mapping {key.path: value, ...} of overrides");
+  for (const auto& k : node.keys()) out.push_back(k + "=" + scalarText(node[k], "a scalar value for " + k));
+  return out;
+}
+
+sim::Fault readFault(const YamlValue& n) {
+  n.expectMap("a fault {type, joint, value}");
+  n.allowKeys({"type", "joint", "value"});
+  sim::Fault f;
+  const YamlValue t = n.required("type", "a fault type");
+  try {
+    f.type = sim::faultTypeFromString(t.asString("a fault type"));
+  } catch (const InputError& e) {
+    t.fail(e.what());
+  }
+  f.joint = n.required("joint", "the joint whose drive is affected").asString("a joint name");
+  f.value = n.required("value", "the fault's factor or amount").asDouble("a number");
+  return f;
+}
+
+// Minimal reader of our own summary.json: the string value of "status" and three numbers.
+struct SummaryInfo {
+  bool exists = false;
+  std::string status;
+  double sim = 0, wall = 0, rtf = 0;
+};
+SummaryInfo readSummary(const fs::path& p) {
+  SummaryInfo s;
+  std::ifstream in(p);
+  if (!in) return s;
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string t = ss.str();
+  s.exists = true;
+  auto str = [&](const std::string& key) -> std::string {
+    const size_t a = t.find("\"" + key + "\": \"");
+    if (a == std::string::npos) return {};
+    const size_t b = a + key.size() + 5;
+    return t.substr(b, t.find('"', b) - b);
+  };
+  auto num = [&](const std::string& key) {
+    const size_t a = t.find("\"" + key + "\": ");
+    return a == std::string::npos ? 0.0 : std::strtod(t.c_str() + a + key.size() + 4, nullptr);
+  };
+  s.status = str("status");
+  s.sim = num("sim_time_s");
+  s.wall = num("wall_time_s");
+  s.rtf = num("real_time_factor");
+  return s;
+}
+
+std::string csvQuote(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+void writeManifest(const std::string& path, const std::vector<BatchRecord>& records) {
+  std::ostringstream os;
+  os << "run,status,wall_time_s,sim_time_s,real_time_factor,output_dir,overrides\n";
+  os.precision(6);
+  for (const auto& r : records)
+    os << r.run << ',' << r.status << ',' << r.wall_time_s << ',' << r.sim_time_s << ',' << r.real_time_factor << ','
+       << r.output_dir << ',' << csvQuote(r.overrides) << '\n';
+  io::writeFileAtomically(path, os.str());
+}
+
+std::string outputDir(const Sweep& s, const BatchOptions& o) {
+  return o.output_dir.empty() ? (fs::path("out") / s.name).string() : o.output_dir;
+}
+
+// The record of a run from its folder (status "pending" when there is no summary).
+BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
+  BatchRecord r;
+  r.run = run.name;
+  r.output_dir = run.name;
+  r.overrides = run.describe();
+  const SummaryInfo s = readSummary(fs::path(dir) / run.name / "summary.json");
+  r.status = s.exists ? (s.status.empty() ? "error" : s.status) : "pending";
+  r.sim_time_s = s.sim;
+  r.wall_time_s = s.wall;
+  r.real_time_factor = s.rtf;
+  return r;
+}
+
+// Child process: runs one experiment with its output in `folder`, stdout/stderr to folder/run.log.
+[[noreturn]] void childRun(const Sweep& sweep, const BatchRun& run, const std::string& folder) {
+  const std::string log = (fs::path(folder) / "run.log").string();
+  if (!std::freopen(log.c_str(), "w", stdout) || !std::freopen(log.c_str(), "a", stderr)) _exit(2);
+  int code = 0;
+  try {
+    RunOptions o;
+    o.output_dir = folder;
+    o.overrides = run.overrides;
+    o.faults = run.faults;
+    const RunReport r = runExperimentFile(sweep.experiment, o);
+    std::printf("%s: %s, simulated %g s in %g s (real-time factor %g)\n", run.name.c_str(), r.status.c_str(),
+                r.sim_time_s, r.wall_time_s, r.real_time_factor);
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    code = 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "failed: %s\n", e.what());
+    code = 1;
+  }
+  std::fflush(nullptr);
+  _exit(code);
+}
+
+}  // namespace
+
+std::string BatchRun::describe() const {
+  std::string s;
+  for (const auto& o : overrides) s += (s.empty() ? "" : "; ") + o;
+  for (const auto& f : faults) s += (s.empty() ? "" : "; ") + std::string("fault ") + sim::describe(f);
+  return s;
+}
+
+Sweep loadSweep(const std::string& path) {
+  const YamlValue root = YamlValue::loadFile(path);
+  root.expectMap("a sweep mapping {sweep, runs, grid, faults}");
+  root.allowKeys({"sweep", "runs", "grid", "faults"});
+  Sweep s;
+  s.file = path;
+  const YamlValue head = root.required("sweep", "mapping {name, experiment, set}");
+  head.expectMap("a mapping {name, experiment, set}");
+  head.allowKeys({"name", "experiment", "set"});
+  s.name = head.required("name", "the sweep name").asString("a name");
+  if (s.name.empty() || sanitize(s.name) != s.name) head["name"].failExpected("a name of letters, digits, '.', '-', '_'");
+  s.experiment = head.required("experiment", "the base experiment file, relative to this file").asPath();
+  if (!fs::exists(s.experiment)) head["experiment"].fail("no such file: " + s.experiment);
+  const std::vector<std::string> common = readSet(head["set"]);
+
+  std::set<std::string> names;
+  auto add = [&](BatchRun r, const YamlValue& where) {
+    if (!names.insert(r.name).second) where.fail("duplicate run name '" + r.name + "'");
+    r.overrides.insert(r.overrides.begin(), common.begin(), common.end());
+    s.runs.push_back(std::move(r));
+  };
+  if (const YamlValue runs = root["runs"]; runs.defined()) {
+    runs.expectSequence("a list of runs {name, set, faults}");
+    for (size_t i = 0; i < runs.size(); ++i) {
+      const YamlValue n = runs.at(i);
+      n.expectMap("a run {name, set, faults}");
+      n.allowKeys({"name", "set", "faults"});
+      BatchRun r;
+      r.name = n.required("name", "the run name").asString("a name");
+      if (r.name.empty() || sanitize(r.name) != r.name) n["name"].failExpected("a name of letters, digits, '.', '-', '_'");
+      r.overrides = readSet(n["set"]);
+      if (const YamlValue f = n["faults"]; f.defined()) {
+        f.expectSequence("a list of faults {type, joint, value}");
+        for (size_t k = 0; k < f.size(); ++k) r.faults.push_back(readFault(f.at(k)));
+      }
+      add(std::move(r), n);
+    }
+  }
+  if (const YamlValue grid = root["grid"]; grid.defined()) {
+    grid.expectMap("a mapping {key.path: [values], ...}");
+    std::vector<std::pair<std::string, std::vector<std::string>>> axes;
+    for (const auto& k : grid.keys()) {
+      const YamlValue v = grid[k];
+      v.expectSequence("a list of values for " + k);
+      if (v.size() == 0) v.failExpected("at least one value");
+      std::vector<std::string> vals;
+      for (size_t i = 0; i < v.size(); ++i) vals.push_back(scalarText(v.at(i), "a scalar value"));
+      axes.emplace_back(k, vals);
+    }
+    std::vector<size_t> idx(axes.size(), 0);
+    for (int count = 1; !axes.empty(); ++count) {
+      BatchRun r;
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "grid-%03d", count);
+      r.name = buf;
+      for (size_t a = 0; a < axes.size(); ++a) r.overrides.push_back(axes[a].first + "=" + axes[a].second[idx[a]]);
+      add(std::move(r), grid);
+      size_t a = 0;
+      while (a < axes.size() && ++idx[a] == axes[a].second.size()) idx[a++] = 0;
+      if (a == axes.size()) break;
+    }
+  }
+  if (const YamlValue faults = root["faults"]; faults.defined()) {
+    faults.expectSequence("a list of fault scenarios {type, joints, values}");
+    for (size_t i = 0; i < faults.size(); ++i) {
+      const YamlValue n = faults.at(i);
+      n.expectMap("a fault scenario {type, joints, values}");
+      n.allowKeys({"type", "joints", "values"});
+      const YamlValue t = n.required("type", "a fault type");
+      sim::FaultType type{};
+      try {
+        type = sim::faultTypeFromString(t.asString("a fault type"));
+      } catch (const InputError& e) {
+        t.fail(e.what());
+      }
+      const YamlValue joints = n.required("joints", "a list of joint names");
+      joints.expectSequence("a list of joint names");
+      const auto values = n.required("values", "a list of factors or amounts").asDoubles(0, "a list of numbers");
+      if (values.empty()) n["values"].failExpected("at least one value");
+      for (size_t j = 0; j < joints.size(); ++j) {
+        const std::string joint = joints.at(j).asString("a joint name");
+        for (double v : values) {
+          BatchRun r;
+          r.name = sanitize(std::string(sim::toString(type)) + "-" + joint + "-" + number(v));
+          r.faults.push_back({type, joint, v});
+          add(std::move(r), n);
+        }
+      }
+    }
+  }
+  if (s.runs.empty()) root.fail("the sweep has no runs (give runs, grid or faults)");
+  return s;
+}
+
+std::vector<size_t> shardRuns(size_t n_runs, int index, int count) {
+  if (count < 1 || index < 0 || index >= count)
+    throw InputError("--shard: expected I/N with 0 <= I < N, got " + std::to_string(index) + "/" + std::to_string(count));
+  std::vector<size_t> out;
+  for (size_t i = static_cast<size_t>(index); i < n_runs; i += static_cast<size_t>(count)) out.push_back(i);
+  return out;
+}
+
+BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
+  if (options.jobs < 1) throw InputError("-j: expected at least 1 job, got " + std::to_string(options.jobs));
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string dir = outputDir(sweep, options);
+  io::createDirectories(dir);
+  const std::vector<size_t> mine = shardRuns(sweep.runs.size(), options.shard_index, options.shard_count);
+  BatchResult res;
+  res.manifest_path = (fs::path(dir) / (options.shard_count > 1 ? "manifest.shard-" + std::to_string(options.shard_index) +
+                                                                      "-of-" + std::to_string(options.shard_count) + ".csv"
+                                                                : std::string("manifest.csv")))
+                          .string();
+  std::vector<size_t> queue;
+  for (size_t k = 0; k < mine.size(); ++k) {
+    BatchRecord r = recordFromFolder(sweep.runs[mine[k]], dir);
+    if (r.status == "ok") {
+      r.skipped = true;
+      ++res.skipped;
+      ++res.ok;
+    } else {
+      r.status = "pending";
+      queue.push_back(k);
+    }
+    res.records.push_back(r);
+  }
+  writeManifest(res.manifest_path, res.records);
+  auto progress = [&](int running) {
+    if (!options.progress) return;
+    std::fprintf(stderr, "\r[batch %s] %zu/%zu done (%d failed, %d skipped), %d running   ", sweep.name.c_str(),
+                 static_cast<size_t>(res.ok + res.failed), res.records.size(), res.failed, res.skipped, running);
+    std::fflush(stderr);
+  };
+  struct Active {
+    size_t k;
+    std::chrono::steady_clock::time_point start;
+  };
+  std::map<pid_t, Active> active;
+  size_t next = 0;
+  progress(0);
+  while (next < queue.size() || !active.empty()) {
+    while (next < queue.size() && static_cast<int>(active.size()) < options.jobs) {
+      const size_t k = queue[next++];
+      const BatchRun& run = sweep.runs[mine[k]];
+      const std::string folder = (fs::path(dir) / run.name).string();
+      io::createDirectories(folder);
+      std::fflush(nullptr);
+      const pid_t pid = ::fork();
+      if (pid < 0) throw Error("batch: cannot start a run process (fork failed)");
+      if (pid == 0) childRun(sweep, run, folder);
+      active[pid] = {k, std::chrono::steady_clock::now()};
+      res.records[k].status = "running";
+    }
+    progress(static_cast<int>(active.size()));
+    int status = 0;
+    const pid_t pid = ::waitpid(-1, &status, 0);
+    if (pid < 0) break;
+    const auto it = active.find(pid);
+    if (it == active.end()) continue;
+    const Active a = it->second;
+    active.erase(it);
+    const BatchRun& run = sweep.runs[mine[a.k]];
+    BatchRecord r = recordFromFolder(run, dir);
+    r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - a.start).count();
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 0 && r.status == "ok") {
+      ++res.ok;
+    } else {
+      if (r.status != "failed") r.status = "error";  // bad input, crash or signal: see run.log
+      ++res.failed;
+    }
+    res.records[a.k] = r;
+    writeManifest(res.manifest_path, res.records);
+  }
+  progress(0);
+  if (options.progress) std::fputc('\n', stderr);
+  res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
+BatchResult collectBatch(const Sweep& sweep, const BatchOptions& options) {
+  const std::string dir = outputDir(sweep, options);
+  BatchResult res;
+  res.manifest_path = (fs::path(dir) / "manifest.csv").string();
+  for (const auto& run : sweep.runs) {
+    BatchRecord r = recordFromFolder(run, dir);
+    if (r.status == "ok") ++res.ok;
+    else if (r.status != "pending") ++res.failed;
+    res.records.push_back(r);
+  }
+  io::createDirectories(dir);
+  writeManifest(res.manifest_path, res.records);
+  return res;
+}
+
+}  // namespace jointsim::experiments

@@ -1,0 +1,225 @@
+// `jointsim batch`: a fault-injection sweep of the UR5 twin with every fault type finishes with a complete
+// manifest; a batch killed midway resumes and runs only what is missing; two shards cover the sweep
+// exactly once; a failing run is recorded without stopping the others; bad sweep files exit 2.
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "test_util.hpp"
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+namespace {
+
+struct Result {
+  int status;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+fs::path freshDir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("jointsim_batch_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+Result run(const std::string& args, const fs::path& dir) {
+  const fs::path out = dir / "cli.out", err = dir / "cli.err";
+  const int rc = std::system((std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string()).c_str());
+  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurp(out), slurp(err)};
+}
+
+// A sweep of the UR5 twin (elastic gears) over `duration` simulated seconds: one nominal run and four runs
+// per fault type (24 faulty runs), plus `extra` YAML appended to the runs list.
+fs::path writeSweep(const fs::path& dir, double duration, const std::string& extra = "") {
+  const fs::path p = dir / "sweep.yaml";
+  std::ofstream(p) << "sweep:\n  name: test_sweep\n  experiment: " << jointsim::test::sourcePath("config/experiments/ur5_excitation.yaml")
+                   << "\n  set: {robot: ../robots/ur5_drives_elastic.yaml, duration: " << duration << ", log_rate: 50}\n"
+                   << "runs:\n  - name: nominal\n" << extra
+                   << "faults:\n"
+                      "  - {type: gear_stiffness_scale,   joints: [shoulder_lift_joint, elbow_joint], values: [0.8, 0.6]}\n"
+                      "  - {type: backlash_add,           joints: [shoulder_lift_joint, elbow_joint], values: [2.9e-4, 1.0e-3]}\n"
+                      "  - {type: coulomb_friction_scale, joints: [shoulder_pan_joint, shoulder_lift_joint], values: [1.5, 2.0]}\n"
+                      "  - {type: sigma0_scale,           joints: [shoulder_pan_joint, elbow_joint], values: [0.5, 2.0]}\n"
+                      "  - {type: torque_constant_scale,  joints: [shoulder_lift_joint, wrist_1_joint], values: [0.9, 0.8]}\n"
+                      "  - {type: sensor_bias,            joints: [shoulder_pan_joint, wrist_2_joint], values: [1.0e-3, -1.0e-3]}\n";
+  return p;
+}
+
+// Manifest rows: run -> status (header checked).
+std::map<std::string, std::string> manifest(const fs::path& p) {
+  std::ifstream in(p);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "run,status,wall_time_s,sim_time_s,real_time_factor,output_dir,overrides");
+  std::map<std::string, std::string> rows;
+  while (std::getline(in, line)) {
+    const size_t a = line.find(','), b = line.find(',', a + 1);
+    rows[line.substr(0, a)] = line.substr(a + 1, b - a - 1);
+  }
+  return rows;
+}
+
+int okSummaries(const fs::path& out) {
+  int n = 0;
+  if (!fs::exists(out)) return 0;
+  for (const auto& e : fs::directory_iterator(out))
+    if (e.is_directory() && slurp(e.path() / "summary.json").find("\"status\": \"ok\"") != std::string::npos) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST(CliBatch, FaultSweepWithEveryFaultTypeCompletesItsManifest) {
+  const fs::path dir = freshDir("all");
+  const Result r = run("batch " + writeSweep(dir, 0.3).string() + " -j 2 -o " + (dir / "out").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  const auto rows = manifest(dir / "out" / "manifest.csv");
+  ASSERT_EQ(rows.size(), 25u);
+  std::set<std::string> types;
+  for (const auto& [name, status] : rows) {
+    EXPECT_EQ(status, "ok") << name;
+    EXPECT_TRUE(fs::exists(dir / "out" / name / "ur5_excitation.csv")) << name;
+    types.insert(name.substr(0, name.find('-')));
+  }
+  for (const char* t : {"gear_stiffness_scale", "backlash_add", "coulomb_friction_scale", "sigma0_scale",
+                        "torque_constant_scale", "sensor_bias", "nominal"})
+    EXPECT_TRUE(types.count(t)) << t;
+  EXPECT_THAT(slurp(dir / "out" / "manifest.csv"), HasSubstr("fault backlash_add@elbow_joint=0.001"));
+  // Faults change the run: the faulty logs differ from the nominal one.
+  EXPECT_NE(slurp(dir / "out" / "nominal" / "ur5_excitation.csv"),
+            slurp(dir / "out" / "backlash_add-elbow_joint-0.001" / "ur5_excitation.csv"));
+  fs::remove_all(dir);
+}
+
+TEST(CliBatch, KilledMidwayResumesOnlyTheMissingRuns) {
+  const fs::path dir = freshDir("resume");
+  const fs::path out = dir / "out";
+  const std::string args = "batch " + writeSweep(dir, 1.0).string() + " -j 1 -o " + out.string();
+  // Start the batch in its own process group, wait until a few runs have finished, kill the whole group.
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::setpgid(0, 0);
+    const std::string cmd = std::string(JOINTSIM_CLI_PATH) + " " + args + " >/dev/null 2>&1";
+    ::execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  ::setpgid(pid, pid);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (okSummaries(out) < 4 && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ::kill(-pid, SIGKILL);
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  const int done_before = okSummaries(out);
+  ASSERT_GE(done_before, 4);
+  ASSERT_LT(done_before, 25) << "the batch finished before it could be killed";
+  std::map<std::string, fs::file_time_type> stamps;
+  for (const auto& e : fs::directory_iterator(out))
+    if (fs::exists(e.path() / "summary.json")) stamps[e.path().filename()] = fs::last_write_time(e.path() / "summary.json");
+  // The interrupted manifest is consistent: every run is listed.
+  EXPECT_EQ(manifest(out / "manifest.csv").size(), 25u);
+
+  const Result r = run(args, dir);
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr(std::to_string(25 - done_before) + " ok"));
+  EXPECT_THAT(r.out, HasSubstr(std::to_string(done_before) + " skipped"));
+  for (const auto& [name, status] : manifest(out / "manifest.csv")) EXPECT_EQ(status, "ok") << name;
+  for (const auto& [name, t] : stamps) {  // finished runs were not run again
+    if (slurp(out / name / "summary.json").find("\"status\": \"ok\"") != std::string::npos) {
+      EXPECT_EQ(fs::last_write_time(out / name / "summary.json"), t) << name;
+    }
+  }
+  fs::remove_all(dir);
+}
+
+TEST(CliBatch, TwoShardsCoverTheSweepExactlyOnce) {
+  const fs::path dir = freshDir("shards");
+  const fs::path sweep = writeSweep(dir, 0.2), out = dir / "out";
+  const Result a = run("batch " + sweep.string() + " --shard 0/2 -o " + out.string(), dir);
+  ASSERT_EQ(a.status, 0) << a.err;
+  const auto m0 = manifest(out / "manifest.shard-0-of-2.csv");
+  const Result b = run("batch " + sweep.string() + " --shard 1/2 -o " + out.string(), dir);
+  ASSERT_EQ(b.status, 0) << b.err;
+  const auto m1 = manifest(out / "manifest.shard-1-of-2.csv");
+  EXPECT_EQ(m0.size(), 13u);
+  EXPECT_EQ(m1.size(), 12u);
+  for (const auto& [name, s] : m0) EXPECT_FALSE(m1.count(name)) << name << " ran in both shards";
+  EXPECT_THAT(b.out, HasSubstr("0 skipped"));  // shard 1 did not re-run shard 0's runs
+  const Result c = run("batch " + sweep.string() + " --collect -o " + out.string(), dir);
+  ASSERT_EQ(c.status, 0) << c.err;
+  const auto all = manifest(out / "manifest.csv");
+  EXPECT_EQ(all.size(), 25u);
+  for (const auto& [name, status] : all) EXPECT_EQ(status, "ok") << name;
+  EXPECT_EQ(run("batch " + sweep.string() + " --shard 2/2", dir).status, 2);
+  EXPECT_EQ(run("batch " + sweep.string() + " --shard x", dir).status, 2);
+  fs::remove_all(dir);
+}
+
+TEST(CliBatch, FailingRunIsRecordedAndTheOthersFinish) {
+  const fs::path dir = freshDir("failing");
+  const std::string extra =
+      "  - {name: bad_key, set: {no_such_key: 1}}\n"
+      "  - {name: swg_backlash, set: {robot: ../robots/ur5_drives.yaml}, faults: [{type: backlash_add, joint: elbow_joint, value: 0.001}]}\n";
+  const Result r = run("batch " + writeSweep(dir, 0.2, extra).string() + " -j 2 -o " + (dir / "out").string(), dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_THAT(r.err, HasSubstr("2 run(s) failed"));
+  const auto rows = manifest(dir / "out" / "manifest.csv");
+  ASSERT_EQ(rows.size(), 27u);
+  EXPECT_EQ(rows.at("bad_key"), "error");
+  EXPECT_EQ(rows.at("swg_backlash"), "error");
+  EXPECT_THAT(slurp(dir / "out" / "swg_backlash" / "run.log"), HasSubstr("strain_wave_gear"));
+  int ok = 0;
+  for (const auto& [name, status] : rows) ok += status == "ok";
+  EXPECT_EQ(ok, 25);
+  fs::remove_all(dir);
+}
+
+TEST(CliBatch, BadSweepFilesExitTwoWithFileAndLine) {
+  const fs::path dir = freshDir("bad");
+  struct Case {
+    std::string text, expected;
+  };
+  const std::string head = "sweep:\n  name: s\n  experiment: " + jointsim::test::sourcePath("config/experiments/ur5_fall.yaml") + "\n";
+  const std::vector<Case> cases{
+      {head + "runs:\n  - name: a\n  - name: a\n", "duplicate run name 'a'"},
+      {head + "faults:\n  - {type: gear_wear, joints: [j], values: [1]}\n", "unknown fault 'gear_wear'"},
+      {head + "grid:\n  duration: []\n", "at least one value"},
+      {head, "the sweep has no runs"},
+      {"sweep:\n  name: s\n  experiment: nowhere.yaml\nruns: [{name: a}]\n", "no such file"},
+      {head + "runs:\n  - {name: a, sets: {duration: 1}}\n", "did you mean 'set'"},
+  };
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const fs::path p = dir / ("bad" + std::to_string(i) + ".yaml");
+    std::ofstream(p) << cases[i].text;
+    const Result r = run("batch " + p.string() + " -o " + (dir / "out").string(), dir);
+    EXPECT_EQ(r.status, 2) << cases[i].expected << ": " << r.err;
+    EXPECT_THAT(r.err, HasSubstr(cases[i].expected));
+    EXPECT_THAT(r.err, HasSubstr(p.filename().string() + ":"));
+  }
+  EXPECT_FALSE(fs::exists(dir / "out" / "manifest.csv"));
+  fs::remove_all(dir);
+}

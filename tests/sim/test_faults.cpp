@@ -1,0 +1,144 @@
+// Fault injection: each fault type changes exactly the parameter it names (checked on the rebuilt
+// components), faults that do not apply are rejected, and in closed loop a joint-angle sensor bias shifts
+// the held posture by minus the bias while a weakened motor needs proportionally more current.
+#include <cmath>
+#include <memory>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/drive/friction_models.hpp"
+#include "jointsim/drive/strain_wave_gear.hpp"
+#include "jointsim/drive/transmissions.hpp"
+#include "jointsim/experiments/tracking.hpp"
+#include "jointsim/sim/cvode_integrator.hpp"
+#include "jointsim/sim/faults.hpp"
+#include "test_util.hpp"
+
+using namespace jointsim;
+using sim::Fault;
+using sim::FaultType;
+using ::testing::HasSubstr;
+
+namespace {
+sim::DriveSpec elasticDrive() {
+  sim::DriveSpec d;
+  d.joint = "j";
+  drive::ElasticGearParams p;
+  p.ratio = 101;
+  p.stiffness = 1.4e5;
+  p.damping = 60;
+  p.side = drive::ComplianceSide::Output;
+  d.transmission = std::make_shared<drive::ElasticGear>(p);
+  drive::LuGreUr5Params f;
+  f.f_c = 4.0;
+  f.f_v = 2.0;
+  f.k_q = 1.0;
+  d.friction = std::make_shared<drive::LuGreUr5Friction>(f);
+  d.motor = drive::DcMotorParams::ur5(2);
+  return d;
+}
+
+// The UR5 twin (elastic gears) holding `q0` for 1.5 s with the given faults; returns the final state's
+// joint angles and motor currents.
+std::pair<Eigen::VectorXd, Eigen::VectorXd> hold(const std::vector<Fault>& faults) {
+  sim::RobotSystem sys =
+      experiments::loadRobotWithDrives(test::sourcePath("config/robots/ur5_drives_elastic.yaml"), faults);
+  Eigen::VectorXd q0(6);
+  q0 << 0.2, -1.2, 1.0, -0.8, 0.5, 0.1;
+  sys.setSetpoints([q0](double, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
+    q = q0;
+    qd.setZero();
+    qdd.setZero();
+  });
+  sim::CvodeOptions o;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  o.max_order = 2;
+  sim::CvodeIntegrator integ(sys.stateSize(), [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+    sys.derivatives(t, y, yd);
+  }, o);
+  Eigen::VectorXd y = sys.initialState(q0);
+  integ.initialize(0.0, y);
+  integ.advance(1.5, y);
+  const auto& s = sys.signals(1.5, y);
+  return {y.head(6), s.current};
+}
+}  // namespace
+
+TEST(Faults, EachTypeChangesTheParameterItNames) {
+  sim::DriveSpec d = elasticDrive();
+  sim::applyFault(d, {FaultType::GearStiffnessScale, "j", 0.8});
+  EXPECT_DOUBLE_EQ(dynamic_cast<const drive::ElasticGear&>(*d.transmission).params().stiffness, 0.8 * 1.4e5);
+  sim::applyFault(d, {FaultType::BacklashAdd, "j", 1e-3});
+  const auto& eb = dynamic_cast<const drive::ElastoBacklash&>(*d.transmission).params();
+  EXPECT_DOUBLE_EQ(eb.backlash, 1e-3);
+  EXPECT_DOUBLE_EQ(eb.stiffness, 0.8 * 1.4e5);
+  EXPECT_EQ(eb.side, drive::ComplianceSide::Output);
+  EXPECT_DOUBLE_EQ(eb.ratio, 101);
+  sim::applyFault(d, {FaultType::BacklashAdd, "j", 5e-4});
+  EXPECT_DOUBLE_EQ(dynamic_cast<const drive::ElastoBacklash&>(*d.transmission).params().backlash, 1.5e-3);
+  sim::applyFault(d, {FaultType::CoulombFrictionScale, "j", 1.5});
+  EXPECT_DOUBLE_EQ(dynamic_cast<const drive::LuGreUr5Friction&>(*d.friction).params().f_c, 6.0);
+  const double s0 = dynamic_cast<const drive::LuGreUr5Friction&>(*d.friction).params().sigma0;
+  sim::applyFault(d, {FaultType::Sigma0Scale, "j", 2.0});
+  EXPECT_DOUBLE_EQ(dynamic_cast<const drive::LuGreUr5Friction&>(*d.friction).params().sigma0, 2.0 * s0);
+  const double kt = d.motor.kt, ke = d.motor.ke;
+  sim::applyFault(d, {FaultType::TorqueConstantScale, "j", 0.9});
+  EXPECT_DOUBLE_EQ(d.motor.kt, 0.9 * kt);
+  EXPECT_DOUBLE_EQ(d.motor.ke, 0.9 * ke);
+  sim::applyFault(d, {FaultType::SensorBias, "j", -2e-3});
+  EXPECT_DOUBLE_EQ(d.sensors.joint_bias, -2e-3);
+
+  // The strain-wave gear scales all five stiffnesses; table friction scales its torques.
+  sim::DriveSpec w;
+  w.joint = "w";
+  w.transmission = std::make_shared<drive::StrainWaveGear>(drive::StrainWaveGearParams{});
+  sim::applyFault(w, {FaultType::GearStiffnessScale, "w", 0.5});
+  const auto& sp = dynamic_cast<const drive::StrainWaveGear&>(*w.transmission).params();
+  const drive::StrainWaveGearParams ref;
+  EXPECT_DOUBLE_EQ(sp.K_m, 0.5 * ref.K_m);
+  EXPECT_DOUBLE_EQ(sp.K_WG, 0.5 * ref.K_WG);
+  EXPECT_DOUBLE_EQ(sp.K_CS, 0.5 * ref.K_CS);
+  drive::TableFrictionParams tp;
+  tp.tau_pos = {{{0.0, 1.0}}, {{1.0, 2.0}}};
+  w.friction = std::make_shared<drive::TableFriction>(tp);
+  sim::applyFault(w, {FaultType::CoulombFrictionScale, "w", 3.0});
+  EXPECT_DOUBLE_EQ(dynamic_cast<const drive::TableFriction&>(*w.friction).params().tau_pos[1][1], 6.0);
+}
+
+TEST(Faults, InapplicableOrOutOfRangeFaultsAreInputErrors) {
+  sim::DriveSpec w;
+  w.joint = "w";
+  w.transmission = std::make_shared<drive::StrainWaveGear>(drive::StrainWaveGearParams{});
+  try {
+    sim::applyFault(w, {FaultType::BacklashAdd, "w", 1e-3});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("backlash_add@w=0.001"));
+    EXPECT_THAT(e.what(), HasSubstr("strain_wave_gear"));
+  }
+  w.friction = std::make_shared<drive::CoulombViscousFriction>(drive::CoulombViscousParams{});
+  EXPECT_THROW(sim::applyFault(w, {FaultType::Sigma0Scale, "w", 2.0}), InputError);
+  EXPECT_THROW(sim::applyFault(w, {FaultType::GearStiffnessScale, "w", -1.0}), InputError);
+  EXPECT_THROW(sim::applyFault(w, {FaultType::BacklashAdd, "w", -1e-3}), InputError);
+  std::vector<sim::DriveSpec> drives{w};
+  EXPECT_THROW(sim::applyFaults(drives, {{FaultType::SensorBias, "nope", 1e-3}}), InputError);
+  EXPECT_THROW(sim::faultTypeFromString("gear_wear"), InputError);
+  for (const auto& n : sim::faultTypeNames()) EXPECT_EQ(sim::toString(sim::faultTypeFromString(n)), n);
+}
+
+TEST(Faults, ClosedLoopSensorBiasShiftsThePostureAndWeakMotorDrawsMoreCurrent) {
+  const auto [q_nom, i_nom] = hold({});
+  Eigen::VectorXd q0(6);
+  q0 << 0.2, -1.2, 1.0, -0.8, 0.5, 0.1;
+  EXPECT_LT((q_nom - q0).cwiseAbs().maxCoeff(), 1e-4);  // the integrators remove the gravity droop
+  // The position loop drives the *measured* angle q + bias to the set-point: q → q_set − bias.
+  const auto [q_b, i_b] = hold({{FaultType::SensorBias, "shoulder_lift_joint", 2e-3}});
+  EXPECT_NEAR(q_b[1] - q_nom[1], -2e-3, 1e-4);
+  // Holding against gravity with 80 % of the torque constant needs 1/0.8 of the current.
+  const auto [q_k, i_k] = hold({{FaultType::TorqueConstantScale, "shoulder_lift_joint", 0.8}});
+  EXPECT_NEAR(i_k[1] / i_nom[1], 1.25, 0.01);
+  EXPECT_LT(std::abs(q_k[1] - q_nom[1]), 1e-4);
+}
