@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   jointsim::cli::addRunCommand(app);
   jointsim::cli::addIdentifyCommand(app);
   jointsim::cli::addBatchCommand(app);
+  jointsim::cli::addCompareCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
