@@ -18,6 +18,7 @@ void addRunCommand(CLI::App& app);
 void addIdentifyCommand(CLI::App& app);
 void addBatchCommand(CLI::App& app);
 void addCompareCommand(CLI::App& app);
+void addPlotCommand(CLI::App& app);
 /// `jointsim identify clamping` and `jointsim identify friction` (added to the `identify` subcommand).
 void addIdentifyClampingCommand(CLI::App& identify);
 void addIdentifyFrictionCommand(CLI::App& identify);

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   jointsim::cli::addIdentifyCommand(app);
   jointsim::cli::addBatchCommand(app);
   jointsim::cli::addCompareCommand(app);
+  jointsim::cli::addPlotCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
