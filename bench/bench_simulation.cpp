@@ -82,4 +82,21 @@ static void UR5_Twin_Excitation_10s(benchmark::State& state) {
 }
 BENCHMARK(UR5_Twin_Excitation_10s)->Unit(benchmark::kSecond)->Iterations(2);
 
+// Seed 000's IRB140 clamping demo (config/experiments/irb140_clamping.yaml, 15 s, all six axes swinging,
+// 42 states with the clamp and bending modes and exact stick-slip), CSV at 200 Hz and the per-axis curves.
+static void IRB140_Clamping_15s(benchmark::State& state) {
+  experiments::RunOptions o;
+  o.output_dir = "/tmp/jointsim_bench_clamping";
+  double rtf = 0;
+  long steps = 0;
+  for (auto _ : state) {
+    const auto r = experiments::runExperimentFile(std::string(JOINTSIM_SOURCE_DIR) + "/config/experiments/irb140_clamping.yaml", o);
+    rtf = r.real_time_factor;
+    steps = r.stats.steps;
+  }
+  state.counters["real_time_factor"] = rtf;
+  state.counters["cvode_steps"] = static_cast<double>(steps);
+}
+BENCHMARK(IRB140_Clamping_15s)->Unit(benchmark::kSecond)->Iterations(2);
+
 BENCHMARK_MAIN();
