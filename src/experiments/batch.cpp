@@ -133,7 +133,10 @@ BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
 // Child process: runs one experiment with its output in `folder`, stdout/stderr to folder/run.log.
 [[noreturn]] void childRun(const Sweep& sweep, const BatchRun& run, const std::string& folder) {
   const std::string log = (fs::path(folder) / "run.log").string();
-  if (!std::freopen(log.c_str(), "w", stdout) || !std::freopen(log.c_str(), "a", stderr)) _exit(2);
+  // Truncate once, then append from both streams so that their writes do not overwrite each other.
+  if (std::FILE* f = std::fopen(log.c_str(), "w")) std::fclose(f);
+  if (!std::freopen(log.c_str(), "a", stdout) || !std::freopen(log.c_str(), "a", stderr)) _exit(2);
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   int code = 0;
   try {
     RunOptions o;
