@@ -1,6 +1,8 @@
 #include "jointsim/experiments/batch.hpp"
 
+#include <cerrno>
 #include <chrono>
+#include <cstdint>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -94,6 +96,28 @@ SummaryInfo readSummary(const fs::path& p) {
   s.wall = num("wall_time_s");
   s.rtf = num("real_time_factor");
   return s;
+}
+
+// What a run's results depend on, as stored in <run>/run.settings: the base experiment file (path and a
+// 64-bit FNV-1a hash of its text) and the run's overrides and faults. A finished run is reused only if
+// its stamp matches (files referenced by the experiment, e.g. the robot, are not hashed: see docs/batch.md).
+std::string settingsStamp(const Sweep& sweep, const BatchRun& run) {
+  std::ifstream in(sweep.experiment, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : ss.str()) h = (h ^ c) * 1099511628211ull;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return "experiment: " + sweep.experiment + "\nexperiment_fnv1a: " + buf + "\nrun: " + run.describe() + "\n";
+}
+
+std::string slurpFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) return {};
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
 }
 
 std::string csvQuote(const std::string& s) {
@@ -216,12 +240,17 @@ Sweep loadSweep(const std::string& path) {
       axes.emplace_back(k, vals);
     }
     std::vector<size_t> idx(axes.size(), 0);
-    for (int count = 1; !axes.empty(); ++count) {
+    while (!axes.empty()) {
+      // Named by the values (last key component and value), so that editing the grid never gives an
+      // existing folder other settings: e.g. grid-duration_0.5-rtol_1e-06.
       BatchRun r;
-      char buf[32];
-      std::snprintf(buf, sizeof buf, "grid-%03d", count);
-      r.name = buf;
-      for (size_t a = 0; a < axes.size(); ++a) r.overrides.push_back(axes[a].first + "=" + axes[a].second[idx[a]]);
+      r.name = "grid";
+      for (size_t a = 0; a < axes.size(); ++a) {
+        const std::string& key = axes[a].first;
+        const size_t dot = key.find_last_of('.');
+        r.name += "-" + sanitize((dot == std::string::npos ? key : key.substr(dot + 1)) + "_" + axes[a].second[idx[a]]);
+        r.overrides.push_back(key + "=" + axes[a].second[idx[a]]);
+      }
       add(std::move(r), grid);
       size_t a = 0;
       while (a < axes.size() && ++idx[a] == axes[a].second.size()) idx[a++] = 0;
@@ -281,8 +310,10 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
                           .string();
   std::vector<size_t> queue;
   for (size_t k = 0; k < mine.size(); ++k) {
-    BatchRecord r = recordFromFolder(sweep.runs[mine[k]], dir);
-    if (r.status == "ok") {
+    const BatchRun& run = sweep.runs[mine[k]];
+    BatchRecord r = recordFromFolder(run, dir);
+    const bool same = slurpFile(fs::path(dir) / run.name / "run.settings") == settingsStamp(sweep, run);
+    if (r.status == "ok" && same) {
       r.skipped = true;
       ++res.skipped;
       ++res.ok;
@@ -312,17 +343,36 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
       const BatchRun& run = sweep.runs[mine[k]];
       const std::string folder = (fs::path(dir) / run.name).string();
       io::createDirectories(folder);
+      // Stale results of an earlier attempt must not be mistaken for this one's.
+      std::error_code ec;
+      for (const auto& e : fs::directory_iterator(folder, ec))
+        if (e.path().extension() == ".csv" || e.path().filename() == "summary.json") fs::remove(e.path(), ec);
+      io::writeFileAtomically((fs::path(folder) / "run.settings").string(), settingsStamp(sweep, run));
       std::fflush(nullptr);
       const pid_t pid = ::fork();
-      if (pid < 0) throw Error("batch: cannot start a run process (fork failed)");
+      if (pid < 0) {
+        res.records[k].status = "error";
+        ++res.failed;
+        std::fprintf(stderr, "jointsim batch: cannot start run '%s' (fork failed)\n", run.name.c_str());
+        continue;
+      }
       if (pid == 0) childRun(sweep, run, folder);
       active[pid] = {k, std::chrono::steady_clock::now()};
       res.records[k].status = "running";
     }
     progress(static_cast<int>(active.size()));
+    if (active.empty()) continue;
     int status = 0;
     const pid_t pid = ::waitpid(-1, &status, 0);
-    if (pid < 0) break;
+    if (pid < 0) {
+      if (errno == EINTR) continue;
+      for (const auto& [p, a] : active) {  // no children left to wait for: count the missing ones as errors
+        res.records[a.k].status = "error";
+        ++res.failed;
+      }
+      active.clear();
+      break;
+    }
     const auto it = active.find(pid);
     if (it == active.end()) continue;
     const Active a = it->second;

@@ -98,10 +98,10 @@ int modeNumber(FrictionMode m) {
 void ClampingAxisParams::validate() const {
   const std::string w = "clamping axis '" + joint + "': ";
   if (!(ratio != 0.0) || !std::isfinite(ratio)) throw InputError(w + "ratio must be a non-zero number");
-  if (!(inertia > 0.0)) throw InputError(w + "inertia must be > 0 kg·m²");
-  if (!(c > 0.0)) throw InputError(w + "c must be > 0 N·m/rad");
-  if (!(d >= 0.0)) throw InputError(w + "d must be >= 0 N·m·s/rad");
-  if (!(b >= 0.0)) throw InputError(w + "b must be >= 0 rad");
+  if (!(inertia > 0.0) || !std::isfinite(inertia)) throw InputError(w + "inertia must be > 0 kg·m²");
+  if (!(c > 0.0) || !std::isfinite(c)) throw InputError(w + "c must be > 0 N·m/rad");
+  if (!(d >= 0.0) || !std::isfinite(d)) throw InputError(w + "d must be >= 0 N·m·s/rad");
+  if (!(b >= 0.0) || !std::isfinite(b)) throw InputError(w + "b must be >= 0 rad");
   if (tau_pos.empty()) throw InputError(w + "tau_pos needs at least one row [w in rad/s, tau in N·m]");
   for (size_t i = 0; i < tau_pos.size(); ++i) {
     if (!(tau_pos[i][1] >= 0.0)) throw InputError(w + "tau_pos torques must be >= 0 N·m");
@@ -110,9 +110,9 @@ void ClampingAxisParams::validate() const {
   }
   if (!(peak >= 1.0)) throw InputError(w + "peak must be >= 1");
   if (!(c_orth >= 0.0) || !(d_orth >= 0.0)) throw InputError(w + "c_orth and d_orth must be >= 0");
-  if (!(Ts > 0.0)) throw InputError(w + "Ts must be > 0 s");
-  if (!std::isfinite(kp) || !std::isfinite(ks) || !std::isfinite(controller_ratio))
-    throw InputError(w + "controller gains must be finite");
+  if (!(Ts > 0.0) || !std::isfinite(Ts)) throw InputError(w + "Ts must be > 0 s");
+  if (!(kp >= 0.0) || !(ks >= 0.0) || !std::isfinite(kp) || !std::isfinite(ks) || !std::isfinite(controller_ratio))
+    throw InputError(w + "controller gains kp, ks must be finite and >= 0, ratio finite");
   path.validate();
 }
 
@@ -138,6 +138,9 @@ void ClampingSetup::validate() const {
   if (coupling.size() > 0) {
     if (coupling.rows() != coupling.cols() || coupling.rows() != static_cast<Eigen::Index>(coupled_joints.size()))
       throw InputError("clamping: coupling must be square with one row per coupled joint");
+    std::set<std::string> coupled;
+    for (const auto& j : coupled_joints)
+      if (!coupled.insert(j).second) throw InputError("clamping: joint '" + j + "' appears twice in the coupling");
     if (std::abs(coupling.determinant()) < 1e-300) throw InputError("clamping: coupling matrix is singular");
     for (const auto& j : coupled_joints) arm.jointIndex(j);
   }
@@ -187,6 +190,9 @@ ClampedRobot::ClampedRobot(ClampingSetup setup) : s_((setup.validate(), std::mov
   }
   GfullInv_ = Gfull_.inverse();
   clamp_frame_ = model_.frameIndex(s_.clamp.frame.empty() ? model_.tip_frame : s_.clamp.frame);
+  if (model_.frames[static_cast<size_t>(clamp_frame_)].joint < 0)
+    throw InputError("clamping: clamp frame '" + model_.frames[static_cast<size_t>(clamp_frame_)].name +
+                     "' is on the fixed base; clamp a frame of a moving link (e.g. the tool flange)");
   // Start posture and the clamp's anchor pose.
   Eigen::VectorXd q = Eigen::VectorXd::Zero(model_.nq);
   if (s_.q0.size())

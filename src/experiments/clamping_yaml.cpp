@@ -172,6 +172,8 @@ RunReport runClamping(const YamlValue& root, const std::string& config_path, con
     for (size_t i = 0; i < j.size(); ++i) {
       const std::string name_j = j.at(i).asString("a joint name");
       if (!seen.count(name_j)) j.at(i).fail("no axis drives joint '" + name_j + "'");
+      for (const auto& prev : s.coupled_joints)
+        if (prev == name_j) j.at(i).fail("joint '" + name_j + "' appears twice in the coupling");
       s.coupled_joints.push_back(name_j);
     }
     const YamlValue m = c.required("matrix", "irb140_wrist or a square matrix (rows), q_joint = G φ_gear_output");
@@ -209,7 +211,13 @@ RunReport runClamping(const YamlValue& root, const std::string& config_path, con
     root.fail(e.what());
   }
 
-  ClampedRobot robot(s);
+  ClampedRobot robot = [&] {
+    try {
+      return ClampedRobot(s);
+    } catch (const InputError& e) {
+      root.fail(e.what());
+    }
+  }();
   std::vector<Eigen::VectorXd> curve_rows;  // time, motor angle and torque of every axis
   size_t events = 0;
   RunReport report = runAndRecord(

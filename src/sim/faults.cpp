@@ -147,10 +147,16 @@ void applyFault(DriveSpec& d, const Fault& f) {
     case FaultType::CoulombFrictionScale:
     case FaultType::Sigma0Scale: frictionFault(d, f); break;
     case FaultType::TorqueConstantScale:
+      if (!d.electrics)
+        notApplicable(f, "a torque-controlled motor without electrics (k_t and k_e are not used)");
       d.motor.kt *= f.value;
       d.motor.ke *= f.value;
       break;
-    case FaultType::SensorBias: d.sensors.joint_bias += f.value; break;
+    case FaultType::SensorBias:
+      if (d.controller.type != control::ControllerType::Cascade002)
+        notApplicable(f, "a drive whose controller does not read the joint angle (only cascade_002 does)");
+      d.sensors.joint_bias += f.value;
+      break;
   }
 }
 

@@ -223,3 +223,31 @@ TEST(CliBatch, BadSweepFilesExitTwoWithFileAndLine) {
   EXPECT_FALSE(fs::exists(dir / "out" / "manifest.csv"));
   fs::remove_all(dir);
 }
+
+TEST(CliBatch, ResumeReusesOnlyRunsWhoseSettingsAreUnchanged) {
+  const fs::path dir = freshDir("settings");
+  const fs::path out = dir / "out";
+  auto write = [&](const std::string& durations, int log_rate) {
+    std::ofstream(dir / "grid.yaml") << "sweep:\n  name: g\n  experiment: "
+                                     << jointsim::test::sourcePath("config/experiments/ur5_fall.yaml")
+                                     << "\n  set: {log_rate: " << log_rate << "}\ngrid:\n  duration: [" << durations << "]\n";
+    return run("batch " + (dir / "grid.yaml").string() + " -o " + out.string(), dir);
+  };
+  Result r = write("0.2, 0.3", 50);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("2 ok"));
+  // A new grid value: only the new run executes; runs are named by their values.
+  r = write("0.1, 0.2, 0.3", 50);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("1 ok"));
+  EXPECT_THAT(r.out, HasSubstr("2 skipped"));
+  const auto rows = manifest(out / "manifest.csv");
+  EXPECT_TRUE(rows.count("grid-duration_0.1") && rows.count("grid-duration_0.2") && rows.count("grid-duration_0.3"));
+  // Changed common settings: every run executes again.
+  r = write("0.1, 0.2, 0.3", 100);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("3 ok"));
+  EXPECT_THAT(r.out, HasSubstr("0 skipped"));
+  EXPECT_THAT(slurp(out / "grid-duration_0.1" / "summary.json"), HasSubstr("\"log_rate\": 100"));
+  fs::remove_all(dir);
+}

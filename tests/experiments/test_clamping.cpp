@@ -364,4 +364,7 @@ TEST(ClampingExperiment, BadInputNamesTheKey) {
   fails("axes[2].joint=joint1", "already has an axis");
   fails("load=some", "'all' or a list of joint names");
   fails("axes[3].path.qd_max=0", "qd_max must be > 0");
+  fails("clamp.frame=base", "is on the fixed base");
+  fails("coupling.joints[1]=joint4", "appears twice in the coupling");
+  fails("axes[0].controller.ks=-0.01", "must be finite and >= 0");
 }

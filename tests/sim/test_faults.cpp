@@ -88,6 +88,7 @@ TEST(Faults, EachTypeChangesTheParameterItNames) {
   sim::applyFault(d, {FaultType::TorqueConstantScale, "j", 0.9});
   EXPECT_DOUBLE_EQ(d.motor.kt, 0.9 * kt);
   EXPECT_DOUBLE_EQ(d.motor.ke, 0.9 * ke);
+  d.controller.type = control::ControllerType::Cascade002;
   sim::applyFault(d, {FaultType::SensorBias, "j", -2e-3});
   EXPECT_DOUBLE_EQ(d.sensors.joint_bias, -2e-3);
 
@@ -126,6 +127,12 @@ TEST(Faults, InapplicableOrOutOfRangeFaultsAreInputErrors) {
   std::vector<sim::DriveSpec> drives{w};
   EXPECT_THROW(sim::applyFaults(drives, {{FaultType::SensorBias, "nope", 1e-3}}), InputError);
   EXPECT_THROW(sim::faultTypeFromString("gear_wear"), InputError);
+  // Faults that would leave the dynamics unchanged are refused rather than silently ignored.
+  sim::DriveSpec ppi = elasticDrive();
+  ppi.electrics = false;
+  ppi.controller.type = control::ControllerType::MotorPPI000;
+  EXPECT_THROW(sim::applyFault(ppi, {FaultType::TorqueConstantScale, "j", 0.8}), InputError);
+  EXPECT_THROW(sim::applyFault(ppi, {FaultType::SensorBias, "j", 1e-3}), InputError);
   for (const auto& n : sim::faultTypeNames()) EXPECT_EQ(sim::toString(sim::faultTypeFromString(n)), n);
 }
 

@@ -10,8 +10,8 @@
 /// | `backlash_add`            | Δb >= 0 [rad], transmission's compliance side | total backlash + Δb (an elastic gear becomes elasto-backlash) |
 /// | `coulomb_friction_scale`  | factor s > 0 [-]              | Coulomb level × s: f_c, α0 (both directions), table torques |
 /// | `sigma0_scale`            | factor s > 0 [-]              | bristle stiffness σ0 (LuGre, UR5 LuGre) or Dahl σ × s      |
-/// | `torque_constant_scale`   | factor s > 0 [-]              | motor k_t and k_e × s (demagnetised motor)                 |
-/// | `sensor_bias`             | bias [rad]                    | constant offset of the measured joint angle                |
+/// | `torque_constant_scale`   | factor s > 0 [-]              | motor k_t and k_e × s (demagnetised motor); needs electrics |
+/// | `sensor_bias`             | bias [rad]                    | constant offset of the measured joint angle; needs a controller that reads it (cascade_002) |
 ///
 /// A fault that does not apply to the drive's components (e.g. backlash on a strain-wave gear, σ0 on
 /// Coulomb friction) throws InputError naming the joint, the fault and the component type.

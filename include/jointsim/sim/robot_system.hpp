@@ -9,7 +9,8 @@
 ///   [q_m, q̇_m] (compliant transmission), [i] (motor electrics), [x_gear...], [z_friction...], [x_ctrl...].
 /// A rigid transmission merges the motor into the joint: q_m = N φ_out and its rotor inertia N² J_M is
 /// added to the joint-space inertia (the gear output torque is then N τ_M − N² J_M φ̈_out).
-/// Sensors are ideal (the controllers see the true states).
+/// Sensors are ideal (the controllers see the true states) unless sampled control adds quantisation and
+/// noise (setSampledControl) or a fault adds a joint-angle bias (SensorSpec::joint_bias, both modes).
 
 #include <functional>
 #include <memory>
