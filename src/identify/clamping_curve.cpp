@@ -2,6 +2,7 @@
 #include "jointsim/identify/clamping_curve.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <numeric>
 #include <sstream>
@@ -187,6 +188,7 @@ void ClampingCurveOptions::validate() const {
     bad("max_rejected_fraction", max_rejected_fraction, "a value in [0, 1]");
   if (!(coverage_fraction > 0 && coverage_fraction <= 1))
     bad("coverage_fraction", coverage_fraction, "a value in (0, 1]");
+  if (!(min_span_fraction >= 0 && min_span_fraction <= 1)) bad("min_span_fraction", min_span_fraction, "a value in [0, 1]");
   if (grid_points < 20) bad("grid_points", grid_points, "an integer >= 20");
   if (!(slope_threshold > 0 && slope_threshold < 1)) bad("slope_threshold", slope_threshold, "a value in (0, 1)");
   if (!(slope_window_fraction > 0 && slope_window_fraction < 0.5))
@@ -497,7 +499,18 @@ ClampingCurves preprocessClampingCurve(const ClampingData& data, const ClampingC
   }
 
   // step 6: merge each group onto a grid
-  auto groupCurve = [&](const std::vector<int>& g) {
+  auto groupCurve = [&](const std::vector<int>& g_all) {
+    // Leave partial half-cycles out: they would lower the coverage of the central interval.
+    double longest = 0;
+    auto span = [&](int i) {
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (int k : hcs[i].kept) lo = std::min(lo, data.angle[k]), hi = std::max(hi, data.angle[k]);
+      return hcs[i].kept.empty() ? 0.0 : hi - lo;
+    };
+    for (int i : g_all) longest = std::max(longest, span(i));
+    std::vector<int> g;
+    for (int i : g_all)
+      if (span(i) >= o.min_span_fraction * longest) g.push_back(i);
     std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>> curves;
     for (int i : g) {
       std::vector<int> v = hcs[i].kept;

@@ -14,6 +14,7 @@
 #include <string>
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -22,6 +23,7 @@
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/transmissions.hpp"
 #include "jointsim/experiments/joint_rig.hpp"
+#include "jointsim/experiments/runner.hpp"
 #include "jointsim/identify/clamping_fit.hpp"
 
 using namespace jointsim;
@@ -265,5 +267,22 @@ TEST(ClampingFitCli, TooManyRejectedHalfCyclesExitThree) {
   EXPECT_EQ(r.status, 3) << r.err;
   EXPECT_THAT(r.err, HasSubstr("half-cycles rejected"));
   EXPECT_FALSE(fs::exists(dir / "o.yaml"));
+  fs::remove_all(dir);
+}
+
+// The shipped seed-001 config's log, as `jointsim run` writes it, identifies its own Table 6.1 parameters.
+// Its first half-cycle (loading from zero) and last one are partial; they must not hide the gap.
+TEST(ClampingFit, ShippedKr300ConfigLogIdentifiesTable61) {
+  const fs::path dir = fs::temp_directory_path() / ("jointsim_clamping_shipped_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  experiments::RunOptions o;
+  o.output_dir = dir.string();
+  const auto rep = experiments::runExperimentFile(
+      std::string(JOINTSIM_SOURCE_DIR) + "/config/experiments/kr300_joint1_clamping.yaml", o);
+  ASSERT_EQ(rep.status, "ok");
+  const auto fit = identify::identifyClamping(identify::readClampingCsv(rep.csv_path));
+  EXPECT_NEAR(fit.stiffness.value / 25.7, 1.0, 0.01);
+  EXPECT_NEAR(fit.backlash.value / 0.0102, 1.0, 0.01);
+  EXPECT_NEAR(fit.friction.value / 1.91, 1.0, 0.01);  // + the 0.5 N·m·s/rad damper's d·δ̇ while sliding
   fs::remove_all(dir);
 }

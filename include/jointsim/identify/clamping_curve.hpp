@@ -78,6 +78,9 @@ struct ClampingCurveOptions {
   // --- step 6: merge
   /// The merged interval is covered by at least ceil(coverage_fraction × group size) half-cycles [-].
   double coverage_fraction = 0.5;
+  /// Half-cycles spanning less than this fraction of the longest span in their group are partial (the
+  /// log's first loading from zero, a last swing cut short) and left out of the merge [-].
+  double min_span_fraction = 0.6;
   /// Grid points of each merged curve (n_grid) [-], >= 20.
   int grid_points = 400;
   // --- steps 8–11: backlash interval, alignment, fold
