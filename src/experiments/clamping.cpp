@@ -74,23 +74,11 @@ Model withOrthogonalCompliance(const Model& model, const std::vector<std::string
 namespace jointsim::experiments {
 namespace {
 
-// Linear interpolation in a [w, tau] table, extrapolating through the last two points (MSL tempInterpol1).
-double interp(const std::vector<std::array<double, 2>>& t, double v) {
-  if (t.size() == 1) return t[0][1];
-  size_t k = 1;
-  while (k + 1 < t.size() && v > t[k][0]) ++k;
-  const auto& p0 = t[k - 1];
-  const auto& p1 = t[k];
-  return p0[1] + (p1[1] - p0[1]) * (v - p0[0]) / (p1[0] - p0[0]);
-}
-
-int modeNumber(FrictionMode m) {
-  switch (m) {
-    case FrictionMode::Forward: return 1;
-    case FrictionMode::Backward: return -1;
-    case FrictionMode::Free: return 2;
-    default: return 0;
-  }
+// Rotation vector θ of a rotation matrix R (R = exp([θ]×)), accurate for small angles.
+Eigen::Vector3d rotationVector(const Eigen::Matrix3d& R) {
+  const Eigen::Vector3d v(0.5 * (R(2, 1) - R(1, 2)), 0.5 * (R(0, 2) - R(2, 0)), 0.5 * (R(1, 0) - R(0, 1)));
+  const double s = v.norm(), c = 0.5 * (R.trace() - 1.0);
+  return s > 1e-300 ? Eigen::Vector3d(v * (std::atan2(s, c) / s)) : v;
 }
 
 }  // namespace
@@ -242,10 +230,7 @@ void ClampedRobot::clampDeflection(const Eigen::Ref<const Eigen::VectorXd>& q, E
   multibody::forwardKinematics(model_, data_, q);
   const auto& X = data_.oMf[static_cast<size_t>(clamp_frame_)];
   dp = X.p - p0_;
-  const Eigen::Matrix3d Rr = R0_.transpose() * X.R;
-  const Eigen::Vector3d v(0.5 * (Rr(2, 1) - Rr(1, 2)), 0.5 * (Rr(0, 2) - Rr(2, 0)), 0.5 * (Rr(1, 0) - Rr(0, 1)));
-  const double s = v.norm(), c = 0.5 * (Rr.trace() - 1.0);
-  theta = s > 1e-300 ? Eigen::Vector3d(v * (std::atan2(s, c) / s)) : v;
+  theta = rotationVector(R0_.transpose() * X.R);
 }
 
 void ClampedRobot::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
@@ -257,12 +242,7 @@ void ClampedRobot::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) c
   const auto& X = data_.oMf[static_cast<size_t>(clamp_frame_)];
   const Eigen::Matrix<double, 6, 1> vel = data_.J * qd;  // [v; ω] world
   dp_ = X.p - p0_;
-  {
-    const Eigen::Matrix3d Rr = R0_.transpose() * X.R;
-    const Eigen::Vector3d v(0.5 * (Rr(2, 1) - Rr(1, 2)), 0.5 * (Rr(0, 2) - Rr(2, 0)), 0.5 * (Rr(1, 0) - Rr(0, 1)));
-    const double s = v.norm(), c = 0.5 * (Rr.trace() - 1.0);
-    theta_ = s > 1e-300 ? Eigen::Vector3d(v * (std::atan2(s, c) / s)) : v;
-  }
+  theta_ = rotationVector(R0_.transpose() * X.R);
   const Eigen::Vector3d w_frame = X.R.transpose() * vel.tail<3>();
   f_w_ = -(s_.clamp.c_lin * dp_ + s_.clamp.d_lin * vel.head<3>());
   m_w_ = X.R * (-(s_.clamp.c_rot * theta_ + s_.clamp.d_rot * w_frame));
@@ -300,7 +280,7 @@ void ClampedRobot::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) c
     u_[k] = a.controller_ratio * qdr + a.kp * (phi_m0_[k] + a.controller_ratio * qr - phi_m) - w_m;
     tau_m_[k] = a.ks * (u_[k] + x);
     stuck_[k] = tau_m_[k] - tau_s_[k];
-    const double f = interp(a.tau_pos, std::abs(w_m));
+    const double f = frictionTableValue(a.tau_pos, std::abs(w_m));
     switch (modes_[static_cast<size_t>(k)]) {
       case FrictionMode::Forward:
       case FrictionMode::StartForward: tau_f_[k] = f; break;
@@ -344,7 +324,7 @@ void ClampedRobot::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, E
   solve(t, y);
   for (int k = 0; k < n_; ++k) {
     const auto& a = s_.axes[static_cast<size_t>(k)];
-    const double t0 = interp(a.tau_pos, 0.0);
+    const double t0 = frictionTableValue(a.tau_pos, 0.0);
     double g0 = 1, g1 = 1;
     frictionRoots(modes_[static_cast<size_t>(k)], stuck_[k], y[motorState(k) + 1], wdot_[k], t0, a.peak * t0, g0, g1);
     g[2 * k] = g0;
@@ -361,7 +341,7 @@ void ClampedRobot::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>
       const auto i = static_cast<size_t>(k);
       FrictionEventFlags f;
       if (iter == 0 && fired.size() >= 2 * i + 2) f = {fired[2 * i] != 0, fired[2 * i] > 0, fired[2 * i + 1] < 0, fired[2 * i + 1] != 0};
-      const double t0 = interp(a.tau_pos, 0.0);
+      const double t0 = frictionTableValue(a.tau_pos, 0.0);
       const FrictionMode m = nextFrictionMode(modes_[i], false, stuck_[k], y[motorState(k) + 1], wdot_[k], t0, a.peak * t0, f);
       if (m != modes_[i]) {
         modes_[i] = m;
@@ -398,7 +378,7 @@ void ClampedRobot::row(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eig
     out[c++] = qa_[k];
     out[c++] = ref_[k];
     out[c++] = tau_f_[k];
-    out[c++] = modeNumber(modes_[static_cast<size_t>(k)]);
+    out[c++] = frictionModeNumber(modes_[static_cast<size_t>(k)]);
     out[c++] = o[0] >= 0 ? std::hypot(y[o[0]], y[o[1]]) : 0.0;
   }
   for (int i = 0; i < 3; ++i) out[c++] = dp_[i];
@@ -414,7 +394,6 @@ ClampingRunResult simulateClamping(ClampedRobot& robot, const std::function<void
   const ClampingSetup& s = robot.setup();
   sim::CvodeOptions options = s.solver;
   if (options.component.empty()) options.component = "clamping '" + s.name + "'";
-  if (options.max_step == 0.0) options.max_step = s.log_interval;
   Eigen::VectorXd row(static_cast<Eigen::Index>(robot.columns().size()));
   sim::HybridSystem sys;
   sys.n_states = robot.stateSize();
@@ -431,7 +410,7 @@ ClampingRunResult simulateClamping(ClampedRobot& robot, const std::function<void
   sim::HybridRunSettings run;
   run.t_end = s.duration;
   run.time_events = robot.timeEvents();
-  run.output_time = [&s, &run](long k) { return std::min(run.t_end, static_cast<double>(k) * s.log_interval); };
+  run.output_interval = s.log_interval;  // also the max step unless the solver options set one
   Eigen::VectorXd y = robot.initialState();
   robot.updateModes(0.0, y, {});
   const sim::HybridRunResult r = sim::runHybrid(sys, options, y, run);

@@ -9,9 +9,8 @@
 
 namespace jointsim::experiments {
 
-namespace {
 // Linear interpolation in a [v, y] table, extrapolating through the last two points; one row = constant.
-double interp(const std::vector<std::array<double, 2>>& t, double v) {
+double frictionTableValue(const std::vector<std::array<double, 2>>& t, double v) {
   if (t.size() == 1) return t[0][1];
   size_t k = 1;
   while (k + 1 < t.size() && v > t[k][0]) ++k;
@@ -20,7 +19,7 @@ double interp(const std::vector<std::array<double, 2>>& t, double v) {
   return p0[1] + (p1[1] - p0[1]) * (v - p0[0]) / (p1[0] - p0[0]);
 }
 
-int modeNumber(FrictionMode m) {
+int frictionModeNumber(FrictionMode m) {
   switch (m) {
     case FrictionMode::Forward: return 1;
     case FrictionMode::Backward: return -1;
@@ -28,7 +27,6 @@ int modeNumber(FrictionMode m) {
     default: return 0;  // stuck and start phases
   }
 }
-}  // namespace
 
 FrictionMode nextFrictionMode(FrictionMode m, bool free, double S, double w, double a, double t0, double t0max,
                               const FrictionEventFlags& fired) {
@@ -173,15 +171,15 @@ double DriveChain::relAccel(int e) const {
 
 double DriveChain::tau0(int e, double t) const {
   const auto& el = s_.elements[static_cast<size_t>(e)];
-  if (el.type == ChainElementType::BearingFriction) return interp(el.table, 0.0);
-  return el.cgeo * el.fn_max * el.normalized.value(t) * interp(el.table, 0.0);
+  if (el.type == ChainElementType::BearingFriction) return frictionTableValue(el.table, 0.0);
+  return el.cgeo * el.fn_max * el.normalized.value(t) * frictionTableValue(el.table, 0.0);
 }
 
 double DriveChain::slidingTorque(int e, double t, double w) const {
   const auto& el = s_.elements[static_cast<size_t>(e)];
   const double mag = el.type == ChainElementType::BearingFriction
-                         ? interp(el.table, std::abs(w))
-                         : el.cgeo * el.fn_max * el.normalized.value(t) * interp(el.table, std::abs(w));
+                         ? frictionTableValue(el.table, std::abs(w))
+                         : el.cgeo * el.fn_max * el.normalized.value(t) * frictionTableValue(el.table, std::abs(w));
   return mag;
 }
 
@@ -374,7 +372,7 @@ void DriveChain::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, E
     row[c++] = relSpeed(e, y);
     row[c++] = tau_el_[e];
     if (el.isFriction()) {
-      row[c++] = modeNumber(modes_[k]);
+      row[c++] = frictionModeNumber(modes_[k]);
       row[c++] = modes_[k] == FrictionMode::StartForward ? 1.0 : 0.0;
       row[c++] = modes_[k] == FrictionMode::StartBackward ? 1.0 : 0.0;
     }

@@ -148,7 +148,7 @@ void RobotR3Axis::updateMode(double t, const Eigen::Ref<const Eigen::VectorXd>& 
 
 void RobotR3Axis::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
   const Eval ev = evaluate(t, y);
-  const int mode = mode_ == FrictionMode::Forward ? 1 : (mode_ == FrictionMode::Backward ? -1 : (mode_ == FrictionMode::Free ? 2 : 0));
+  const int mode = frictionModeNumber(mode_);
   row << t, y[4], y[2], y[3], y[0], y[1], y[5], y[6], mode, mode_ == FrictionMode::StartBackward ? 1.0 : 0.0,
       mode_ == FrictionMode::StartForward ? 1.0 : 0.0, ev.tau_f, ev.i_ref, y[7], storedEnergy(y), y[8], y[9], y[10];
 }
@@ -157,7 +157,6 @@ AxisRunResult simulateRobotR3Axis(RobotR3Axis& axis, const std::function<void(co
   const RobotR3AxisSetup& s = axis.setup();
   sim::CvodeOptions options = s.solver;
   if (options.component.empty()) options.component = "RobotR3 axis '" + s.name + "'";
-  if (options.max_step == 0.0) options.max_step = s.log_interval;
   Eigen::VectorXd row(static_cast<Eigen::Index>(axis.columns().size()));
   sim::HybridSystem sys;
   sys.n_states = RobotR3Axis::kStates;
@@ -175,7 +174,7 @@ AxisRunResult simulateRobotR3Axis(RobotR3Axis& axis, const std::function<void(co
   run.t_end = axis.endTime();
   run.time_events =
       control::KinematicPtpTrajectory(one(s.q_begin), one(s.q_end), one(s.qd_max), one(s.qdd_max), s.start_time).breakpoints();
-  run.output_time = [&s, &run](long k) { return std::min(run.t_end, static_cast<double>(k) * s.log_interval); };
+  run.output_interval = s.log_interval;  // also the max step unless the solver options set one
   Eigen::VectorXd y = axis.initialState();
   axis.updateMode(0.0, y, {});
   const sim::HybridRunResult r = sim::runHybrid(sys, options, y, run);

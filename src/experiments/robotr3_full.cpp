@@ -268,17 +268,13 @@ void RobotR3Full::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, 
   for (int j = 0; j < n_; ++j) row[c++] = y[j];
   for (int j = 0; j < n_; ++j)
     if (j != 1) row[c++] = y[n_ + j];
-  for (int j = 0; j < n_; ++j) {
-    const FrictionMode m = modes_[static_cast<size_t>(j)];
-    row[c++] = m == FrictionMode::Forward ? 1 : (m == FrictionMode::Backward ? -1 : 0);
-  }
+  for (int j = 0; j < n_; ++j) row[c++] = frictionModeNumber(modes_[static_cast<size_t>(j)]);
 }
 
 FullRunResult simulateRobotR3Full(RobotR3Full& robot, const std::function<void(const Eigen::VectorXd&)>& sink) {
   const RobotR3FullSetup& s = robot.setup();
   sim::CvodeOptions options = s.solver;
   if (options.component.empty()) options.component = "RobotR3 '" + s.name + "'";
-  if (options.max_step == 0.0) options.max_step = s.log_interval;
   Eigen::VectorXd row(static_cast<Eigen::Index>(robot.columns().size()));
   sim::HybridSystem sys;
   sys.n_states = robot.stateSize();
@@ -295,7 +291,7 @@ FullRunResult simulateRobotR3Full(RobotR3Full& robot, const std::function<void(c
   sim::HybridRunSettings run;
   run.t_end = robot.endTime();
   run.time_events = control::KinematicPtpTrajectory(s.q_begin, s.q_end, s.qd_max, s.qdd_max, s.start_time).breakpoints();
-  run.output_time = [&s, &run](long k) { return std::min(run.t_end, static_cast<double>(k) * s.log_interval); };
+  run.output_interval = s.log_interval;  // also the max step unless the solver options set one
   Eigen::VectorXd y = robot.initialState();
   robot.updateModes(0.0, y, {});
   const sim::HybridRunResult r = sim::runHybrid(sys, options, y, run);

@@ -7,8 +7,16 @@
 
 namespace jointsim::sim {
 
-HybridRunResult runHybrid(const HybridSystem& system, const CvodeOptions& options, const Eigen::VectorXd& y0,
+HybridRunResult runHybrid(const HybridSystem& system, const CvodeOptions& options_in, const Eigen::VectorXd& y0,
                           const HybridRunSettings& settings) {
+  CvodeOptions options = options_in;
+  if (options.max_step == 0.0 && settings.output_interval > 0.0) options.max_step = settings.output_interval;
+  const std::function<double(long)> output_time =
+      settings.output_time ? settings.output_time : [&settings](long k) {
+        return std::min(settings.t_end, static_cast<double>(k) * settings.output_interval);
+      };
+  if (!(settings.output_interval > 0.0) && !settings.output_time)
+    throw InputError("runHybrid: give output_time or an output_interval > 0 s");
   CvodeIntegrator integ(system.n_states, system.rhs, options);
   if (system.n_roots > 0) integ.setRootFunction(system.n_roots, system.roots);
   // Time events inside (0, t_end), then the end itself.
@@ -28,7 +36,7 @@ HybridRunResult runHybrid(const HybridSystem& system, const CvodeOptions& option
   system.output(0.0, y);
   double t = 0.0;
   for (long k = 1;; ++k) {
-    const double t_out = settings.output_time(k);
+    const double t_out = output_time(k);
     long events_here = 0;
     while (t < t_out) {
       t = integ.advance(std::min(t_out, breaks[next]), y);

@@ -14,6 +14,7 @@
 /// by φ_a = ratio·φ_b: it is a kinematic constraint solved together with the stuck friction elements; it
 /// exerts τ on the input and −ratio·τ on the output (lossless). Initial states must satisfy it.
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -83,6 +84,11 @@ FrictionMode nextFrictionMode(FrictionMode m, bool free, double S, double w, dou
                               const FrictionEventFlags& fired);
 /// Root functions of one friction element in mode m (two slots, see nextFrictionMode).
 void frictionRoots(FrictionMode m, double S, double w, double a, double tau0, double tau0max, double& g0, double& g1);
+/// Mode as logged: −1 backward, 0 stuck or start phase, +1 forward, 2 free (MSL numbering).
+int frictionModeNumber(FrictionMode m);
+/// MSL friction table (tau_pos rows [w, τ], w ascending) at speed v >= 0: linear interpolation,
+/// extrapolated through the last two rows; a single row is a constant.
+double frictionTableValue(const std::vector<std::array<double, 2>>& table, double v);
 
 class DriveChain {
  public:

@@ -29,8 +29,12 @@ struct HybridSystem {
 struct HybridRunSettings {
   double t_end = 1.0;               ///< end of the run [s]
   std::vector<double> time_events;  ///< input discontinuities [s]; those outside (0, t_end) are ignored
-  /// Time of output k >= 1 [s] (the caller clamps it to t_end).
+  /// Time of output k >= 1 [s] (the caller clamps it to t_end). When empty, outputs are at
+  /// min(t_end, k · output_interval).
   std::function<double(long k)> output_time;
+  /// Output grid spacing [s], used when output_time is empty; it is also the default max step
+  /// (options.max_step == 0), so that no step jumps over a logged sample.
+  double output_interval = 0.0;
   long n_outputs = 0;               ///< outputs after t = 0; 0: until an output time reaches t_end
   long max_events_per_output = 100000;  ///< more events than this between two outputs: chattering error
 };
