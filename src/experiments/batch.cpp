@@ -67,6 +67,14 @@ sim::Fault readFault(const YamlValue& n) {
   return f;
 }
 
+std::string slurpFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) return {};
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
 // Minimal reader of our own summary.json: the string value of "status" and three numbers.
 struct SummaryInfo {
   bool exists = false;
@@ -75,11 +83,8 @@ struct SummaryInfo {
 };
 SummaryInfo readSummary(const fs::path& p) {
   SummaryInfo s;
-  std::ifstream in(p);
-  if (!in) return s;
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string t = ss.str();
+  if (!fs::exists(p)) return s;
+  const std::string t = slurpFile(p);
   s.exists = true;
   auto str = [&](const std::string& key) -> std::string {
     const size_t a = t.find("\"" + key + "\": \"");
@@ -101,23 +106,15 @@ SummaryInfo readSummary(const fs::path& p) {
 // What a run's results depend on, as stored in <run>/run.settings: the base experiment file (path and a
 // 64-bit FNV-1a hash of its text) and the run's overrides and faults. A finished run is reused only if
 // its stamp matches (files referenced by the experiment, e.g. the robot, are not hashed: see docs/batch.md).
-std::string settingsStamp(const Sweep& sweep, const BatchRun& run) {
-  std::ifstream in(sweep.experiment, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
+std::string experimentHash(const Sweep& sweep) {
   std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : ss.str()) h = (h ^ c) * 1099511628211ull;
+  for (unsigned char c : slurpFile(sweep.experiment)) h = (h ^ c) * 1099511628211ull;
   char buf[32];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return "experiment: " + sweep.experiment + "\nexperiment_fnv1a: " + buf + "\nrun: " + run.describe() + "\n";
+  return buf;
 }
-
-std::string slurpFile(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  if (!in) return {};
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+std::string settingsStamp(const Sweep& sweep, const std::string& experiment_hash, const BatchRun& run) {
+  return "experiment: " + sweep.experiment + "\nexperiment_fnv1a: " + experiment_hash + "\nrun: " + run.describe() + "\n";
 }
 
 std::string csvQuote(const std::string& s) {
@@ -308,11 +305,12 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
                                                                       "-of-" + std::to_string(options.shard_count) + ".csv"
                                                                 : std::string("manifest.csv")))
                           .string();
+  const std::string hash = experimentHash(sweep);
   std::vector<size_t> queue;
   for (size_t k = 0; k < mine.size(); ++k) {
     const BatchRun& run = sweep.runs[mine[k]];
     BatchRecord r = recordFromFolder(run, dir);
-    const bool same = slurpFile(fs::path(dir) / run.name / "run.settings") == settingsStamp(sweep, run);
+    const bool same = slurpFile(fs::path(dir) / run.name / "run.settings") == settingsStamp(sweep, hash, run);
     if (r.status == "ok" && same) {
       r.skipped = true;
       ++res.skipped;
@@ -347,7 +345,7 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
       std::error_code ec;
       for (const auto& e : fs::directory_iterator(folder, ec))
         if (e.path().extension() == ".csv" || e.path().filename() == "summary.json") fs::remove(e.path(), ec);
-      io::writeFileAtomically((fs::path(folder) / "run.settings").string(), settingsStamp(sweep, run));
+      io::writeFileAtomically((fs::path(folder) / "run.settings").string(), settingsStamp(sweep, hash, run));
       std::fflush(nullptr);
       const pid_t pid = ::fork();
       if (pid < 0) {
