@@ -8,14 +8,14 @@
 
 #include "cli_common.hpp"
 #include "jointsim/common/error.hpp"
-#include "jointsim/io/compare.hpp"
+#include "jointsim/report/compare.hpp"
 
 namespace jointsim::cli {
 
 void addCompareCommand(CLI::App& app) {
   struct Options {
     std::string a, b;
-    io::CompareOptions compare;
+    report::CompareOptions compare;
     bool quiet = false;
   };
   auto opt = std::make_shared<Options>();
@@ -40,8 +40,8 @@ void addCompareCommand(CLI::App& app) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_flag("-q,--quiet", opt->quiet, "List only the columns out of tolerance (and the verdict)");
   cmd->callback([opt] {
-    const io::CompareResult r = io::compareCsvFiles(opt->a, opt->b, opt->compare);
-    std::fputs(io::formatComparison(r, opt->quiet).c_str(), stdout);
+    const report::CompareResult r = report::compareCsvFiles(opt->a, opt->b, opt->compare);
+    std::fputs(report::formatComparison(r, opt->quiet).c_str(), stdout);
     std::fflush(stdout);
     if (!r.pass()) {
       std::string list;

@@ -3,9 +3,10 @@
 #include <iostream>
 #include <memory>
 
+#include <nlohmann/json.hpp>
+
 #include "cli_common.hpp"
 #include "jointsim/common/error.hpp"
-#include "jointsim/io/json.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
 
@@ -66,24 +67,24 @@ void addDynamicsCommand(CLI::App& app) {
     const int frame = model.frameIndex(opt->frame.empty() ? model.tip_frame : opt->frame);
     Data data(model);
 
-    io::JsonWriter w(std::cout);
-    w.beginObject();
-    w.key("tau");
-    w.value(rnea(model, data, q, qd, qdd));
-    w.key("M");
-    w.valueRows(crba(model, data, q));
-    w.key("g");
-    w.value(gravityTorques(model, data, q));
+    // Numbers as the shortest text that reads back to the same double.
+    auto vec = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
+    auto rows = [&vec](const Eigen::MatrixXd& m) {
+      nlohmann::ordered_json out = nlohmann::ordered_json::array();
+      for (Eigen::Index r = 0; r < m.rows(); ++r) out.push_back(vec(m.row(r).transpose()));
+      return out;
+    };
+    nlohmann::ordered_json out;
+    out["tau"] = vec(rnea(model, data, q, qd, qdd));
+    out["M"] = rows(crba(model, data, q));
+    out["g"] = vec(gravityTorques(model, data, q));
     if (!opt->tau.empty()) {
       const Eigen::VectorXd tau = parseList(opt->tau, "--tau", n, per_joint);
-      w.key("qdd");
-      w.value(aba(model, data, q, qd, tau));
+      out["qdd"] = vec(aba(model, data, q, qd, tau));
     }
     forwardKinematics(model, data, q);
-    w.key("tcp");
-    w.valueRows(data.oMf[static_cast<size_t>(frame)].homogeneous());
-    w.endObject();
-    std::cout << '\n';
+    out["tcp"] = rows(data.oMf[static_cast<size_t>(frame)].homogeneous());
+    std::cout << out.dump() << '\n';
   });
 }
 

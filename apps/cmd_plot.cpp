@@ -3,14 +3,14 @@
 #include <memory>
 
 #include "cli_common.hpp"
-#include "jointsim/io/plot.hpp"
+#include "jointsim/report/plot.hpp"
 
 namespace jointsim::cli {
 
 void addPlotCommand(CLI::App& app) {
   struct Options {
     std::string run_dir, fig_dir;
-    io::PlotOptions plot;
+    report::PlotOptions plot;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -24,7 +24,7 @@ void addPlotCommand(CLI::App& app) {
                 "Also write FIG_DIR/<name>_plots.gp, the gnuplot script (run it with gnuplot to adjust the figures)");
   cmd->add_option("--gnuplot", opt->plot.gnuplot, "gnuplot executable (default: gnuplot on PATH)");
   cmd->callback([opt] {
-    const auto written = io::plotRun(opt->run_dir, opt->fig_dir, opt->plot);
+    const auto written = report::plotRun(opt->run_dir, opt->fig_dir, opt->plot);
     std::printf("%zu file%s written:\n", written.size(), written.size() == 1 ? "" : "s");
     for (const auto& path : written) std::printf("  %s\n", path.c_str());
   });

@@ -5,7 +5,8 @@
 #include <unistd.h>
 
 #include "cli_common.hpp"
-#include "jointsim/experiments/runner.hpp"
+#include "jointsim/experiments/experiment.hpp"
+#include "jointsim/experiments/registry.hpp"
 
 namespace jointsim::cli {
 
@@ -16,6 +17,9 @@ void addRunCommand(CLI::App& app) {
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("run", "Run an experiment YAML file; writes DIR/<name>.csv and DIR/summary.json");
+  std::string types = "Experiment types (experiment.type):";
+  for (const auto& t : experiments::experimentTypes()) types += "\n  " + t.name + ": " + t.description;
+  cmd->footer(types);
   cmd->add_option("experiment", opt->config, "Experiment description (.yaml)")->required();
   cmd->add_option("-o,--output-dir", opt->output_dir, "Output directory (default: out/<experiment name>/)");
   cmd->add_option("--set", opt->overrides, "Override a scalar of the experiment file: key.path=value (repeatable)")

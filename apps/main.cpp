@@ -6,11 +6,13 @@
 
 #include "cli_common.hpp"
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/version.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"jointsim — high-fidelity robot joint and multibody simulator"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "jointsim 0.1.0");
+  app.set_version_flag("--version", std::string("jointsim ") + jointsim::version() +
+                                           (*jointsim::gitCommit() ? std::string(" (") + jointsim::gitCommit() + ")" : std::string()));
   jointsim::cli::addDynamicsCommand(app);
   jointsim::cli::addRunCommand(app);
   jointsim::cli::addIdentifyCommand(app);

@@ -4,24 +4,25 @@
 
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/strain_wave_gear.hpp"
-#include "jointsim/experiments/joint_rig.hpp"
-#include "jointsim/experiments/passive_robot.hpp"
-#include "jointsim/experiments/runner.hpp"
+#include "jointsim/systems/joint_rig.hpp"
+#include "jointsim/systems/passive_robot.hpp"
+#include "jointsim/experiments/experiment.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
 
 using namespace jointsim;
 
 static void UR5_Fall_1s_Adams(benchmark::State& state) {
   const auto model = multibody::loadRobot(std::string(JOINTSIM_SOURCE_DIR) + "/config/robots/ur5.yaml");
-  experiments::PassiveRobotParams p;
+  systems::PassiveRobotParams p;
   p.q0.resize(6);
   p.q0 << 0.0, -1.2, 0.8, -0.5, 0.7, 0.0;
   p.duration = 1.0;
   p.log_rate = 100.0;
   p.solver.rtol = static_cast<double>(state.range(0)) * 1e-10;  // 1e-8 by default
+  systems::PassiveRobot plant(model, p);
   long steps = 0;
   for (auto _ : state) {
-    const auto r = experiments::simulatePassiveRobot(model, p, [](const Eigen::VectorXd& row) {
+    const auto r = sim::simulate(plant, plant.simulateOptions(), [](const Eigen::VectorXd& row) {
       benchmark::DoNotOptimize(row.data());
     });
     steps = r.stats.steps;
@@ -35,7 +36,7 @@ BENCHMARK(UR5_Fall_1s_Adams)->Arg(100)->Unit(benchmark::kMillisecond);
 // The UR5 base joint on the rig (config/experiments/ur5_swg_joint_velocity.yaml): DC motor, size-A
 // strain-wave gear, UR5 LuGre friction, load 1.279 kg·m², motor-velocity PI on the voltage; 10 s.
 static void UR5_SwgJointRig_10s(benchmark::State& state) {
-  experiments::JointRigSetup s;
+  systems::JointRigSetup s;
   s.name = "bench";
   s.motor = drive::DcMotorParams::ur5(1);
   s.transmission = std::make_shared<drive::StrainWaveGear>(drive::StrainWaveGearParams::ur5SizeA());
@@ -44,19 +45,19 @@ static void UR5_SwgJointRig_10s(benchmark::State& state) {
   f.f_v = 2.0;
   f.k_q = 0.0;
   s.friction = std::make_shared<drive::LuGreUr5Friction>(f);
-  s.friction_side = experiments::Side::Output;
+  s.friction_side = systems::Side::Output;
   s.load_inertia = 1.279;
-  s.input = experiments::RigInput::VelocityPI;
-  s.pi = {0.5, 20.0, 48.0, true, experiments::Side::Motor};
+  s.input = systems::RigInput::VelocityPI;
+  s.pi = {0.5, 20.0, 48.0, true, systems::Side::Motor};
   s.profile = control::Profile::piecewise({0, 1, 4, 5, 8, 9, 10}, {0, 101, 101, 0, 0, -50.5, -50.5});
   s.duration = 10.0;
   s.log_rate = 1000.0;
   s.solver.rtol = 1e-6;
   s.solver.atol = 1e-9;
-  const experiments::JointRig rig(s);
+  systems::JointRig rig(s);
   long steps = 0;
   for (auto _ : state) {
-    const auto r = experiments::simulateJointRig(rig, [](const Eigen::VectorXd& row) { benchmark::DoNotOptimize(row.data()); });
+    const auto r = sim::simulate(rig, rig.simulateOptions(), [](const Eigen::VectorXd& row) { benchmark::DoNotOptimize(row.data()); });
     steps = r.stats.steps;
   }
   state.counters["real_time_factor"] =

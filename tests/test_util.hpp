@@ -4,13 +4,30 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
+#include "jointsim/sim/plant.hpp"
+#include "jointsim/sim/simulate.hpp"
+
 namespace jointsim::test {
 
 inline std::string sourcePath(const std::string& relative) { return std::string(JOINTSIM_SOURCE_DIR) + "/" + relative; }
+
+/// Index in a simulate() row (time first) of the plant's signal `name` ("time": 0).
+inline int rowIndex(const sim::Plant& plant, const std::string& name) {
+  return name == "time" ? 0 : 1 + sim::signalIndex(plant, name);
+}
+
+/// Runs a plant with options (defaults: its own) and returns every row.
+template <class P>
+std::vector<Eigen::VectorXd> simulateRows(P& plant) {
+  std::vector<Eigen::VectorXd> rows;
+  sim::simulate(plant, plant.simulateOptions(), [&](const Eigen::VectorXd& r) { rows.push_back(r); });
+  return rows;
+}
 
 /// |a − b| ≤ tol·max(1, |b|) entrywise; on failure names the worst entry, both values and the difference.
 inline ::testing::AssertionResult MatricesNear(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double tol) {

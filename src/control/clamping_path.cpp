@@ -3,17 +3,17 @@
 #include <algorithm>
 #include <cmath>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::control {
 
 void ClampingPathParams::validate() const {
-  if (!std::isfinite(q_pos)) throw InputError("clamping path: q_pos must be a finite angle in rad");
-  if (!(qd_max > 0.0) || !std::isfinite(qd_max)) throw InputError("clamping path: qd_max must be > 0 rad/s");
-  if (!(qdd_max > 0.0) || !std::isfinite(qdd_max)) throw InputError("clamping path: qdd_max must be > 0 rad/s²");
-  if (!(segment_time > 0.0) || !std::isfinite(segment_time))
-    throw InputError("clamping path: segment_time must be > 0 s");
-  if (segments < 1) throw InputError("clamping path: segments must be >= 1");
+  check::finite("clamping path", "q_pos", q_pos, "rad");
+  check::positive("clamping path", "qd_max", qd_max, "rad/s");
+  check::positive("clamping path", "qdd_max", qdd_max, "rad/s²");
+  check::positive("clamping path", "segment_time", segment_time, "s");
+  check::atLeast("clamping path", "segments", segments, 1, "");
 }
 
 ClampingPath::ClampingPath(const ClampingPathParams& params) : p_(params) {

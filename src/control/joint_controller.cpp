@@ -3,15 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::control {
 
 void JointControllerParams::validate(const std::string& where) const {
-  auto nonneg = [&](double v, const char* name) {
-    if (!(v >= 0.0) || !std::isfinite(v))
-      throw InputError(where + "." + name + ": expected a finite gain >= 0, got " + std::to_string(v));
-  };
+  auto nonneg = [&](double v, const char* name) { check::nonNegative(where, name, v, "(a gain)"); };
   if (type == ControllerType::Cascade002) {
     nonneg(P_pos, "P_pos");
     nonneg(P_vel, "P_vel");
@@ -21,7 +19,7 @@ void JointControllerParams::validate(const std::string& where) const {
   } else if (type == ControllerType::MotorPPI000) {
     nonneg(kp, "kp");
     nonneg(ks, "ks");
-    if (!(Ts > 0.0)) throw InputError(where + ".Ts: expected a time constant > 0 s, got " + std::to_string(Ts));
+    check::positive(where, "Ts", Ts, "s");
   }
 }
 

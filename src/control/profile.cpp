@@ -6,6 +6,9 @@
 #include <sstream>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/interpolate.hpp"
+#include "jointsim/common/text.hpp"
+#include "jointsim/io/csv_reader.hpp"
 
 namespace jointsim::control {
 namespace {
@@ -90,48 +93,19 @@ Profile Profile::piecewise(std::vector<double> times, std::vector<double> values
 }
 
 Profile Profile::csv(const std::string& path, const std::string& column) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open CSV input for reading");
-  std::string line;
-  if (!std::getline(in, line)) throw InputError(path + ":1: empty CSV file, expected a header line");
-  std::vector<std::string> header;
-  {
-    std::stringstream ss(line);
-    for (std::string cell; std::getline(ss, cell, ',');) {
-      cell.erase(0, cell.find_first_not_of(" \t\r"));
-      cell.erase(cell.find_last_not_of(" \t\r") + 1);
-      header.push_back(cell);
-    }
-  }
-  if (header.size() < 2) throw InputError(path + ":1: expected at least two columns (time and value)");
-  size_t col = 1;
+  const io::CsvTable table = io::readCsv(path);
+  if (table.header.size() < 2) throw InputError(path + ":1: expected at least two columns (time and value)");
+  int col = 1;
   if (!column.empty()) {
-    const auto it = std::find(header.begin(), header.end(), column);
-    if (it == header.end()) throw InputError(path + ":1: no column named '" + column + "'");
-    col = static_cast<size_t>(it - header.begin());
+    col = table.find(column);
+    if (col < 0) throw InputError(path + ":1: no column named '" + column + "' (columns: " + join(table.header, ", ") + ")");
   }
   std::vector<double> t, v;
-  int line_no = 1;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    std::stringstream ss(line);
-    std::vector<double> cells;
-    for (std::string cell; std::getline(ss, cell, ',');) {
-      char* end = nullptr;
-      const double x = std::strtod(cell.c_str(), &end);
-      while (end && (*end == ' ' || *end == '\t' || *end == '\r')) ++end;
-      if (end == cell.c_str() || *end != '\0' || !std::isfinite(x))
-        throw InputError(path + ":" + std::to_string(line_no) + ": expected a number, got '" + cell + "'");
-      cells.push_back(x);
-    }
-    if (cells.size() <= col)
-      throw InputError(path + ":" + std::to_string(line_no) + ": expected " + std::to_string(header.size()) +
-                       " columns, got " + std::to_string(cells.size()));
-    if (!t.empty() && !(cells[0] > t.back()))
-      throw InputError(path + ":" + std::to_string(line_no) + ": time must increase strictly");
-    t.push_back(cells[0]);
-    v.push_back(cells[col]);
+  for (Eigen::Index r = 0; r < table.rows(); ++r) {
+    if (!t.empty() && !(table.data(r, 0) > t.back()))
+      throw InputError(table.where(r, 0) + ": time must increase strictly");
+    t.push_back(table.data(r, 0));
+    v.push_back(table.data(r, col));
   }
   if (t.empty()) throw InputError(path + ": no data rows");
   Profile p = piecewise(std::move(t), std::move(v), false);
@@ -158,13 +132,14 @@ double Profile::value(double t) const {
     case Kind::Sine: return t < until_ ? d_ + a_ * std::sin(kTwoPi * b_ * t + c_) : 0.0;
     case Kind::Piecewise:
     case Kind::Csv: {
-      if (t <= times_.front()) return values_.front();
-      if (t >= times_.back()) return values_.back();
-      const auto it = std::upper_bound(times_.begin(), times_.end(), t);
-      const size_t k = static_cast<size_t>(it - times_.begin());
-      if (hold_) return values_[k - 1];
-      const double w = (t - times_[k - 1]) / (times_[k] - times_[k - 1]);
-      return values_[k - 1] + w * (values_[k] - values_[k - 1]);
+      if (hold_) {
+        if (t <= times_.front()) return values_.front();
+        if (t >= times_.back()) return values_.back();
+        const auto it = std::upper_bound(times_.begin(), times_.end(), t);
+        return values_[static_cast<size_t>(it - times_.begin()) - 1];
+      }
+      return interpolateLinear(
+          times_.size(), [this](size_t i) { return times_[i]; }, [this](size_t i) { return values_[i]; }, t, Ends::Hold);
     }
   }
   return 0.0;

@@ -3,11 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <limits>
 #include <sstream>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
+#include "jointsim/io/csv_reader.hpp"
 
 namespace jointsim::control {
 namespace {
@@ -341,29 +342,6 @@ std::string SampledTrajectory::describe() const {
   return os.str();
 }
 
-namespace {
-
-std::vector<std::string> splitCsv(const std::string& line) {
-  std::vector<std::string> cells;
-  std::string cur;
-  for (char ch : line) {
-    if (ch == ',') {
-      cells.push_back(cur);
-      cur.clear();
-    } else {
-      cur += ch;
-    }
-  }
-  cells.push_back(cur);
-  for (auto& c : cells) {
-    const size_t b = c.find_first_not_of(" \t\r");
-    c = b == std::string::npos ? std::string() : c.substr(b, c.find_last_not_of(" \t\r") - b + 1);
-  }
-  return cells;
-}
-
-}  // namespace
-
 SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, const std::vector<std::string>& columns,
                                              double gap_factor) {
   if (dof < 1) throw InputError(path + ": the number of joints must be >= 1");
@@ -372,61 +350,37 @@ SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, c
   if (!columns.empty() && columns.size() != static_cast<size_t>(dof))
     throw InputError(path + ": " + std::to_string(columns.size()) + " column names given for " +
                      std::to_string(dof) + " joints");
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open CSV file for reading");
-  auto rowError = [&](int row, const std::string& msg) {
-    return InputError(path + ": row " + std::to_string(row) + ": " + msg);
+  const io::CsvTable table = io::readCsv(path);
+  auto rowError = [&](Eigen::Index r, const std::string& msg) {
+    return InputError(path + ":" + std::to_string(table.lines[static_cast<size_t>(r)]) + ": " + msg);
   };
-  std::string line;
-  if (!std::getline(in, line)) throw rowError(1, "empty file, expected a header line (time, then one column per joint)");
-  const std::vector<std::string> header = splitCsv(line);
+  const std::vector<std::string>& header = table.header;
   std::vector<size_t> cols;
   if (columns.empty()) {
     if (header.size() != static_cast<size_t>(dof) + 1)
-      throw rowError(1, "expected 1 + " + std::to_string(dof) + " = " + std::to_string(dof + 1) +
-                            " columns (time, then one per joint), got " + std::to_string(header.size()) +
-                            "; name the joint columns with `columns` to select them");
+      throw InputError(path + ":1: expected 1 + " + std::to_string(dof) + " = " + std::to_string(dof + 1) +
+                       " columns (time, then one per joint), got " + std::to_string(header.size()) +
+                       "; name the joint columns with `columns` to select them");
     for (int i = 1; i <= dof; ++i) cols.push_back(static_cast<size_t>(i));
   } else {
     for (const std::string& name : columns) {
       const auto it = std::find(header.begin(), header.end(), name);
-      if (it == header.end()) {
-        std::string list;
-        for (const auto& h : header) list += (list.empty() ? "" : ", ") + h;
-        throw rowError(1, "no column named '" + name + "' (columns: " + list + ")");
-      }
-      if (it == header.begin()) throw rowError(1, "column '" + name + "' is the time column");
+      if (it == header.end()) throw InputError(path + ":1: no column named '" + name + "' (columns: " + join(header, ", ") + ")");
+      if (it == header.begin()) throw InputError(path + ":1: column '" + name + "' is the time column");
       cols.push_back(static_cast<size_t>(it - header.begin()));
     }
   }
-
   std::vector<double> times;
-  std::vector<int> rows;
+  std::vector<Eigen::Index> rows;
   std::vector<double> values;  // row-major, dof per sample
-  int row = 1;
-  std::vector<double> cells;
-  while (std::getline(in, line)) {
-    ++row;
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    const std::vector<std::string> text = splitCsv(line);
-    if (text.size() != header.size())
-      throw rowError(row, "expected " + std::to_string(header.size()) + " columns (as the header), got " +
-                              std::to_string(text.size()));
-    cells.clear();
-    for (size_t c = 0; c < text.size(); ++c) {
-      const std::string& cell = text[c];
-      char* end = nullptr;
-      const double x = std::strtod(cell.c_str(), &end);
-      if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(x))
-        throw rowError(row, "column '" + header[c] + "': expected a number, got '" + cell + "'");
-      cells.push_back(x);
-    }
-    if (!times.empty() && !(cells[0] > times.back()))
-      throw rowError(row, "time " + num(cells[0]) + " s is not after the previous row's " + num(times.back()) +
-                              " s (time must increase strictly)");
-    times.push_back(cells[0]);
-    rows.push_back(row);
-    for (size_t c : cols) values.push_back(cells[c]);
+  for (Eigen::Index r = 0; r < table.rows(); ++r) {
+    const double t = table.data(r, 0);
+    if (!times.empty() && !(t > times.back()))
+      throw rowError(r, "time " + num(t) + " s is not after the previous row's " + num(times.back()) +
+                            " s (time must increase strictly)");
+    times.push_back(t);
+    rows.push_back(r);
+    for (size_t c : cols) values.push_back(table.data(r, static_cast<Eigen::Index>(c)));
   }
   if (times.size() < 2)
     throw InputError(path + ": expected at least 2 data rows, got " + std::to_string(times.size()));

@@ -1,4 +1,4 @@
-#include "control/trajectory_yaml.hpp"
+#include "jointsim/control/trajectory_yaml.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -174,8 +174,7 @@ std::unique_ptr<JointTrajectory> trajectoryFromYaml(const YamlValue& node, int d
     if (t == "csv") return readCsv(node, dof, base_dir);
     if (t == "kinematic_ptp") return readKinematicPtp(node, dof);
   } catch (const InputError& e) {
-    if (std::string(e.what()).rfind(node.file(), 0) == 0) throw;  // already located
-    node.fail(e.what());
+    node.relocate(e);
   }
   type.failExpected("a trajectory type (point_to_point, fourier, csv)");
 }

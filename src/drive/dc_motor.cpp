@@ -3,16 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::drive {
 
 void DcMotorParams::validate() const {
-  auto positive = [](double v, const char* name, const char* unit) {
-    if (!(v > 0.0) || !std::isfinite(v))
-      throw InputError(std::string("motor.") + name + ": expected a finite value > 0 " + unit + ", got " +
-                       std::to_string(v));
-  };
+  auto positive = [](double v, const char* name, const char* unit) { check::positive("motor", name, v, unit); };
   positive(R, "R", "Ω");
   positive(L, "L", "H");
   positive(kt, "kt", "N·m/A");

@@ -5,27 +5,24 @@
 #include <sstream>
 #include <string>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
+#include "jointsim/drive/msl_friction.hpp"
 
 namespace jointsim::drive {
 namespace {
 
-// Parameter errors have the form "<model> parameter '<field>': expected <rule>, got <value>", where
-// <field> is spelled like the YAML key (friction_yaml.cpp relies on this to point at the key's line).
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
+// Parameter errors (common/check.hpp) carry the field spelled like the YAML key as their key path, so that
+// frictionFromYaml can point at the key's line.
 [[noreturn]] void badParameter(const char* model, const std::string& field, const std::string& rule, double value) {
-  throw InputError(std::string(model) + " parameter '" + field + "': expected " + rule + ", got " + num(value));
+  check::fail(model, field, rule, value);
 }
 void requirePositive(const char* model, const std::string& field, double v, const char* unit) {
-  if (!(v > 0.0) || !std::isfinite(v)) badParameter(model, field, std::string("a finite value > 0 ") + unit, v);
+  check::positive(model, field, v, unit);
 }
 void requireNonNegative(const char* model, const std::string& field, double v, const char* unit) {
-  if (!(v >= 0.0) || !std::isfinite(v)) badParameter(model, field, std::string("a finite value >= 0 ") + unit, v);
+  check::nonNegative(model, field, v, unit);
 }
 
 inline double sgn(double v) { return static_cast<double>((v > 0.0) - (v < 0.0)); }
@@ -72,7 +69,7 @@ void TableFrictionParams::validate() const {
     requireNonNegative(m, row, tau_pos[i][0], "rad/s as the velocity w (column 1)");
     requireNonNegative(m, row, tau_pos[i][1], "N·m as the friction torque (column 2)");
     if (i > 0 && !(tau_pos[i][0] > tau_pos[i - 1][0]))
-      badParameter(m, row, "velocities strictly increasing, w > " + num(tau_pos[i - 1][0]) + " rad/s",
+      badParameter(m, row, "velocities strictly increasing, w > " + formatNumber(tau_pos[i - 1][0]) + " rad/s",
                    tau_pos[i][0]);
   }
   if (tau_pos.size() >= 2) {
@@ -98,15 +95,7 @@ TableFriction::TableFriction(const TableFrictionParams& params) : p_(params) {
 }
 
 double TableFriction::tableTorque(double w) const {
-  // MSL BearingFriction: linear interpolation in tau_pos, extrapolation through the end segments.
-  const auto& t = p_.tau_pos;
-  const size_t n = t.size();
-  if (n == 1) return t[0][1];
-  size_t i = 1;  // segment [i-1, i]
-  while (i < n - 1 && w > t[i][0]) ++i;
-  const auto& a = t[i - 1];
-  const auto& b = t[i];
-  return a[1] + (w - a[0]) * (b[1] - a[1]) / (b[0] - a[0]);
+  return frictionTableValue(p_.tau_pos, w);  // [MSL, Rotational.Components.BearingFriction]: extrapolated table
 }
 
 double TableFriction::evaluate(const FrictionInput& in, const double*, double*) const {

@@ -1,4 +1,4 @@
-#include "drive/friction_yaml.hpp"
+#include "jointsim/drive/drive_yaml.hpp"
 
 #include <string>
 #include <vector>
@@ -53,50 +53,6 @@ void readStaticSet(const YamlValue& node, StribeckBranch& positive, StribeckBran
   }
 }
 
-// Maps an InputError of a params validate() ("<model> parameter '<field>': <rule>") to the YAML key
-// of <field> (e.g. "positive.alpha0", "tau_pos[2]"), so the message carries that key's line and path.
-[[noreturn]] void rethrowAtKey(const YamlValue& node, const InputError& e) {
-  const std::string msg = e.what();
-  const std::string tag = " parameter '";
-  const size_t a = msg.find(tag);
-  const size_t b = a == std::string::npos ? a : msg.find("': ", a + tag.size());
-  if (b == std::string::npos) node.fail(msg);
-  const std::string field = msg.substr(a + tag.size(), b - a - tag.size());
-  const std::string rule = msg.substr(b + 3);
-
-  // Split "x.y[3]" into keys and an optional trailing index.
-  std::vector<std::string> keys;
-  size_t start = 0;
-  while (start <= field.size()) {
-    const size_t dot = field.find('.', start);
-    keys.push_back(field.substr(start, dot == std::string::npos ? std::string::npos : dot - start));
-    if (dot == std::string::npos) break;
-    start = dot + 1;
-  }
-  long index = -1;
-  std::string& last = keys.back();
-  if (const size_t br = last.find('['); br != std::string::npos) {
-    index = std::stol(last.substr(br + 1));
-    last = last.substr(0, br);
-  }
-  YamlValue target = node;
-  bool found = true;
-  for (const auto& k : keys) {
-    if (!target.has(k)) {
-      found = false;
-      break;
-    }
-    target = target[k];
-  }
-  // Symmetric static set: "positive.alpha0" was written as top-level "alpha0".
-  if (!found && keys.size() == 2 && node.has(keys[1])) {
-    target = node[keys[1]];
-    found = true;
-  }
-  if (!found) node.fail(msg);
-  if (index >= 0 && target.isSequence() && static_cast<size_t>(index) < target.size()) target = target.at(index);
-  target.fail(rule);
-}
 
 std::unique_ptr<Friction> build(const YamlValue& node, const std::string& type) {
   if (type == "coulomb_viscous") {
@@ -184,9 +140,7 @@ std::unique_ptr<Friction> frictionFromYaml(const io::YamlValue& node) {
   try {
     return build(node, type);
   } catch (const InputError& e) {
-    // Errors of the YAML reader already carry file:line; only validate() errors need relocating.
-    if (std::string(e.what()).rfind(type + " parameter '", 0) != 0) throw;
-    rethrowAtKey(node, e);
+    node.relocate(e);  // validate() errors carry the key; the reader's own errors are located already
   }
 }
 

@@ -3,16 +3,13 @@
 #include <cmath>
 #include <string>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::drive {
 
 void OpAmpMotorParams::validate() const {
-  auto positive = [](double v, const char* name, const char* unit) {
-    if (!(v > 0.0) || !std::isfinite(v))
-      throw InputError(std::string("opamp_motor.") + name + ": expected a finite value > 0 " + unit + ", got " +
-                       std::to_string(v));
-  };
+  auto positive = [](double v, const char* name, const char* unit) { check::positive("op-amp motor", name, v, unit); };
   positive(J, "J", "kg·m²");
   positive(k, "k", "N·m/A");
   positive(w, "w", "rad/s");

@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::drive {
@@ -16,18 +17,9 @@ namespace {
 
 const double kPi = 3.14159265358979323846;
 
-[[noreturn]] void fieldError(const char* field, double value, const char* unit, const char* rule) {
-  std::ostringstream os;
-  os.precision(6);
-  os << "StrainWaveGearParams." << field << " = " << value << (unit[0] ? " " : "") << unit << ": " << rule;
-  throw InputError(os.str());
-}
-void requirePositive(const char* field, double v, const char* unit) {
-  if (!std::isfinite(v) || !(v > 0.0)) fieldError(field, v, unit, "expected a finite value > 0");
-}
-void requireNonNegative(const char* field, double v, const char* unit) {
-  if (!std::isfinite(v) || !(v >= 0.0)) fieldError(field, v, unit, "expected a finite value >= 0");
-}
+const char* const kComponent = "strain_wave_gear";
+void requirePositive(const char* field, double v, const char* unit) { check::positive(kComponent, field, v, unit); }
+void requireNonNegative(const char* field, double v, const char* unit) { check::nonNegative(kComponent, field, v, unit); }
 
 }  // namespace
 
@@ -36,8 +28,8 @@ void requireNonNegative(const char* field, double v, const char* unit) {
 void StrainWaveGearParams::validate() const {
   requirePositive("r_g", r_g, "m");
   if (!std::isfinite(alpha_t) || !(alpha_t > 0.0) || !(alpha_t < 0.5 * kPi))
-    fieldError("alpha_t", alpha_t, "rad", "expected a value in (0, pi/2)");
-  if (!std::isfinite(tau) || !(tau > 1.0)) fieldError("tau", tau, "", "expected a finite reduction ratio > 1");
+    check::fail(kComponent, "alpha_t", "a pressure angle in (0, pi/2) rad", alpha_t);
+  if (!std::isfinite(tau) || !(tau > 1.0)) check::fail(kComponent, "tau", "a finite reduction ratio > 1", tau);
   requirePositive("K_WG", K_WG, "N·m/rad");
   requirePositive("K_b", K_b, "N/m");
   requirePositive("K_FS", K_FS, "N·m/rad");

@@ -1,4 +1,4 @@
-#include "drive/strain_wave_gear_yaml.hpp"
+#include "jointsim/drive/drive_yaml.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -40,19 +40,16 @@ const Field kDamping[] = {
     {"c_CS", &StrainWaveGearParams::c_CS, "damping c_CS (N·m·s/rad, or a damping ratio)"},
 };
 
-// Maps an InputError of StrainWaveGearParams::validate() ("StrainWaveGearParams.<field> = ...: rule") to
-// the YAML key that set <field>, so the message carries that key's line and path.
+// Re-throws an error of StrainWaveGearParams::validate() at the YAML key that set its field: the field's own
+// key, or the key it was derived from (alpha_t from alpha_t_deg, tau from Z_CS, c_* from damping.value).
 [[noreturn]] void rethrowAtKey(const YamlValue& node, const InputError& e) {
-  const std::string msg = e.what();
-  const std::string prefix = "StrainWaveGearParams.";
-  if (msg.rfind(prefix, 0) != 0) node.fail(msg);
-  const std::string rest = msg.substr(prefix.size());
-  const std::string field = rest.substr(0, rest.find(' '));
-  if (node.has(field)) node[field].fail(rest);
-  if (field == "alpha_t" && node.has("alpha_t_deg")) node["alpha_t_deg"].fail(rest);
-  if (field == "tau" && node.has("Z_CS")) node["Z_CS"].fail(rest);
-  if (field.rfind("c_", 0) == 0 && node["damping"].has("value")) node["damping"]["value"].fail(rest);
-  node.fail(rest);
+  const std::string& field = e.keyPath();
+  if (!node.has(field)) {
+    if (field == "alpha_t" && node.has("alpha_t_deg")) node["alpha_t_deg"].fail(e.message());
+    if (field == "tau" && node.has("Z_CS")) node["Z_CS"].fail(e.message());
+    if (field.rfind("c_", 0) == 0 && node["damping"].has("value")) node["damping"]["value"].fail(e.message());
+  }
+  node.relocate(e);
 }
 
 }  // namespace

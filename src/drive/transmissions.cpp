@@ -6,17 +6,14 @@
 
 #include <Eigen/LU>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::drive {
 namespace {
-void requirePositive(double v, const std::string& name, const char* unit) {
-  if (!(v > 0.0) || !std::isfinite(v))
-    throw InputError(name + ": expected a finite value > 0 " + unit + ", got " + std::to_string(v));
-}
+void requirePositive(double v, const std::string& name, const char* unit) { check::positive("transmission", name, v, unit); }
 void requireNonNegative(double v, const std::string& name, const char* unit) {
-  if (!(v >= 0.0) || !std::isfinite(v))
-    throw InputError(name + ": expected a finite value >= 0 " + unit + ", got " + std::to_string(v));
+  check::nonNegative("transmission", name, v, unit);
 }
 
 // Deflection and its rate on the compliance side, and the map from the side torque to the ports.

@@ -15,10 +15,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "io/yaml_reader.hpp"
+#include <nlohmann/json.hpp>
+
 #include "jointsim/common/error.hpp"
-#include "jointsim/experiments/runner.hpp"
+#include "jointsim/experiments/experiment.hpp"
+#include "jointsim/io/input_files.hpp"
 #include "jointsim/io/output.hpp"
+#include "jointsim/io/yaml.hpp"
 
 namespace jointsim::experiments {
 namespace {
@@ -26,10 +29,7 @@ namespace {
 using io::YamlValue;
 namespace fs = std::filesystem;
 
-std::string scalarText(const YamlValue& v, const std::string& what) {
-  if (!v.defined() || !v.node().IsScalar()) v.failExpected(what);
-  return v.node().Scalar();
-}
+std::string scalarText(const YamlValue& v, const std::string& what) { return v.scalarText(what); }
 
 std::string sanitize(const std::string& s) {
   std::string out;
@@ -52,13 +52,13 @@ std::vector<std::string> readSet(const YamlValue& node) {
   return out;
 }
 
-sim::Fault readFault(const YamlValue& n) {
+systems::Fault readFault(const YamlValue& n) {
   n.expectMap("a fault {type, joint, value}");
   n.allowKeys({"type", "joint", "value"});
-  sim::Fault f;
+  systems::Fault f;
   const YamlValue t = n.required("type", "a fault type");
   try {
-    f.type = sim::faultTypeFromString(t.asString("a fault type"));
+    f.type = systems::faultTypeFromString(t.asString("a fault type"));
   } catch (const InputError& e) {
     t.fail(e.what());
   }
@@ -75,46 +75,49 @@ std::string slurpFile(const fs::path& p) {
   return ss.str();
 }
 
-// Minimal reader of our own summary.json: the string value of "status" and three numbers.
+// What a run folder's summary.json says (read with nlohmann-json; a missing or unreadable one counts as absent).
 struct SummaryInfo {
   bool exists = false;
-  std::string status;
+  std::string status, version, commit, started;
   double sim = 0, wall = 0, rtf = 0;
+  std::vector<io::InputFile> inputs;
 };
 SummaryInfo readSummary(const fs::path& p) {
   SummaryInfo s;
   if (!fs::exists(p)) return s;
-  const std::string t = slurpFile(p);
   s.exists = true;
-  auto str = [&](const std::string& key) -> std::string {
-    const size_t a = t.find("\"" + key + "\": \"");
-    if (a == std::string::npos) return {};
-    const size_t b = a + key.size() + 5;
-    return t.substr(b, t.find('"', b) - b);
-  };
-  auto num = [&](const std::string& key) {
-    const size_t a = t.find("\"" + key + "\": ");
-    return a == std::string::npos ? 0.0 : std::strtod(t.c_str() + a + key.size() + 4, nullptr);
-  };
-  s.status = str("status");
-  s.sim = num("sim_time_s");
-  s.wall = num("wall_time_s");
-  s.rtf = num("real_time_factor");
+  const nlohmann::json j = nlohmann::json::parse(slurpFile(p), nullptr, false);
+  if (!j.is_object()) return s;  // unreadable: status "" (counted as an error)
+  auto text = [&](const char* key) { return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string(); };
+  auto number = [&](const char* key) { return j.contains(key) && j[key].is_number() ? j[key].get<double>() : 0.0; };
+  s.status = text("status");
+  s.version = text("jointsim_version");
+  s.commit = text("git_commit");
+  s.started = text("started_utc");
+  s.sim = number("sim_time_s");
+  s.wall = number("wall_time_s");
+  s.rtf = number("real_time_factor");
+  if (j.contains("inputs") && j["inputs"].is_array())
+    for (const auto& in : j["inputs"])
+      if (in.is_object() && in.contains("path") && in.contains("hash") && in["path"].is_string() && in["hash"].is_string())
+        s.inputs.push_back({in["path"].get<std::string>(), in["hash"].get<std::string>(), 0});
   return s;
 }
 
-// What a run's results depend on, as stored in <run>/run.settings: the base experiment file (path and a
-// 64-bit FNV-1a hash of its text) and the run's overrides and faults. A finished run is reused only if
-// its stamp matches (files referenced by the experiment, e.g. the robot, are not hashed: see docs/batch.md).
-std::string experimentHash(const Sweep& sweep) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : slurpFile(sweep.experiment)) h = (h ^ c) * 1099511628211ull;
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
+// The inputs a finished run read still have the content they had: every file listed in its summary hashes to
+// the recorded value. A run without recorded inputs (an older summary) does not count as current.
+bool inputsUnchanged(const SummaryInfo& s) {
+  if (s.inputs.empty()) return false;
+  for (const auto& in : s.inputs)
+    if (io::fileHash(in.path) != in.hash) return false;
+  return true;
 }
-std::string settingsStamp(const Sweep& sweep, const std::string& experiment_hash, const BatchRun& run) {
-  return "experiment: " + sweep.experiment + "\nexperiment_fnv1a: " + experiment_hash + "\nrun: " + run.describe() + "\n";
+
+// What a run's results depend on besides its input files, as stored in <run>/run.settings: the base experiment
+// file and the run's overrides and faults. A finished run is reused only if its stamp matches and its inputs
+// are unchanged (docs/batch.md).
+std::string settingsStamp(const Sweep& sweep, const BatchRun& run) {
+  return "experiment: " + sweep.experiment + "\nrun: " + run.describe() + "\n";
 }
 
 std::string csvQuote(const std::string& s) {
@@ -125,11 +128,13 @@ std::string csvQuote(const std::string& s) {
 
 void writeManifest(const std::string& path, const std::vector<BatchRecord>& records) {
   std::ostringstream os;
-  os << "run,status,wall_time_s,sim_time_s,real_time_factor,output_dir,overrides\n";
+  os << "run,status,wall_time_s,sim_time_s,real_time_factor,output_dir,overrides,jointsim_version,git_commit,started_utc,"
+        "inputs\n";
   os.precision(6);
   for (const auto& r : records)
     os << r.run << ',' << r.status << ',' << r.wall_time_s << ',' << r.sim_time_s << ',' << r.real_time_factor << ','
-       << r.output_dir << ',' << csvQuote(r.overrides) << '\n';
+       << r.output_dir << ',' << csvQuote(r.overrides) << ',' << r.jointsim_version << ',' << r.git_commit << ','
+       << r.started_utc << ',' << csvQuote(r.inputs) << '\n';
   io::writeFileAtomically(path, os.str());
 }
 
@@ -148,6 +153,10 @@ BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
   r.sim_time_s = s.sim;
   r.wall_time_s = s.wall;
   r.real_time_factor = s.rtf;
+  r.jointsim_version = s.version;
+  r.git_commit = s.commit;
+  r.started_utc = s.started;
+  for (const auto& in : s.inputs) r.inputs += (r.inputs.empty() ? "" : ";") + in.path + "=" + in.hash;
   return r;
 }
 
@@ -183,7 +192,7 @@ BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
 std::string BatchRun::describe() const {
   std::string s;
   for (const auto& o : overrides) s += (s.empty() ? "" : "; ") + o;
-  for (const auto& f : faults) s += (s.empty() ? "" : "; ") + std::string("fault ") + sim::describe(f);
+  for (const auto& f : faults) s += (s.empty() ? "" : "; ") + std::string("fault ") + systems::describe(f);
   return s;
 }
 
@@ -261,9 +270,9 @@ Sweep loadSweep(const std::string& path) {
       n.expectMap("a fault scenario {type, joints, values}");
       n.allowKeys({"type", "joints", "values"});
       const YamlValue t = n.required("type", "a fault type");
-      sim::FaultType type{};
+      systems::FaultType type{};
       try {
-        type = sim::faultTypeFromString(t.asString("a fault type"));
+        type = systems::faultTypeFromString(t.asString("a fault type"));
       } catch (const InputError& e) {
         t.fail(e.what());
       }
@@ -275,7 +284,7 @@ Sweep loadSweep(const std::string& path) {
         const std::string joint = joints.at(j).asString("a joint name");
         for (double v : values) {
           BatchRun r;
-          r.name = sanitize(std::string(sim::toString(type)) + "-" + joint + "-" + number(v));
+          r.name = sanitize(std::string(systems::toString(type)) + "-" + joint + "-" + number(v));
           r.faults.push_back({type, joint, v});
           add(std::move(r), n);
         }
@@ -305,12 +314,12 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
                                                                       "-of-" + std::to_string(options.shard_count) + ".csv"
                                                                 : std::string("manifest.csv")))
                           .string();
-  const std::string hash = experimentHash(sweep);
   std::vector<size_t> queue;
   for (size_t k = 0; k < mine.size(); ++k) {
     const BatchRun& run = sweep.runs[mine[k]];
     BatchRecord r = recordFromFolder(run, dir);
-    const bool same = slurpFile(fs::path(dir) / run.name / "run.settings") == settingsStamp(sweep, hash, run);
+    const bool same = slurpFile(fs::path(dir) / run.name / "run.settings") == settingsStamp(sweep, run) &&
+                      inputsUnchanged(readSummary(fs::path(dir) / run.name / "summary.json"));
     if (r.status == "ok" && same) {
       r.skipped = true;
       ++res.skipped;
@@ -345,7 +354,7 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
       std::error_code ec;
       for (const auto& e : fs::directory_iterator(folder, ec))
         if (e.path().extension() == ".csv" || e.path().filename() == "summary.json") fs::remove(e.path(), ec);
-      io::writeFileAtomically((fs::path(folder) / "run.settings").string(), settingsStamp(sweep, hash, run));
+      io::writeFileAtomically((fs::path(folder) / "run.settings").string(), settingsStamp(sweep, run));
       std::fflush(nullptr);
       const pid_t pid = ::fork();
       if (pid < 0) {

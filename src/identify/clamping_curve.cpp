@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/interpolate.hpp"
 #include "jointsim/io/csv_reader.hpp"
 
 namespace jointsim::identify {
@@ -58,16 +59,11 @@ Line fitLine(const Eigen::VectorXd& x, const Eigen::VectorXd& y, Eigen::Index fr
                  [&](size_t i) { return y[from + static_cast<Eigen::Index>(i)]; });
 }
 
-/// Linear interpolation in sorted x (clamped at the ends).
+/// Linear interpolation in sorted x (held at the ends).
 double interp(const Eigen::VectorXd& x, const Eigen::VectorXd& y, double at) {
-  const Eigen::Index n = x.size();
-  if (n == 1 || at <= x[0]) return y[0];
-  if (at >= x[n - 1]) return y[n - 1];
-  const double* begin = x.data();
-  const Eigen::Index k = std::upper_bound(begin, begin + n, at) - begin;  // x[k-1] <= at < x[k]
-  const double x0 = x[k - 1], x1 = x[k];
-  const double w = x1 > x0 ? (at - x0) / (x1 - x0) : 0.5;
-  return (1.0 - w) * y[k - 1] + w * y[k];
+  return interpolateLinear(
+      static_cast<size_t>(x.size()), [&x](size_t i) { return x[static_cast<Eigen::Index>(i)]; },
+      [&y](size_t i) { return y[static_cast<Eigen::Index>(i)]; }, at, Ends::Hold);
 }
 
 GridCurve sampleCurve(const GridCurve& c, double lo, double hi, int n) {
@@ -379,97 +375,89 @@ GridCurve foldCurve(const GridCurve& merged, double middle, const ClampingCurveO
   return f;
 }
 
-// ---------------------------------------------------------------------------------------------------- driver
+// ---------------------------------------------------------------------------------------------------- steps
+namespace {
 
-ClampingCurves preprocessClampingCurve(const ClampingData& data, const ClampingCurveOptions& o) {
-  o.validate();
-  data.validate();
-  const std::string src = where(data.source);
-  ClampingCurves r;
-  r.mean_position = data.angle.mean();
-  r.torque_half_span = 0.5 * (data.torque.maxCoeff() - data.torque.minCoeff());
-
-  // step 1
-  r.half_cycles = segmentHalfCycles(data.angle, o);
-  std::vector<HalfCycle>& hcs = r.half_cycles;
-  if (hcs.size() < 2)
-    throw InputError(src + ": found " + std::to_string(hcs.size()) +
-                     " half-cycle(s) (runs of one direction of motion), need at least 2: the motor angle must move "
-                     "back and forth as in a clamping experiment");
-
-  // stuck samples: the angle step on both sides is below the step-1 threshold (the motor does not move)
+/// Samples where the angle step on both sides is below the step-1 threshold (the motor does not move).
+std::vector<char> stuckSamples(const ClampingData& data, const ClampingCurveOptions& o) {
   std::vector<char> stuck(static_cast<size_t>(data.angle.size()), 0);
-  if (o.drop_stuck_points) {
-    const Eigen::Index n = data.angle.size();
-    const Eigen::VectorXd d = data.angle.tail(n - 1) - data.angle.head(n - 1);
-    const double thr = o.step_threshold_factor * d.cwiseAbs().mean();
-    auto still = [&](Eigen::Index k) { return k < 0 || k >= n - 1 || std::abs(d[k]) < thr; };
-    for (Eigen::Index k = 0; k < n; ++k) stuck[static_cast<size_t>(k)] = still(k - 1) && still(k);
-  }
+  if (!o.drop_stuck_points) return stuck;
+  const Eigen::Index n = data.angle.size();
+  const Eigen::VectorXd d = data.angle.tail(n - 1) - data.angle.head(n - 1);
+  const double thr = o.step_threshold_factor * d.cwiseAbs().mean();
+  auto still = [&](Eigen::Index k) { return k < 0 || k >= n - 1 || std::abs(d[k]) < thr; };
+  for (Eigen::Index k = 0; k < n; ++k) stuck[static_cast<size_t>(k)] = still(k - 1) && still(k);
+  return stuck;
+}
 
-  // step 2: per half-cycle cleaning
-  for (HalfCycle& h : hcs) {
-    std::vector<int> idx;
-    for (int k = h.first; k <= h.last; ++k)
-      if (!stuck[static_cast<size_t>(k)]) idx.push_back(k);
-    std::sort(idx.begin(), idx.end(), [&](int a, int b) { return data.angle[a] < data.angle[b]; });
-    const size_t cut = static_cast<size_t>(std::floor(o.extreme_fraction * static_cast<double>(idx.size())));
-    if (2 * cut < idx.size())
-      idx = std::vector<int>(idx.begin() + static_cast<long>(cut), idx.end() - static_cast<long>(cut));
-    if (!idx.empty()) {
-      const double lo = data.angle[idx.front()], hi = data.angle[idx.back()];
-      const double a = lo + o.end_trim_fraction * (hi - lo), b = hi - o.end_trim_fraction * (hi - lo);
-      std::vector<int> kept;
-      for (int k : idx)
-        if (data.angle[k] >= a && data.angle[k] <= b) kept.push_back(k);
-      idx.swap(kept);
-    }
-    if (idx.size() >= 3) {
-      auto line = [&](const std::vector<int>& v) {
-        return fitLine(v.size(), [&](size_t i) { return data.angle[v[i]]; },
-                       [&](size_t i) { return data.torque[v[i]]; });
-      };
-      const Line l = line(idx);
-      double ss = 0;
-      for (int k : idx) ss += std::pow(data.torque[k] - l(data.angle[k]), 2);
-      const double sigma = std::sqrt(ss / static_cast<double>(idx.size()));
-      std::vector<int> kept;
-      for (int k : idx)
-        if (std::abs(data.torque[k] - l(data.angle[k])) <= o.point_kappa * sigma) kept.push_back(k);
-      idx.swap(kept);
-    }
-    if (static_cast<int>(idx.size()) < o.min_points) {
+/// Step 2: cleans one half-cycle (drops stuck samples, the extreme angles, the turning ends, points off its LS
+/// line) and sets its line; rejects it when too few points are left.
+void cleanHalfCycle(HalfCycle& h, const ClampingData& data, const std::vector<char>& stuck, double mean_position,
+                    const ClampingCurveOptions& o) {
+  std::vector<int> idx;
+  for (int k = h.first; k <= h.last; ++k)
+    if (!stuck[static_cast<size_t>(k)]) idx.push_back(k);
+  std::sort(idx.begin(), idx.end(), [&](int a, int b) { return data.angle[a] < data.angle[b]; });
+  const size_t cut = static_cast<size_t>(std::floor(o.extreme_fraction * static_cast<double>(idx.size())));
+  if (2 * cut < idx.size()) idx = std::vector<int>(idx.begin() + static_cast<long>(cut), idx.end() - static_cast<long>(cut));
+  if (!idx.empty()) {
+    const double lo = data.angle[idx.front()], hi = data.angle[idx.back()];
+    const double a = lo + o.end_trim_fraction * (hi - lo), b = hi - o.end_trim_fraction * (hi - lo);
+    std::vector<int> kept;
+    for (int k : idx)
+      if (data.angle[k] >= a && data.angle[k] <= b) kept.push_back(k);
+    idx.swap(kept);
+  }
+  auto line = [&](const std::vector<int>& v) {
+    return fitLine(v.size(), [&](size_t i) { return data.angle[v[i]]; }, [&](size_t i) { return data.torque[v[i]]; });
+  };
+  if (idx.size() >= 3) {
+    const Line l = line(idx);
+    double ss = 0;
+    for (int k : idx) ss += std::pow(data.torque[k] - l(data.angle[k]), 2);
+    const double sigma = std::sqrt(ss / static_cast<double>(idx.size()));
+    std::vector<int> kept;
+    for (int k : idx)
+      if (std::abs(data.torque[k] - l(data.angle[k])) <= o.point_kappa * sigma) kept.push_back(k);
+    idx.swap(kept);
+  }
+  if (static_cast<int>(idx.size()) < o.min_points) {
+    h.rejected = true;
+    h.reason = "cleaning: " + std::to_string(idx.size()) + " points left, need " + std::to_string(o.min_points);
+    return;
+  }
+  std::sort(idx.begin(), idx.end());  // sample order
+  h.kept = idx;
+  const Line l = line(idx);
+  h.slope = l.slope;
+  h.rep_torque = l(mean_position);
+}
+
+/// Steps 3–5: half-cycle outliers among all, classification into upper and lower curve (the direction must
+/// match the side friction pushes it to), outliers per curve.
+void classifyHalfCycles(std::vector<HalfCycle>& hcs, const ClampingCurveOptions& o, double torque_half_span) {
+  rejectOutlierHalfCycles(hcs, active(hcs, -1), o, torque_half_span, "step 3 (all half-cycles)");
+  const std::vector<int> act = active(hcs, -1);
+  double mean_rep = 0;
+  for (int i : act) mean_rep += hcs[i].rep_torque;
+  if (!act.empty()) mean_rep /= static_cast<double>(act.size());
+  for (int i : act) {
+    HalfCycle& h = hcs[i];
+    h.upper = h.rep_torque > mean_rep;
+    if ((h.direction > 0) != h.upper) {
       h.rejected = true;
-      h.reason = "cleaning: " + std::to_string(idx.size()) + " points left, need " + std::to_string(o.min_points);
-      continue;
+      h.reason = std::string("step 4: classified ") + (h.upper ? "upper" : "lower") + " but the angle " +
+                 (h.direction > 0 ? "increases" : "decreases") + " (friction would act the other way)";
     }
-    std::sort(idx.begin(), idx.end());  // sample order
-    h.kept = idx;
-    const Line l = fitLine(idx.size(), [&](size_t i) { return data.angle[idx[i]]; },
-                           [&](size_t i) { return data.torque[idx[i]]; });
-    h.slope = l.slope;
-    h.rep_torque = l(r.mean_position);
   }
+  rejectOutlierHalfCycles(hcs, active(hcs, 1), o, torque_half_span, "step 5 (upper curve)");
+  rejectOutlierHalfCycles(hcs, active(hcs, 0), o, torque_half_span, "step 5 (lower curve)");
+}
 
-  // step 3: half-cycle outliers among all; step 4: upper/lower; step 5: outliers per group
-  rejectOutlierHalfCycles(hcs, active(hcs, -1), o, r.torque_half_span, "step 3 (all half-cycles)");
-  {
-    const std::vector<int> act = active(hcs, -1);
-    double mean_rep = 0;
-    for (int i : act) mean_rep += hcs[i].rep_torque;
-    if (!act.empty()) mean_rep /= static_cast<double>(act.size());
-    for (int i : act) {
-      HalfCycle& h = hcs[i];
-      h.upper = h.rep_torque > mean_rep;
-      if ((h.direction > 0) != h.upper) {
-        h.rejected = true;
-        h.reason = std::string("step 4: classified ") + (h.upper ? "upper" : "lower") + " but the angle " +
-                   (h.direction > 0 ? "increases" : "decreases") + " (friction would act the other way)";
-      }
-    }
-  }
-  rejectOutlierHalfCycles(hcs, active(hcs, 1), o, r.torque_half_span, "step 5 (upper curve)");
-  rejectOutlierHalfCycles(hcs, active(hcs, 0), o, r.torque_half_span, "step 5 (lower curve)");
+/// After step 5: counts the half-cycles per curve and refuses data that cannot identify (too many rejected, a
+/// curve without half-cycles, a falling torque).
+void requireUsableHalfCycles(ClampingCurves& r, const ClampingCurveOptions& o) {
+  const std::vector<HalfCycle>& hcs = r.half_cycles;
   const std::vector<int> up = active(hcs, 1), lo = active(hcs, 0);
   r.used_upper = static_cast<int>(up.size());
   r.used_lower = static_cast<int>(lo.size());
@@ -488,130 +476,158 @@ ClampingCurves preprocessClampingCurve(const ClampingData& data, const ClampingC
   if (up.empty() || lo.empty())
     throw UnidentifiableError(std::string("friction: no ") + (up.empty() ? "upper (loading)" : "lower (unloading)") +
                               " half-cycle left, the branch distance is unobservable" + reasons());
-  {
-    double ms = 0;
-    for (int i : up) ms += hcs[i].slope;
-    for (int i : lo) ms += hcs[i].slope;
-    if (!(ms > 0))
-      throw UnidentifiableError("stiffness: the torque decreases with the angle (mean half-cycle slope " +
-                                num(ms / static_cast<double>(up.size() + lo.size())) +
-                                " N*m/rad); check the sign conventions of the angle and torque columns");
-  }
+  double ms = 0;
+  for (int i : up) ms += hcs[i].slope;
+  for (int i : lo) ms += hcs[i].slope;
+  if (!(ms > 0))
+    throw UnidentifiableError("stiffness: the torque decreases with the angle (mean half-cycle slope " +
+                              num(ms / static_cast<double>(up.size() + lo.size())) +
+                              " N*m/rad); check the sign conventions of the angle and torque columns");
+}
 
-  // step 6: merge each group onto a grid
-  auto groupCurve = [&](const std::vector<int>& g_all) {
-    // Leave partial half-cycles out: they would lower the coverage of the central interval.
-    double longest = 0;
-    auto span = [&](int i) {
-      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-      for (int k : hcs[i].kept) lo = std::min(lo, data.angle[k]), hi = std::max(hi, data.angle[k]);
-      return hcs[i].kept.empty() ? 0.0 : hi - lo;
-    };
-    for (int i : g_all) longest = std::max(longest, span(i));
-    std::vector<int> g;
-    for (int i : g_all)
-      if (span(i) >= o.min_span_fraction * longest) g.push_back(i);
-    std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>> curves;
-    for (int i : g) {
-      std::vector<int> v = hcs[i].kept;
-      std::sort(v.begin(), v.end(), [&](int a, int b) { return data.angle[a] < data.angle[b]; });
-      Eigen::VectorXd x(static_cast<Eigen::Index>(v.size())), t(static_cast<Eigen::Index>(v.size()));
-      for (size_t k = 0; k < v.size(); ++k) {
-        x[static_cast<Eigen::Index>(k)] = data.angle[v[k]];
-        t[static_cast<Eigen::Index>(k)] = data.torque[v[k]];
-      }
-      curves.emplace_back(x, t);
-    }
-    const double need = o.coverage_fraction * static_cast<double>(g.size());
-    const int cover = std::max(1, static_cast<int>(std::ceil(need - 1e-9)));
-    return mergeCurves(curves, cover, o.grid_points);
+/// Step 6: merges the kept points of one curve's half-cycles onto a grid (partial half-cycles left out: they
+/// would lower the coverage of the central interval).
+GridCurve mergeGroup(const std::vector<HalfCycle>& hcs, const std::vector<int>& g_all, const ClampingData& data,
+                     const ClampingCurveOptions& o) {
+  double longest = 0;
+  auto span = [&](int i) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int k : hcs[i].kept) lo = std::min(lo, data.angle[k]), hi = std::max(hi, data.angle[k]);
+    return hcs[i].kept.empty() ? 0.0 : hi - lo;
   };
-  r.upper = groupCurve(up);
-  r.lower = groupCurve(lo);
-  if (r.upper.empty() || r.lower.empty())
-    throw UnidentifiableError("clamping curve: the half-cycles of the " +
-                              std::string(r.upper.empty() ? "upper" : "lower") +
-                              " curve do not cover a common position interval");
+  for (int i : g_all) longest = std::max(longest, span(i));
+  std::vector<int> g;
+  for (int i : g_all)
+    if (span(i) >= o.min_span_fraction * longest) g.push_back(i);
+  std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>> curves;
+  for (int i : g) {
+    std::vector<int> v = hcs[i].kept;
+    std::sort(v.begin(), v.end(), [&](int a, int b) { return data.angle[a] < data.angle[b]; });
+    Eigen::VectorXd x(static_cast<Eigen::Index>(v.size())), t(static_cast<Eigen::Index>(v.size()));
+    for (size_t k = 0; k < v.size(); ++k) {
+      x[static_cast<Eigen::Index>(k)] = data.angle[v[k]];
+      t[static_cast<Eigen::Index>(k)] = data.torque[v[k]];
+    }
+    curves.emplace_back(x, t);
+  }
+  const double need = o.coverage_fraction * static_cast<double>(g.size());
+  const int cover = std::max(1, static_cast<int>(std::ceil(need - 1e-9)));
+  return mergeCurves(curves, cover, o.grid_points);
+}
 
-  // step 7: friction = half the mean distance of the curves over their common interval
+/// Step 7: the friction is half the mean distance of the upper and lower curves over their common interval;
+/// returns both sampled there.
+std::pair<GridCurve, GridCurve> estimateFriction(ClampingCurves& r, const ClampingCurveOptions& o) {
   const double c_lo = std::max(r.upper.x[0], r.lower.x[0]);
   const double c_hi = std::min(r.upper.x[r.upper.x.size() - 1], r.lower.x[r.lower.x.size() - 1]);
-  if (!(c_hi > c_lo))
-    throw UnidentifiableError("friction: the upper and lower curves do not overlap in position");
-  const GridCurve u = sampleCurve(r.upper, c_lo, c_hi, o.grid_points);
-  const GridCurve l = sampleCurve(r.lower, c_lo, c_hi, o.grid_points);
+  if (!(c_hi > c_lo)) throw UnidentifiableError("friction: the upper and lower curves do not overlap in position");
+  GridCurve u = sampleCurve(r.upper, c_lo, c_hi, o.grid_points);
+  GridCurve l = sampleCurve(r.lower, c_lo, c_hi, o.grid_points);
   r.friction = 0.5 * (u.tau - l.tau).mean();
+  return {u, l};
+}
 
-  // observability of the backlash: the mid-line (upper + lower)/2 = EB(x) must take both signs
-  {
-    const Eigen::VectorXd mid = 0.5 * (u.tau + l.tau);
-    const double big = mid.cwiseAbs().maxCoeff();
-    int neg = 0, pos = 0;
-    for (Eigen::Index i = 0; i < mid.size(); ++i) {
-      if (mid[i] < -o.zero_margin * big) ++neg;
-      if (mid[i] > o.zero_margin * big) ++pos;
-    }
-    const double need = o.min_side_fraction * static_cast<double>(mid.size());
-    r.crosses_zero = neg >= need && pos >= need && big > 0;
-    if (!r.crosses_zero) {
-      // no gap traversal: stiffness from the mid-line, centre where it crosses zero (extrapolated)
-      GridCurve m{u.x, mid};
-      const Line lin = fitLine(m.x, m.tau);
-      r.stiffness = lin.slope;
-      if (!(r.stiffness > 0))
-        throw UnidentifiableError("stiffness: the clamping curve's mid-line has slope " + num(r.stiffness) +
-                                  " N*m/rad (not positive)");
-      r.center = lin.x_mean - lin.intercept / lin.slope;
-      r.backlash = 0.0;
-      return r;
-    }
+/// Observability of the backlash: the mid-line (upper + lower)/2 = EB(x) must take both signs. When it does
+/// not (no traversal of the gap), sets the stiffness from the mid-line and the centre where it crosses zero
+/// (extrapolated), backlash 0, and returns false.
+bool backlashObservable(ClampingCurves& r, const GridCurve& u, const GridCurve& l, const ClampingCurveOptions& o) {
+  const Eigen::VectorXd mid = 0.5 * (u.tau + l.tau);
+  const double big = mid.cwiseAbs().maxCoeff();
+  int neg = 0, pos = 0;
+  for (Eigen::Index i = 0; i < mid.size(); ++i) {
+    if (mid[i] < -o.zero_margin * big) ++neg;
+    if (mid[i] > o.zero_margin * big) ++pos;
   }
+  const double need = o.min_side_fraction * static_cast<double>(mid.size());
+  r.crosses_zero = neg >= need && pos >= need && big > 0;
+  if (r.crosses_zero) return true;
+  const GridCurve m{u.x, mid};
+  const Line lin = fitLine(m.x, m.tau);
+  r.stiffness = lin.slope;
+  if (!(r.stiffness > 0))
+    throw UnidentifiableError("stiffness: the clamping curve's mid-line has slope " + num(r.stiffness) +
+                              " N*m/rad (not positive)");
+  r.center = lin.x_mean - lin.intercept / lin.slope;
+  r.backlash = 0.0;
+  return false;
+}
 
-  // step 8: backlash interval per curve
-  auto flatMiddle = [&](const GridCurve& c, double level, double& length) {
-    const Eigen::VectorXd s = localSlope(c, slopeWindow(c, o));
-    const double thr = o.slope_threshold * fitLine(c.x, c.tau).slope;
-    const auto run = longestFlatRun(s, thr);
-    if (run.first >= 0) {
-      length = c.x[run.second] - c.x[run.first];
-      return 0.5 * (c.x[run.first] + c.x[run.second]);
-    }
-    length = 0.0;
-    Eigen::Index best = 0;
-    (c.tau.array() - level).abs().minCoeff(&best);
-    return c.x[best];
-  };
-  const double mid_u = flatMiddle(r.upper, r.friction, r.backlash_upper);
-  const double mid_l = flatMiddle(r.lower, -r.friction, r.backlash_lower);
+/// Step 8: the middle of a curve's backlash (low-slope) interval and its length; without one, the position
+/// where the curve is closest to `level`.
+double flatMiddle(const GridCurve& c, double level, double& length, const ClampingCurveOptions& o) {
+  const Eigen::VectorXd s = localSlope(c, slopeWindow(c, o));
+  const double thr = o.slope_threshold * fitLine(c.x, c.tau).slope;
+  const auto run = longestFlatRun(s, thr);
+  if (run.first >= 0) {
+    length = c.x[run.second] - c.x[run.first];
+    return 0.5 * (c.x[run.first] + c.x[run.second]);
+  }
+  length = 0.0;
+  Eigen::Index best = 0;
+  (c.tau.array() - level).abs().minCoeff(&best);
+  return c.x[best];
+}
 
-  // step 9: shift the lower curve horizontally (backlash middles coincide) and up (mean distance), merge
+/// Step 9: shifts the lower curve horizontally (backlash middles coincide) and up (mean distance) and merges it
+/// with the upper curve.
+GridCurve alignAndMerge(const ClampingCurves& r, double mid_u, double mid_l, const ClampingCurveOptions& o) {
   GridCurve lower_shifted = r.lower;
   lower_shifted.x.array() += mid_u - mid_l;
-  {
-    const double a = std::max(r.upper.x[0], lower_shifted.x[0]);
-    const double b = std::min(r.upper.x[r.upper.x.size() - 1], lower_shifted.x[lower_shifted.x.size() - 1]);
-    if (!(b > a)) throw UnidentifiableError("friction: the aligned upper and lower curves do not overlap");
-    const GridCurve us = sampleCurve(r.upper, a, b, o.grid_points);
-    const GridCurve ls = sampleCurve(lower_shifted, a, b, o.grid_points);
-    lower_shifted.tau.array() += (us.tau - ls.tau).mean();
-  }
-  r.merged = mergeCurves({{r.upper.x, r.upper.tau}, {lower_shifted.x, lower_shifted.tau}}, 1, o.grid_points);
+  const double a = std::max(r.upper.x[0], lower_shifted.x[0]);
+  const double b = std::min(r.upper.x[r.upper.x.size() - 1], lower_shifted.x[lower_shifted.x.size() - 1]);
+  if (!(b > a)) throw UnidentifiableError("friction: the aligned upper and lower curves do not overlap");
+  const GridCurve us = sampleCurve(r.upper, a, b, o.grid_points);
+  const GridCurve ls = sampleCurve(lower_shifted, a, b, o.grid_points);
+  lower_shifted.tau.array() += (us.tau - ls.tau).mean();
+  return mergeCurves({{r.upper.x, r.upper.tau}, {lower_shifted.x, lower_shifted.tau}}, 1, o.grid_points);
+}
 
-  // step 10: middle of the merged curve, fold; step 11: backlash and stiffness
+/// Steps 10–11: fold the merged curve about its middle; the backlash is twice the x-intercept of the fold's
+/// linear part (the flat length of the fold is half the total backlash, our reading of [KR300Thesis, §4.3,
+/// Algorithm II step 11]; the derivative window biases the threshold crossing, the intercept is the kink itself).
+void foldAndMeasure(ClampingCurves& r, const ClampingCurveOptions& o) {
   double unused = 0;
-  r.center = flatMiddle(r.merged, r.friction, unused);
+  r.center = flatMiddle(r.merged, r.friction, unused, o);
   r.folded = foldCurve(r.merged, r.center, o, r.fold_flat, r.stiffness);
-  // The flat length of the fold is half the total backlash (§8 B-5). The derivative window biases the
-  // threshold crossing; the x-intercept of the linear part's LS line is the kink itself.
-  {
-    const Eigen::Index nj = r.folded.x.size();
-    const int window = std::max(3, static_cast<int>(std::lround(o.slope_window_fraction * 2.0 * (nj - 1))));
-    const Eigen::Index k = static_cast<Eigen::Index>(std::lround(r.fold_flat / (r.folded.x[1] - r.folded.x[0])));
-    const Eigen::Index start = std::min<Eigen::Index>(nj - 2, k + window / 2);
-    const Line lin = fitLine(r.folded.x, r.folded.tau, start, nj - 1);
-    const double x0 = lin.x_mean - lin.intercept / lin.slope;
-    r.backlash = std::max(0.0, 2.0 * x0);
-  }
+  const Eigen::Index nj = r.folded.x.size();
+  const int window = std::max(3, static_cast<int>(std::lround(o.slope_window_fraction * 2.0 * (nj - 1))));
+  const Eigen::Index k = static_cast<Eigen::Index>(std::lround(r.fold_flat / (r.folded.x[1] - r.folded.x[0])));
+  const Eigen::Index start = std::min<Eigen::Index>(nj - 2, k + window / 2);
+  const Line lin = fitLine(r.folded.x, r.folded.tau, start, nj - 1);
+  const double x0 = lin.x_mean - lin.intercept / lin.slope;
+  r.backlash = std::max(0.0, 2.0 * x0);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------- driver
+
+ClampingCurves preprocessClampingCurve(const ClampingData& data, const ClampingCurveOptions& o) {
+  o.validate();
+  data.validate();
+  ClampingCurves r;
+  r.mean_position = data.angle.mean();
+  r.torque_half_span = 0.5 * (data.torque.maxCoeff() - data.torque.minCoeff());
+  r.half_cycles = segmentHalfCycles(data.angle, o);  // step 1
+  if (r.half_cycles.size() < 2)
+    throw InputError(where(data.source) + ": found " + std::to_string(r.half_cycles.size()) +
+                     " half-cycle(s) (runs of one direction of motion), need at least 2: the motor angle must move "
+                     "back and forth as in a clamping experiment");
+  const std::vector<char> stuck = stuckSamples(data, o);
+  for (HalfCycle& h : r.half_cycles) cleanHalfCycle(h, data, stuck, r.mean_position, o);  // step 2
+  classifyHalfCycles(r.half_cycles, o, r.torque_half_span);                              // steps 3–5
+  requireUsableHalfCycles(r, o);
+  r.upper = mergeGroup(r.half_cycles, active(r.half_cycles, 1), data, o);  // step 6
+  r.lower = mergeGroup(r.half_cycles, active(r.half_cycles, 0), data, o);
+  if (r.upper.empty() || r.lower.empty())
+    throw UnidentifiableError("clamping curve: the half-cycles of the " + std::string(r.upper.empty() ? "upper" : "lower") +
+                              " curve do not cover a common position interval");
+  const auto [u, l] = estimateFriction(r, o);  // step 7
+  if (!backlashObservable(r, u, l, o)) return r;
+  const double mid_u = flatMiddle(r.upper, r.friction, r.backlash_upper, o);  // step 8
+  const double mid_l = flatMiddle(r.lower, -r.friction, r.backlash_lower, o);
+  r.merged = alignAndMerge(r, mid_u, mid_l, o);  // step 9
+  foldAndMeasure(r, o);                          // steps 10–11
   return r;
 }
 

@@ -15,7 +15,8 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/transmissions.hpp"
-#include "jointsim/experiments/joint_rig.hpp"
+#include "jointsim/common/interpolate.hpp"
+#include "jointsim/systems/joint_rig.hpp"
 
 namespace jointsim::identify {
 
@@ -50,7 +51,7 @@ struct PointResidual {
 
 /// RMS angle error of the dynamic 1-D model (joint rig, clamped, measured torque as input) [rad].
 double validationAngleRms(const ClampingData& data, const ClampingFitResult& r, const ClampingFitOptions& o) {
-  experiments::JointRigSetup s;
+  systems::JointRigSetup s;
   s.name = "clamping_validation";
   s.rotor_inertia = o.rotor_inertia;
   drive::ElastoBacklashParams eb;
@@ -63,7 +64,7 @@ double validationAngleRms(const ClampingData& data, const ClampingFitResult& r, 
   fp.tau_pos = {{{0.0, std::max(0.0, r.friction.value)}}, {{1.0, std::max(0.0, r.friction.value) + kv}}};
   s.friction = std::make_shared<drive::TableFriction>(fp);
   s.clamped = true;
-  s.input = experiments::RigInput::MotorTorque;
+  s.input = systems::RigInput::MotorTorque;
   const Eigen::Index n = data.time.size();
   const double t0 = data.time[0];
   std::vector<double> times(static_cast<size_t>(n)), values(static_cast<size_t>(n));
@@ -75,23 +76,14 @@ double validationAngleRms(const ClampingData& data, const ClampingFitResult& r, 
   s.q_m0 = data.angle[0] - r.center.value;
   s.duration = data.time[n - 1] - t0;
   s.log_rate = static_cast<double>(n - 1) / s.duration;
-  const experiments::JointRig rig(s);
-  const int qi = rig.column("motor_angle");
-  std::vector<double> ts, qs;
-  experiments::simulateJointRig(rig, [&](const Eigen::VectorXd& row) {
-    ts.push_back(row[0]);
-    qs.push_back(row[qi]);
-  });
+  systems::JointRig rig(s);
+  const sim::SignalTable log = sim::simulateTable(rig, rig.simulateOptions());
+  const Eigen::VectorXd ts = log["time"], qs = log["motor_angle"];
   double ss = 0;
-  size_t j = 0;
   for (Eigen::Index k = 0; k < n; ++k) {
-    const double t = data.time[k] - t0;
-    while (j + 2 < ts.size() && ts[j + 1] < t) ++j;
-    double q = qs[j];
-    if (j + 1 < ts.size() && ts[j + 1] > ts[j]) {
-      const double w = std::clamp((t - ts[j]) / (ts[j + 1] - ts[j]), 0.0, 1.0);
-      q = (1 - w) * qs[j] + w * qs[j + 1];
-    }
+    const double q = interpolateLinear(
+        static_cast<size_t>(ts.size()), [&](size_t i) { return ts[static_cast<Eigen::Index>(i)]; },
+        [&](size_t i) { return qs[static_cast<Eigen::Index>(i)]; }, data.time[k] - t0, Ends::Hold);
     ss += std::pow(q + r.center.value - data.angle[k], 2);
   }
   return std::sqrt(ss / static_cast<double>(n));

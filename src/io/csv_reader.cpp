@@ -2,32 +2,43 @@
 
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <sstream>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
+#include "jointsim/io/input_files.hpp"
 
 namespace jointsim::io {
 namespace {
-std::string trim(std::string s) {
-  s.erase(0, s.find_first_not_of(" \t\r"));
-  const size_t last = s.find_last_not_of(" \t\r");
-  s.erase(last == std::string::npos ? 0 : last + 1);
-  return s;
-}
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> cells;
-  std::stringstream ss(line);
-  for (std::string cell; std::getline(ss, cell, ',');) cells.push_back(trim(cell));
-  if (!line.empty() && line.back() == ',') cells.emplace_back();
+
+/// One record with RFC 4180 quoting; unquoted cells are trimmed.
+std::vector<std::string> splitRecord(const std::string& line) {
+  std::vector<std::string> cells(1);
+  bool quoted = false, was_quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') cells.back() += '"', ++i;
+      else if (c == '"') quoted = false;
+      else cells.back() += c;
+    } else if (c == '"' && trim(cells.back()).empty()) {
+      quoted = was_quoted = true;
+      cells.back().clear();
+    } else if (c == ',') {
+      if (!was_quoted) cells.back() = trim(cells.back());
+      cells.emplace_back();
+      was_quoted = false;
+    } else if (c != '\r' && !(was_quoted && (c == ' ' || c == '\t'))) {
+      cells.back() += c;
+    }
+  }
+  if (!was_quoted) cells.back() = trim(cells.back());
   return cells;
 }
-}  // namespace
 
-std::string columnBaseName(const std::string& header) {
-  const size_t br = header.find('[');
-  return trim(br == std::string::npos ? header : header.substr(0, br));
-}
+std::string location(const std::string& path, int line) { return path + ":" + std::to_string(line); }
+
+}  // namespace
 
 int CsvTable::find(const std::string& name) const {
   for (size_t i = 0; i < header.size(); ++i)
@@ -41,53 +52,62 @@ int CsvTable::find(const std::string& name) const {
 int CsvTable::require(const std::string& name, const std::string& what) const {
   const int i = find(name);
   if (i >= 0) return i;
-  std::string cols;
-  for (const auto& h : header) cols += (cols.empty() ? "" : ", ") + h;
-  throw InputError(path + ":1: missing column '" + name + "' (expected " + what + "; the columns are: " + cols + ")");
+  throw InputError(path + ":1: missing column '" + name + "' (expected " + what + "; the columns are: " + join(header, ", ") + ")");
 }
 
-CsvTable readCsv(const std::string& path, bool require_finite) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open CSV file for reading");
-  CsvTable t;
+std::string CsvTable::where(Eigen::Index r, int c) const {
+  return location(path, lines[static_cast<size_t>(r)]) + ":" + std::to_string(c + 1);
+}
+
+CsvText readCsvText(const std::string& path) {
+  std::istringstream in(readInputFile(path, "CSV file"));
+  CsvText t;
   t.path = path;
   std::string line;
   int line_no = 0;
-  std::vector<double> values;
   while (std::getline(in, line)) {
     ++line_no;
     const std::string s = trim(line);
     if (s.empty() || s[0] == '#') continue;
+    std::vector<std::string> cells = splitRecord(s);
     if (t.header.empty()) {
-      t.header = split(s);
-      for (size_t i = 0; i < t.header.size(); ++i)
-        if (t.header[i].empty())
-          throw InputError(path + ":" + std::to_string(line_no) + ": empty column name in the header (column " +
-                           std::to_string(i + 1) + ")");
+      for (size_t i = 0; i < cells.size(); ++i)
+        if (cells[i].empty())
+          throw InputError(location(path, line_no) + ": empty column name in the header (column " + std::to_string(i + 1) + ")");
+      t.header = std::move(cells);
       continue;
     }
-    const auto cells = split(s);
     if (cells.size() != t.header.size())
-      throw InputError(path + ":" + std::to_string(line_no) + ": expected " + std::to_string(t.header.size()) +
+      throw InputError(location(path, line_no) + ": expected " + std::to_string(t.header.size()) +
                        " cells as in the header, got " + std::to_string(cells.size()));
-    for (size_t c = 0; c < cells.size(); ++c) {
-      char* end = nullptr;
-      const double x = std::strtod(cells[c].c_str(), &end);
-      if (cells[c].empty() || end == cells[c].c_str() || *end != '\0')
-        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + t.header[c] +
-                         "': expected a number, got '" + cells[c] + "'");
-      if (require_finite && !std::isfinite(x))
-        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + t.header[c] +
-                         "': expected a finite number, got '" + cells[c] + "'");
-      values.push_back(x);
-    }
+    t.rows.push_back(std::move(cells));
     t.lines.push_back(line_no);
   }
   if (t.header.empty()) throw InputError(path + ": empty CSV file, expected a header line of column names");
-  const Eigen::Index cols = static_cast<Eigen::Index>(t.header.size());
-  const Eigen::Index rows = static_cast<Eigen::Index>(t.lines.size());
-  t.data = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(values.data(), rows,
-                                                                                                     cols);
+  return t;
+}
+
+CsvTable readCsv(const std::string& path, bool require_finite) {
+  CsvText text = readCsvText(path);
+  CsvTable t;
+  t.path = path;
+  t.header = std::move(text.header);
+  t.lines = std::move(text.lines);
+  const auto cols = static_cast<Eigen::Index>(t.header.size());
+  t.data.resize(static_cast<Eigen::Index>(text.rows.size()), cols);
+  for (size_t r = 0; r < text.rows.size(); ++r) {
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      const std::string& cell = text.rows[r][static_cast<size_t>(c)];
+      char* end = nullptr;
+      const double x = std::strtod(cell.c_str(), &end);
+      const std::string where = location(path, t.lines[r]) + ":" + std::to_string(c + 1) + ": column '" +
+                                t.header[static_cast<size_t>(c)] + "': ";
+      if (cell.empty() || end == cell.c_str() || *end != '\0')
+        throw InputError(where + "expected a number, got '" + cell + "'");
+      if (require_finite && !std::isfinite(x)) throw InputError(where + "expected a finite number, got '" + cell + "'");
+      t.data(static_cast<Eigen::Index>(r), c) = x;
+    }
+  }
   return t;
 }
 

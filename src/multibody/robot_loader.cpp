@@ -9,7 +9,8 @@
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
-#include "io/yaml_reader.hpp"
+#include "jointsim/io/input_files.hpp"
+#include "jointsim/io/yaml.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::multibody {
@@ -341,13 +342,7 @@ Model loadUrdfString(const std::string& xml, const std::string& name) {
   }
 }
 
-Model loadUrdf(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open file for reading");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return loadUrdfString(ss.str(), path);
-}
+Model loadUrdf(const std::string& path) { return loadUrdfString(io::readInputFile(path, "URDF file"), path); }
 
 Model loadRobotYamlString(const std::string& text, const std::string& name) {
   return buildFromYaml(YamlValue::loadString(text, name));

@@ -73,7 +73,8 @@ std::map<std::string, std::string> manifest(const fs::path& p) {
   std::ifstream in(p);
   std::string line;
   std::getline(in, line);
-  EXPECT_EQ(line, "run,status,wall_time_s,sim_time_s,real_time_factor,output_dir,overrides");
+  EXPECT_EQ(line, "run,status,wall_time_s,sim_time_s,real_time_factor,output_dir,overrides,jointsim_version,git_commit,"
+                  "started_utc,inputs");
   std::map<std::string, std::string> rows;
   while (std::getline(in, line)) {
     const size_t a = line.find(','), b = line.find(',', a + 1);
@@ -249,5 +250,42 @@ TEST(CliBatch, ResumeReusesOnlyRunsWhoseSettingsAreUnchanged) {
   EXPECT_THAT(r.out, HasSubstr("3 ok"));
   EXPECT_THAT(r.out, HasSubstr("0 skipped"));
   EXPECT_THAT(slurp(out / "grid-duration_0.1" / "summary.json"), HasSubstr("\"log_rate\": 100"));
+  fs::remove_all(dir);
+}
+
+TEST(CliBatch, EditedRobotFileRecomputesTheRunsThatReadIt) {
+  // Resume compares the content hash of every file a finished run read (summary.json "inputs") with the file
+  // now: editing the robot file recomputes the runs; an unrelated edit does not.
+  const fs::path dir = freshDir("inputs");
+  const fs::path out = dir / "out";
+  fs::create_directories(dir / "experiments");
+  fs::create_directories(dir / "robots");
+  fs::copy_file(jointsim::test::sourcePath("config/experiments/ur5_fall.yaml"), dir / "experiments" / "ur5_fall.yaml");
+  fs::copy_file(jointsim::test::sourcePath("config/robots/ur5.yaml"), dir / "robots" / "ur5.yaml");
+  std::ofstream(dir / "grid.yaml") << "sweep:\n  name: g\n  experiment: experiments/ur5_fall.yaml\n"
+                                   << "  set: {log_rate: 50}\ngrid:\n  duration: [0.1, 0.2]\n";
+  const std::string args = "batch " + (dir / "grid.yaml").string() + " -o " + out.string();
+  Result r = run(args, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("2 ok"));
+  const std::string summary = slurp(out / "grid-duration_0.1" / "summary.json");
+  EXPECT_THAT(summary, HasSubstr("robots/ur5.yaml"));
+  EXPECT_THAT(summary, HasSubstr("\"hash\": \"xxh3:"));
+  EXPECT_THAT(slurp(out / "manifest.csv"), HasSubstr("ur5.yaml=xxh3:"));
+  // Unchanged inputs (and an unrelated new file): both runs are reused.
+  std::ofstream(dir / "robots" / "unrelated.yaml") << "name: x\n";
+  r = run(args, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("2 skipped"));
+  // The robot file changes (a comment only, but its bytes change): both runs are recomputed.
+  std::ofstream(dir / "robots" / "ur5.yaml", std::ios::app) << "# edited\n";
+  r = run(args, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("2 ok"));
+  EXPECT_THAT(r.out, HasSubstr("0 skipped"));
+  EXPECT_NE(slurp(out / "grid-duration_0.1" / "summary.json"), summary);
+  // And reused again once the results match the edited file.
+  r = run(args, dir);
+  EXPECT_THAT(r.out, HasSubstr("2 skipped"));
   fs::remove_all(dir);
 }

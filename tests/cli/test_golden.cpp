@@ -21,7 +21,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "jointsim/io/compare.hpp"
+#include "jointsim/report/compare.hpp"
 #include "test_util.hpp"
 
 using ::testing::HasSubstr;
@@ -163,10 +163,10 @@ TEST(Golden, CatchesOnePercentStiffnessChangeOnKr300ClampingRig) {
   EXPECT_THAT(r.err, HasSubstr("motor_angle[rad]"));
   EXPECT_THAT(r.out, ::testing::ContainsRegex("motor_angle\\[rad\\] .* FAIL"));
   // With margin: the deflection changes by about 1 % of the motor angle, ~100 × the tolerance.
-  jointsim::io::CompareOptions o;
+  jointsim::report::CompareOptions o;
   o.rtol = std::stod(c.rtol);
   o.atol = std::stod(c.atol);
-  const auto result = jointsim::io::compareCsvFiles(sourcePath("tests/golden/" + c.name + ".csv"), log, o);
+  const auto result = jointsim::report::compareCsvFiles(sourcePath("tests/golden/" + c.name + ".csv"), log, o);
   for (const auto& col : result.columns) {
     if (col.name == "motor_angle[rad]") {
       EXPECT_GT(col.max_deviation, 20.0 * col.tolerance);

@@ -1,4 +1,4 @@
-// `jointsim plot` (io::plotRun): for a short run of every shipped experiment type, the expected figures exist
+// `jointsim plot` (report::plotRun): for a short run of every shipped experiment type, the expected figures exist
 // and are valid PNGs of the requested size (SVGs with --svg); sweep folders (manifest.csv), the generic
 // fallback, atomic output and the errors (missing folder, no CSV, gnuplot not found: InputError, exit 2).
 // Needs gnuplot (Debian gnuplot-nox, installed by scripts/install-deps.sh): without it every figure test fails
@@ -19,8 +19,8 @@
 #include <gtest/gtest.h>
 
 #include "jointsim/common/error.hpp"
-#include "jointsim/experiments/runner.hpp"
-#include "jointsim/io/plot.hpp"
+#include "jointsim/experiments/experiment.hpp"
+#include "jointsim/report/plot.hpp"
 #include "test_util.hpp"
 
 using ::testing::HasSubstr;
@@ -92,8 +92,8 @@ std::string slurp(const fs::path& p) {
 
 /// Plots `run_dir` into run_dir/figures and checks exactly the expected figures (PNG) were written.
 void expectFigures(const fs::path& run_dir, const std::vector<std::string>& stems,
-                   const jointsim::io::PlotOptions& options = {}) {
-  const auto written = jointsim::io::plotRun(run_dir.string(), "", options);
+                   const jointsim::report::PlotOptions& options = {}) {
+  const auto written = jointsim::report::plotRun(run_dir.string(), "", options);
   std::vector<std::string> expected;
   for (const auto& s : stems) expected.push_back((run_dir / "figures" / (s + ".png")).string());
   if (options.svg)
@@ -133,9 +133,9 @@ TEST(Plot, TrackingErrorTorquesAnglesCurrents) {
   expectFigures(dir, {"ur5_excitation_tracking_error", "ur5_excitation_torques", "ur5_excitation_joint_angles",
                       "ur5_excitation_currents"});
   // The script says what is drawn: the error q_set - q per joint, the inverse-dynamics reference.
-  jointsim::io::PlotOptions options;
+  jointsim::report::PlotOptions options;
   options.keep_script = true;
-  const auto written = jointsim::io::plotRun(dir.string(), (dir / "kept").string(), options);
+  const auto written = jointsim::report::plotRun(dir.string(), (dir / "kept").string(), options);
   ASSERT_EQ(written.back(), (dir / "kept" / "ur5_excitation_plots.gp").string());
   const std::string script = slurp(written.back());
   EXPECT_THAT(script, HasSubstr("set ylabel 'q_set − q ["));
@@ -147,9 +147,9 @@ TEST(Plot, ClampingCurvesPerAxisAndClamp) {
   const Scratch dir("clamping");
   runExperiment("irb140_clamping.yaml", {"duration=0.3"}, dir);
   expectFigures(dir, {"irb140_clamping_clamping_curves", "irb140_clamping_axis_torques", "irb140_clamping_clamp"});
-  jointsim::io::PlotOptions options;
+  jointsim::report::PlotOptions options;
   options.keep_script = true;
-  const std::string script = slurp(jointsim::io::plotRun(dir.string(), (dir / "kept").string(), options).back());
+  const std::string script = slurp(jointsim::report::plotRun(dir.string(), (dir / "kept").string(), options).back());
   EXPECT_THAT(script, HasSubstr("set multiplot layout 2,3"));  // six axes
   EXPECT_THAT(script, HasSubstr("set xlabel 'motor angle [rad]'"));
   EXPECT_THAT(script, HasSubstr("set ylabel 'torque [N·m]'"));
@@ -170,7 +170,7 @@ TEST(Plot, JointRigFrictionMap) {
 TEST(Plot, JointRigWithMotorElectricsAsSvgToo) {
   const Scratch dir("rig_swg");
   runExperiment("ur5_swg_joint_velocity.yaml", {"duration=0.3"}, dir);
-  jointsim::io::PlotOptions options;
+  jointsim::report::PlotOptions options;
   options.svg = true;
   options.width = 900;
   options.height = 600;
@@ -226,9 +226,9 @@ TEST(Plot, SweepBarsAndOverlay) {
       << "fall_b,ok,0.01,0.1,10," << (dir / "fall_b").string() << ",\"duration=0.1,initial_state.qd[0]=1\"\n"
       << "fall_c,failed,0.005,0.01,2,fall_c,\"solver.rtol=1\"\n";
   expectFigures(dir, {"sweep_runs", "sweep_overlay"});
-  jointsim::io::PlotOptions options;
+  jointsim::report::PlotOptions options;
   options.keep_script = true;
-  const std::string script = slurp(jointsim::io::plotRun(dir.string(), (dir / "kept").string(), options).back());
+  const std::string script = slurp(jointsim::report::plotRun(dir.string(), (dir / "kept").string(), options).back());
   EXPECT_THAT(script, HasSubstr("title 'fall_a'"));
   EXPECT_THAT(script, HasSubstr("title 'fall_b'"));
   EXPECT_THAT(script, HasSubstr("title 'status failed'"));
@@ -246,7 +246,7 @@ TEST(Plot, SweepOfDifferentExperimentsHasNoOverlay) {
 TEST(Plot, BadManifestIsInputError) {
   const Scratch dir("sweep_bad");
   std::ofstream(dir / "manifest.csv") << "run,status\nx,ok\n";
-  EXPECT_THROW(jointsim::io::plotRun(dir.string()), jointsim::InputError);
+  EXPECT_THROW(jointsim::report::plotRun(dir.string()), jointsim::InputError);
 }
 
 // ------------------------------------------------------------------------------------------ errors
@@ -254,13 +254,13 @@ TEST(Plot, BadManifestIsInputError) {
 TEST(Plot, MissingFolderOrCsvIsInputError) {
   const Scratch dir("errors");
   try {
-    jointsim::io::plotRun((dir / "nowhere").string());
+    jointsim::report::plotRun((dir / "nowhere").string());
     FAIL() << "expected InputError";
   } catch (const jointsim::InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("no such run folder"));
   }
   try {  // neither a run nor a sweep
-    jointsim::io::plotRun(dir.string());
+    jointsim::report::plotRun(dir.string());
     FAIL() << "expected InputError";
   } catch (const jointsim::InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("neither a run folder"));
@@ -269,7 +269,7 @@ TEST(Plot, MissingFolderOrCsvIsInputError) {
   std::ofstream(dir / "summary.json") << "{\"experiment\": \"boom\", \"type\": \"joint_rig\", \"status\": \"failed\", "
                                          "\"reason\": \"CV_CONV_FAILURE at t = 0.1 s\"}";
   try {
-    jointsim::io::plotRun(dir.string());
+    jointsim::report::plotRun(dir.string());
     FAIL() << "expected InputError";
   } catch (const jointsim::InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("no CSV log to plot"));
@@ -281,15 +281,15 @@ TEST(Plot, MissingFolderOrCsvIsInputError) {
 TEST(Plot, GnuplotNotFoundIsInputError) {
   const Scratch dir("nognuplot");
   runExperiment("ur5_fall.yaml", {"duration=0.05"}, dir);
-  jointsim::io::PlotOptions options;
+  jointsim::report::PlotOptions options;
   options.gnuplot = (dir / "no-such-gnuplot").string();
   try {
-    jointsim::io::plotRun(dir.string(), "", options);
+    jointsim::report::plotRun(dir.string(), "", options);
     FAIL() << "expected InputError";
   } catch (const jointsim::InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("gnuplot not found; install gnuplot-nox (scripts/install-deps.sh)"));
   }
-  EXPECT_NO_THROW(jointsim::io::findGnuplot()) << "gnuplot-nox is needed by `jointsim plot` and these tests";
+  EXPECT_NO_THROW(jointsim::report::findGnuplot()) << "gnuplot-nox is needed by `jointsim plot` and these tests";
 }
 
 TEST(Plot, GnuplotFailureIsReportedAndLeavesNoFigure) {
@@ -298,10 +298,10 @@ TEST(Plot, GnuplotFailureIsReportedAndLeavesNoFigure) {
   const fs::path fake = dir / "fake-gnuplot";
   std::ofstream(fake) << "#!/bin/sh\necho 'line 3: something went wrong' >&2\nexit 1\n";
   fs::permissions(fake, fs::perms::owner_all);
-  jointsim::io::PlotOptions options;
+  jointsim::report::PlotOptions options;
   options.gnuplot = fake.string();
   try {
-    jointsim::io::plotRun(dir.string(), "", options);
+    jointsim::report::plotRun(dir.string(), "", options);
     FAIL() << "expected Error";
   } catch (const jointsim::InputError&) {
     FAIL() << "a gnuplot failure is not bad input";

@@ -6,7 +6,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "control/trajectory_yaml.hpp"
+#include "jointsim/control/trajectory_yaml.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/control/kinematic_ptp.hpp"
 #include "test_util.hpp"

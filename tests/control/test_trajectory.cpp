@@ -8,7 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "control/trajectory_yaml.hpp"
+#include "jointsim/control/trajectory_yaml.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/control/trajectory.hpp"
 #include "test_util.hpp"
@@ -365,10 +365,10 @@ TEST(TrajectorySampled, CsvByOrderAndByColumnName) {
   EXPECT_NEAR(traj.setpoint(0.04).qd[1], -2.5, 1e-6);
   EXPECT_THAT(traj.describe(), HasSubstr("jointsim_traj_named.csv, 2 joints, 20 samples"));
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(path.string(), 2); },
-              ThrowsMessage<InputError>(HasSubstr("jointsim_traj_named.csv: row 1: expected 1 + 2 = 3 columns (time, "
+              ThrowsMessage<InputError>(HasSubstr("jointsim_traj_named.csv:1: expected 1 + 2 = 3 columns (time, "
                                                   "then one per joint), got 4; name the joint columns")));
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(path.string(), 2, {"q1", "q3"}); },
-              ThrowsMessage<InputError>(HasSubstr("row 1: no column named 'q3' (columns: time [s], qd1, q1, q2)")));
+              ThrowsMessage<InputError>(HasSubstr("jointsim_traj_named.csv:1: no column named 'q3' (columns: time [s], qd1, q1, q2)")));
   const auto ordered = SampledTrajectory::fromCsv(path.string(), 3);
   EXPECT_DOUBLE_EQ(ordered.setpoint(0.0).q[0], 9.0);
 }
@@ -384,24 +384,24 @@ TEST(TrajectorySampled, CsvErrorsNameTheFileAndRow) {
   const auto gap = writeFile("jointsim_traj_gap.csv", text);
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(gap.string(), 2); },
               ThrowsMessage<InputError>(HasSubstr(
-                  "jointsim_traj_gap.csv: row 57: time step 0.05 s is more than 3x the median 0.008 s (a gap)")));
+                  "jointsim_traj_gap.csv:57: time step 0.05 s is more than 3x the median 0.008 s (a gap)")));
   EXPECT_NO_THROW(SampledTrajectory::fromCsv(gap.string(), 2, {}, 10.0));
   EXPECT_NO_THROW(SampledTrajectory::fromCsv(gap.string(), 2, {}, 0.0));
 
   const auto backwards = writeFile("jointsim_traj_backwards.csv", "t,q1\n0,1\n0.008,1\n0.008,2\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(backwards.string(), 1); },
-              ThrowsMessage<InputError>(HasSubstr("jointsim_traj_backwards.csv: row 4: time 0.008 s is not after")));
+              ThrowsMessage<InputError>(HasSubstr("jointsim_traj_backwards.csv:4: time 0.008 s is not after")));
   const auto cell = writeFile("jointsim_traj_cell.csv", "t,q1,q2\n0,1,2\n0.008,1,abc\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(cell.string(), 2); },
               ThrowsMessage<InputError>(
-                  HasSubstr("jointsim_traj_cell.csv: row 3: column 'q2': expected a number, got 'abc'")));
+                  HasSubstr("jointsim_traj_cell.csv:3:3: column 'q2': expected a number, got 'abc'")));
   const auto cols = writeFile("jointsim_traj_cols.csv", "t,q1,q2\n0,1,2\n0.008,1\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(cols.string(), 2); },
               ThrowsMessage<InputError>(
-                  HasSubstr("jointsim_traj_cols.csv: row 3: expected 3 columns (as the header), got 2")));
+                  HasSubstr("jointsim_traj_cols.csv:3: expected 3 cells as in the header, got 2")));
   const auto trailing = writeFile("jointsim_traj_trailing.csv", "t,q1,q2\n0,1,2,\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(trailing.string(), 2); },
-              ThrowsMessage<InputError>(HasSubstr("row 2: expected 3 columns (as the header), got 4")));
+              ThrowsMessage<InputError>(HasSubstr("jointsim_traj_trailing.csv:2: expected 3 cells as in the header, got 4")));
   const auto one = writeFile("jointsim_traj_one.csv", "t,q1\n0,1\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(one.string(), 1); },
               ThrowsMessage<InputError>(HasSubstr("at least 2 data rows")));
@@ -539,7 +539,7 @@ TEST(TrajectoryYaml, ErrorsNameFileLineAndKeyPath) {
   yamlError("trajectory:\n  type: csv\n  file: jointsim_traj_yaml_bad.csv\n", 2,
             "t.yaml:3: trajectory.file: ")();
   yamlError("trajectory:\n  type: csv\n  file: jointsim_traj_yaml_bad.csv\n", 2,
-            "jointsim_traj_yaml_bad.csv: row 3: column 'q1': expected a number, got 'x'")();
+            "jointsim_traj_yaml_bad.csv:3:2: column 'q1': expected a number, got 'x'")();
   yamlError("trajectory:\n  type: csv\n  file: log.csv\n  columns: [a]\n", 2,
             "t.yaml:4: trajectory.columns: expected a list of 2 column names")();
   yamlError("trajectory:\n  type: csv\n  file: log.csv\n  gap_factor: 1\n", 2,

@@ -15,7 +15,7 @@
 #include <vector>
 
 // Internal header (src/ is not on the test include path, hence the relative path).
-#include "../../src/drive/friction_yaml.hpp"
+#include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/sim/cvode_integrator.hpp"
 
@@ -291,7 +291,8 @@ TEST(FrictionLuGreUr5, UnsetCoefficientsAreRejected) {
     LuGreUr5Friction f(p);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_TRUE(contains(e.what(), "'f_c'"));
+    EXPECT_TRUE(contains(e.what(), "lugre_ur5: f_c: expected a finite value > 0")) << e.what();
+    EXPECT_EQ(e.keyPath(), "f_c");
   }
   p = ur5Params();
   p.k_q = -1.0;
@@ -580,7 +581,7 @@ TEST(FrictionYaml, ErrorsNameFileLineAndKeyPath) {
   // Bad value (rule of validate(), relocated to the key).
   std::string e = parseError("friction:\n  type: lugre\n  sigma0: -5\n  sigma1: 10\n"
                              "  alpha0: 5\n  alpha1: 1\n  alpha2: 2\n  v_s: 0.1\n");
-  EXPECT_TRUE(contains(e, "f.yaml:3: friction.sigma0: expected a finite value > 0")) << e;
+  EXPECT_TRUE(contains(e, "f.yaml:3: friction.sigma0: expected a finite value > 0 N·m/rad, got -5")) << e;
   EXPECT_TRUE(contains(e, "-5"));
   // Bad value in a per-direction mapping.
   e = parseError("friction:\n  type: stribeck\n"

@@ -7,15 +7,16 @@
 #include <gtest/gtest.h>
 
 #include "jointsim/drive/transmissions.hpp"
-#include "jointsim/experiments/joint_rig.hpp"
+#include "jointsim/systems/joint_rig.hpp"
+#include "test_util.hpp"
 
 using namespace jointsim;
-using namespace jointsim::experiments;
+using namespace jointsim::systems;
 
 namespace {
-std::vector<Eigen::VectorXd> run(const JointRig& rig) {
+std::vector<Eigen::VectorXd> run(JointRig& rig) {
   std::vector<Eigen::VectorXd> rows;
-  simulateJointRig(rig, [&](const Eigen::VectorXd& r) { rows.push_back(r); });
+  sim::simulate(rig, rig.simulateOptions(), [&](const Eigen::VectorXd& r) { rows.push_back(r); });
   return rows;
 }
 }  // namespace
@@ -28,15 +29,15 @@ TEST(JointRig, RigidGearConstantTorqueClosedForm) {
   s.profile = control::Profile::constant(0.3);
   s.duration = 1.0;
   s.log_rate = 10;
-  const JointRig rig(s);
+  JointRig rig(s);
   EXPECT_EQ(rig.stateSize(), 2);
   const auto rows = run(rig);
   const double J_eff = 2e-4 + 1.5 / 2500.0;
   const double t = rows.back()[0];
-  EXPECT_NEAR(rows.back()[rig.column("motor_angle")], 0.5 * 0.3 / J_eff * t * t, 1e-6);
-  EXPECT_NEAR(rows.back()[rig.column("output_velocity")], 0.3 / J_eff * t / 50.0, 1e-7);
+  EXPECT_NEAR(rows.back()[test::rowIndex(rig, "motor_angle")], 0.5 * 0.3 / J_eff * t * t, 1e-6);
+  EXPECT_NEAR(rows.back()[test::rowIndex(rig, "output_velocity")], 0.3 / J_eff * t / 50.0, 1e-7);
   // The gear delivers N times the torque it takes from the motor; the load accelerates with it.
-  EXPECT_NEAR(rows.back()[rig.column("transmission_torque_out")], 1.5 * 0.3 / J_eff / 50.0, 1e-9);
+  EXPECT_NEAR(rows.back()[test::rowIndex(rig, "transmission_torque_out")], 1.5 * 0.3 / J_eff / 50.0, 1e-9);
 }
 
 TEST(JointRig, DcMotorDrivesViscousLoadToHandDerivedSpeed) {
@@ -50,14 +51,14 @@ TEST(JointRig, DcMotorDrivesViscousLoadToHandDerivedSpeed) {
   s.load_damping = 40.0;
   s.duration = 3.0;
   s.log_rate = 100;
-  const JointRig rig(s);
+  JointRig rig(s);
   const auto rows = run(rig);
   const auto& p = *s.motor;
   const double b_m = 40.0 / (101.0 * 101.0);
   const double omega = p.kt * 24.0 / (p.R * b_m + p.kt * p.ke);
-  EXPECT_NEAR(rows.back()[rig.column("motor_velocity")], omega, 1e-6 * omega);
-  EXPECT_NEAR(rows.back()[rig.column("motor_current")], b_m * omega / p.kt, 1e-5);
-  EXPECT_EQ(rows[0][rig.column("motor_voltage")], 0.0);
+  EXPECT_NEAR(rows.back()[test::rowIndex(rig, "motor_velocity")], omega, 1e-6 * omega);
+  EXPECT_NEAR(rows.back()[test::rowIndex(rig, "motor_current")], b_m * omega / p.kt, 1e-5);
+  EXPECT_EQ(rows[0][test::rowIndex(rig, "motor_voltage")], 0.0);
 }
 
 TEST(JointRig, VelocityPiTracksStepWithElasticGear) {
@@ -71,11 +72,11 @@ TEST(JointRig, VelocityPiTracksStepWithElasticGear) {
   s.profile = control::Profile::step(0.0, 1.0, 0.1);
   s.duration = 8.0;
   s.log_rate = 50;
-  const JointRig rig(s);
+  JointRig rig(s);
   const auto rows = run(rig);
-  EXPECT_NEAR(rows.back()[rig.column("output_velocity")], 1.0, 1e-4);
+  EXPECT_NEAR(rows.back()[test::rowIndex(rig, "output_velocity")], 1.0, 1e-4);
   // Holding 1 rad/s against b_l = 2 N·m·s/rad takes 2 N·m at the output, 0.1 N·m at the motor.
-  EXPECT_NEAR(rows.back()[rig.column("motor_torque")], 2.0 / 20.0, 1e-3);
+  EXPECT_NEAR(rows.back()[test::rowIndex(rig, "motor_torque")], 2.0 / 20.0, 1e-3);
 }
 
 TEST(JointRig, ClampedBacklashCurveSlopeAndGap) {
@@ -89,9 +90,9 @@ TEST(JointRig, ClampedBacklashCurveSlopeAndGap) {
   s.profile = control::Profile::triangle(2.0, 20.0);
   s.duration = 20.0;
   s.log_rate = 100;
-  const JointRig rig(s);
+  JointRig rig(s);
   const auto rows = run(rig);
-  const int ia = rig.column("motor_angle"), iv = rig.column("motor_velocity"), it = rig.column("command_torque");
+  const int ia = test::rowIndex(rig, "motor_angle"), iv = test::rowIndex(rig, "motor_velocity"), it = test::rowIndex(rig, "command_torque");
   double max_err = 0, max_lag = 0;
   for (const auto& r : rows) {
     const double tau = r[it], phi = r[ia], lag = 0.5 * r[iv] / c;

@@ -68,7 +68,7 @@ TEST(DcMotor, SupplySaturatesAndValidates) {
   EXPECT_DOUBLE_EQ(motor.supplyVoltage(10.0), 10.0);
   DcMotorParams bad;
   bad.L = -1;
-  EXPECT_THAT([&] { DcMotor m(bad); }, ::testing::ThrowsMessage<jointsim::InputError>(::testing::HasSubstr("motor.L")));
+  EXPECT_THAT([&] { DcMotor m(bad); }, ::testing::ThrowsMessage<jointsim::InputError>(::testing::HasSubstr("motor: L: expected a finite value > 0 H, got -1")));
 }
 
 TEST(ElastoBacklash, ZeroInGapSlopeOutsideNeverWrongSign) {

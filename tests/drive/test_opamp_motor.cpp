@@ -332,7 +332,7 @@ TEST(OpAmpMotorParams, ValidationErrors) {
         p.validate();
         ADD_FAILURE() << f.name << " = " << bad << " accepted";
       } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find(std::string("opamp_motor.") + f.name + ":"), std::string::npos)
+        EXPECT_NE(std::string(e.what()).find(std::string("op-amp motor: ") + f.name + ": expected a finite value > 0"), std::string::npos)
             << e.what();
       }
       EXPECT_THROW(OpAmpMotor{p}, InputError) << f.name;

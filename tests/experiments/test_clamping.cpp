@@ -13,14 +13,15 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/control/clamping_path.hpp"
 #include "jointsim/drive/transmissions.hpp"
-#include "jointsim/experiments/clamping.hpp"
-#include "jointsim/experiments/runner.hpp"
+#include "jointsim/multibody/orthogonal_compliance.hpp"
+#include "jointsim/systems/clamped_robot.hpp"
+#include "jointsim/experiments/experiment.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;
-using namespace jointsim::experiments;
+using namespace jointsim::systems;
 
 namespace {
 
@@ -114,7 +115,7 @@ struct Curve {
 Curve simulate(const ClampingSetup& s, int k) {
   ClampedRobot robot(s);
   Curve c;
-  simulateClamping(robot, [&](const Eigen::VectorXd& row) {
+  sim::simulate(robot, robot.simulateOptions(), [&](const Eigen::VectorXd& row) {
     c.angle.push_back(row[1 + 10 * k]);
     c.speed.push_back(row[1 + 10 * k + 1]);
     c.torque.push_back(row[1 + 10 * k + 2]);
@@ -328,10 +329,10 @@ TEST(ClampedRobotCurve, FrictionWidensTheLoopByTwiceItsLevel) {
 TEST(ClampingExperiment, Irb140DemoRunsAndWritesCurves) {
   const std::string dir = (std::filesystem::temp_directory_path() / "jointsim_clamping_demo").string();
   std::filesystem::remove_all(dir);
-  RunOptions o;
+  experiments::RunOptions o;
   o.output_dir = dir;
   o.overrides = {"duration=3", "log_rate=100"};
-  const RunReport r = runExperimentFile(test::sourcePath("config/experiments/irb140_clamping.yaml"), o);
+  const experiments::RunReport r = experiments::runExperimentFile(test::sourcePath("config/experiments/irb140_clamping.yaml"), o);
   EXPECT_EQ(r.status, "ok");
   for (int j = 1; j <= 6; ++j)
     EXPECT_TRUE(std::filesystem::exists(dir + "/irb140_clamping_joint" + std::to_string(j) + "_curve.csv")) << j;
@@ -346,11 +347,11 @@ TEST(ClampingExperiment, BadInputNamesTheKey) {
   const std::string dir = (std::filesystem::temp_directory_path() / "jointsim_clamping_bad").string();
   std::filesystem::remove_all(dir);
   auto fails = [&](const std::string& override_, const std::string& expected) {
-    RunOptions o;
+    experiments::RunOptions o;
     o.output_dir = dir;
     o.overrides = {override_};
     try {
-      runExperimentFile(test::sourcePath("config/experiments/irb140_clamping.yaml"), o);
+      experiments::runExperimentFile(test::sourcePath("config/experiments/irb140_clamping.yaml"), o);
       ADD_FAILURE() << override_ << ": no error";
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
@@ -358,13 +359,13 @@ TEST(ClampingExperiment, BadInputNamesTheKey) {
     }
     EXPECT_FALSE(std::filesystem::exists(dir + "/irb140_clamping.csv"));
   };
-  fails("axes[1].c=-3", "c must be > 0");
-  fails("axes[0].friction.peak=0.5", "peak must be >= 1");
+  fails("axes[1].c=-3", "irb140_clamping.yaml:40: axes[1].c: expected a finite value > 0 N·m/rad, got -3");
+  fails("axes[0].friction.peak=0.5", ": axes[0].friction.peak: expected a finite value >= 1 (-), got 0.5");
   fails("clamp.frame=nowhere", "no frame named 'nowhere'");
   fails("axes[2].joint=joint1", "already has an axis");
   fails("load=some", "'all' or a list of joint names");
-  fails("axes[3].path.qd_max=0", "qd_max must be > 0");
+  fails("axes[3].path.qd_max=0", ": axes[3].path.qd_max: expected a finite value > 0 rad/s, got 0");
   fails("clamp.frame=base", "is on the fixed base");
   fails("coupling.joints[1]=joint4", "appears twice in the coupling");
-  fails("axes[0].controller.ks=-0.01", "must be finite and >= 0");
+  fails("axes[0].controller.ks=-0.01", ": axes[0].controller.ks: expected a finite value >= 0 N·m·s/rad, got -0.01");
 }

@@ -10,12 +10,12 @@
 #include <gtest/gtest.h>
 
 #include "jointsim/common/error.hpp"
-#include "jointsim/experiments/drive_chain.hpp"
-#include "jointsim/experiments/runner.hpp"
+#include "jointsim/systems/drive_chain.hpp"
+#include "jointsim/experiments/experiment.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;
-using namespace jointsim::experiments;
+using namespace jointsim::systems;
 
 namespace {
 // One inertia on a bearing with friction f = 2 N·m (τ0max = 3 N·m with peak 1.5), driven by `torque`.
@@ -42,7 +42,7 @@ DriveChainSetup bearing(control::Profile torque, double duration) {
 
 std::vector<Eigen::VectorXd> run(DriveChain& chain) {
   std::vector<Eigen::VectorXd> rows;
-  simulateDriveChain(chain, [&](const Eigen::VectorXd& r) { rows.push_back(r); });
+  sim::simulate(chain, chain.simulateOptions(), [&](const Eigen::VectorXd& r) { rows.push_back(r); });
   return rows;
 }
 }  // namespace
@@ -54,7 +54,7 @@ TEST(DriveChainFriction, HoldsExactlyBelowPeakWithoutCreep) {
     EXPECT_EQ(r[1], 0.0) << "angle at t = " << r[0];
     EXPECT_EQ(r[2], 0.0) << "speed at t = " << r[0];
   }
-  EXPECT_DOUBLE_EQ(rows.back()[chain.columns().size() - 6 + 2], 2.9) << "stuck torque balances the drive";
+  EXPECT_DOUBLE_EQ(rows.back()[sim::tableColumns(chain).size() - 6 + 2], 2.9) << "stuck torque balances the drive";
 }
 
 TEST(DriveChainFriction, BreaksAwayAboveThePeakThenSlidesAtTheKineticLevel) {
@@ -87,7 +87,7 @@ TEST(DriveChainFriction, StopsAndSticksAgainWhenTheDriveDrops) {
   }
   // Stuck again: the acceleration is constrained to zero, so the speed keeps exactly the (tiny) value it
   // had at the stop — as in MSL, it is not reset — and the shaft does not creep.
-  const auto& cols = chain.columns();
+  const auto& cols = sim::tableColumns(chain);
   const auto mode_col = static_cast<Eigen::Index>(std::find(cols.begin(), cols.end(), "bearing.mode[-]") - cols.begin());
   ASSERT_LT(static_cast<size_t>(mode_col), cols.size());
   const Eigen::VectorXd* first_stuck = nullptr;
@@ -104,9 +104,9 @@ TEST(DriveChainFriction, StopsAndSticksAgainWhenTheDriveDrops) {
 TEST(DriveChainMsl, BacklashSpringDamperMatchesClosedForm) {
   const auto dir = std::filesystem::temp_directory_path() / "jointsim_msl_backlash";
   std::filesystem::remove_all(dir);
-  RunOptions o;
+  experiments::RunOptions o;
   o.output_dir = dir.string();
-  const auto report = runExperimentFile(test::sourcePath("config/experiments/msl_backlash.yaml"), o);
+  const auto report = experiments::runExperimentFile(test::sourcePath("config/experiments/msl_backlash.yaml"), o);
   ASSERT_EQ(report.status, "ok");
   std::ifstream in(report.csv_path);
   std::string line;
@@ -129,9 +129,9 @@ TEST(DriveChainMsl, BacklashSpringDamperMatchesClosedForm) {
 TEST(DriveChainMsl, FrictionExampleRunsAndEndsWithTheBrakeHolding) {
   const auto dir = std::filesystem::temp_directory_path() / "jointsim_msl_friction";
   std::filesystem::remove_all(dir);
-  RunOptions o;
+  experiments::RunOptions o;
   o.output_dir = dir.string();
-  const auto report = runExperimentFile(test::sourcePath("config/experiments/msl_friction.yaml"), o);
+  const auto report = experiments::runExperimentFile(test::sourcePath("config/experiments/msl_friction.yaml"), o);
   ASSERT_EQ(report.status, "ok");
   EXPECT_NEAR(report.sim_time_s, 3.0, 1e-12);
   std::ifstream in(report.csv_path);
@@ -154,9 +154,9 @@ TEST(RobotR3OneAxis, RunsToTheTerminationTimeAndClosesItsEnergyBalance) {
   // friction losses (energy integrals carried as ODE states), to 1e-4 relative.
   const auto dir = std::filesystem::temp_directory_path() / "jointsim_one_axis";
   std::filesystem::remove_all(dir);
-  RunOptions o;
+  experiments::RunOptions o;
   o.output_dir = dir.string();
-  const auto report = runExperimentFile(test::sourcePath("config/experiments/robotr3_one_axis.yaml"), o);
+  const auto report = experiments::runExperimentFile(test::sourcePath("config/experiments/robotr3_one_axis.yaml"), o);
   ASSERT_EQ(report.status, "ok");
   EXPECT_NEAR(report.sim_time_s, 1.4981317007977317, 1e-9);
   std::ifstream in(report.csv_path);
@@ -201,9 +201,9 @@ TEST(RobotR3FullRobot, StartsFromTheDocumentedStateAndReachesTheTarget) {
   // joints end near the path's end angles.
   const auto dir = std::filesystem::temp_directory_path() / "jointsim_full_robot";
   std::filesystem::remove_all(dir);
-  RunOptions o;
+  experiments::RunOptions o;
   o.output_dir = dir.string();
-  const auto report = runExperimentFile(test::sourcePath("config/experiments/robotr3_full_robot.yaml"), o);
+  const auto report = experiments::runExperimentFile(test::sourcePath("config/experiments/robotr3_full_robot.yaml"), o);
   ASSERT_EQ(report.status, "ok");
   EXPECT_NEAR(report.sim_time_s, 1.8560450019, 1e-9);
   std::ifstream in(report.csv_path);

@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "jointsim/experiments/runner.hpp"
+#include "jointsim/experiments/experiment.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;

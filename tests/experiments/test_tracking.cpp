@@ -11,8 +11,8 @@
 #include <gtest/gtest.h>
 
 #include "jointsim/common/error.hpp"
-#include "jointsim/experiments/runner.hpp"
-#include "jointsim/experiments/tracking.hpp"
+#include "jointsim/experiments/experiment.hpp"
+#include "jointsim/systems/robot_with_drives.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;
@@ -69,7 +69,7 @@ TEST(Tracking, RobotWithDrivesErrors) {
     text.replace(text.find("multibody: ur5.yaml"), 19, "multibody: " + test::sourcePath("config/robots/ur5.yaml"));
     std::ofstream(path) << text;
     try {
-      experiments::loadRobotWithDrives(path.string());
+      systems::loadRobotWithDrives(path.string());
       ADD_FAILURE() << "no error for " << expected;
     } catch (const InputError& e) {
       EXPECT_THAT(e.what(), HasSubstr(path.string()));
@@ -112,13 +112,13 @@ TEST(Tracking, TrajectoryBeyondLimitsAndBadSetpointCsvExitTwoAndWriteNothing) {
                                     "0.016,0,-1.5,1.5,-1.5,-1.5,0\n0.5,0,-1.5,1.5,-1.5,-1.5,0\n";
   auto [rc2, err2] = run("  type: csv\n  file: gap.csv\n");
   EXPECT_EQ(rc2, 2);
-  EXPECT_THAT(err2, HasSubstr("gap.csv: row 5: time step"));
+  EXPECT_THAT(err2, HasSubstr("gap.csv:5: time step"));
   EXPECT_THAT(err2, HasSubstr("(a gap)"));
   std::ofstream(dir / "back.csv") << "t,q1,q2,q3,q4,q5,q6\n0,0,-1.5,1.5,-1.5,-1.5,0\n0.008,0,-1.5,1.5,-1.5,-1.5,0\n"
                                      "0.004,0,-1.5,1.5,-1.5,-1.5,0\n";
   auto [rc3, err3] = run("  type: csv\n  file: back.csv\n");
   EXPECT_EQ(rc3, 2);
-  EXPECT_THAT(err3, HasSubstr("back.csv: row 4"));
+  EXPECT_THAT(err3, HasSubstr("back.csv:4: time 0.004 s is not after"));
 }
 
 TEST(Tracking, SampledControlWithNoisySensorsIsReproducibleBySeed) {

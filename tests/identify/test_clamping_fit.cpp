@@ -22,9 +22,10 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/transmissions.hpp"
-#include "jointsim/experiments/joint_rig.hpp"
-#include "jointsim/experiments/runner.hpp"
+#include "jointsim/systems/joint_rig.hpp"
+#include "jointsim/experiments/experiment.hpp"
 #include "jointsim/identify/clamping_fit.hpp"
+#include "test_util.hpp"
 
 using namespace jointsim;
 using ::testing::HasSubstr;
@@ -40,7 +41,7 @@ constexpr double kEncoderZero = 1.234;                      // rad: arbitrary ze
 /// triangle amplitude 5 N·m, period 40 s, `offset` [N·m], `duration` [s] (240 s: 12 half-cycles, as many as
 /// 001 used), logged at 50 Hz.
 identify::ClampingData simulateRig(double offset, unsigned seed, double duration = 240.0) {
-  experiments::JointRigSetup s;
+  systems::JointRigSetup s;
   s.rotor_inertia = 0.01;
   drive::ElastoBacklashParams eb;
   eb.stiffness = kC;
@@ -52,14 +53,14 @@ identify::ClampingData simulateRig(double offset, unsigned seed, double duration
   fp.peak = 1.0;
   s.friction = std::make_shared<drive::TableFriction>(fp);
   s.clamped = true;
-  s.input = experiments::RigInput::MotorTorque;
+  s.input = systems::RigInput::MotorTorque;
   s.profile = control::Profile::triangle(5.0, 40.0, offset);
   s.duration = duration;
   s.log_rate = 50.0;
-  const experiments::JointRig rig(s);
-  const int ai = rig.column("motor_angle"), qi = rig.column("motor_torque");
+  systems::JointRig rig(s);
+  const int ai = test::rowIndex(rig, "motor_angle"), qi = test::rowIndex(rig, "motor_torque");
   std::vector<Eigen::VectorXd> rows;
-  experiments::simulateJointRig(rig, [&](const Eigen::VectorXd& r) { rows.push_back(r); });
+  sim::simulate(rig, rig.simulateOptions(), [&](const Eigen::VectorXd& r) { rows.push_back(r); });
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> na(0.0, kAngleNoise), nt(0.0, kTorqueNoise);
   identify::ClampingData d;

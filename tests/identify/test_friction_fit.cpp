@@ -24,11 +24,11 @@
 
 #include <gtest/gtest.h>
 
-#include "drive/friction_yaml.hpp"
+#include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/transmissions.hpp"
-#include "jointsim/experiments/joint_rig.hpp"
+#include "jointsim/systems/joint_rig.hpp"
 #include "jointsim/identify/friction_fit.hpp"
 #include "test_util.hpp"
 
@@ -202,15 +202,15 @@ TEST(FrictionFit, RigTimeSimulationRecoversTable43WithinTwoPercent) {
       speeds.push_back(dir * w);
       t += std::max(3.0, 10.0 * 9.4 / (259.0 * w));
     }
-  experiments::JointRigSetup s;
+  systems::JointRigSetup s;
   s.name = "friction_map";
   s.rotor_inertia = 1e-3;
   s.transmission = std::make_shared<drive::RigidGear>(1.0);
   s.friction = std::make_shared<drive::LuGreFriction>(table43Model());
-  s.friction_side = experiments::Side::Output;
+  s.friction_side = systems::Side::Output;
   s.load_inertia = 3.41;
-  s.input = experiments::RigInput::VelocityPI;
-  s.pi = {200.0, 4000.0, 60.0, false, experiments::Side::Output};
+  s.input = systems::RigInput::VelocityPI;
+  s.pi = {200.0, 4000.0, 60.0, false, systems::Side::Output};
   std::vector<double> pt = times, pv = speeds;
   pt.push_back(t);
   pv.push_back(speeds.back());
@@ -219,11 +219,11 @@ TEST(FrictionFit, RigTimeSimulationRecoversTable43WithinTwoPercent) {
   s.log_rate = 4.0;
   s.solver.rtol = 1e-8;
   s.solver.atol = 1e-10;
-  const experiments::JointRig rig(s);
-  const int it = rig.column("time"), iv = rig.column("output_velocity"), iq = rig.column("motor_torque");
+  systems::JointRig rig(s);
+  const int it = test::rowIndex(rig, "time"), iv = test::rowIndex(rig, "output_velocity"), iq = test::rowIndex(rig, "motor_torque");
   std::vector<double> sum_v(times.size(), 0.0), sum_tau(times.size(), 0.0), count(times.size(), 0.0);
   const auto wall0 = std::chrono::steady_clock::now();
-  experiments::simulateJointRig(rig, [&](const Eigen::VectorXd& row) {
+  sim::simulate(rig, rig.simulateOptions(), [&](const Eigen::VectorXd& row) {
     const size_t k = static_cast<size_t>(std::upper_bound(times.begin(), times.end(), row[it]) - times.begin()) - 1;
     const double end = k + 1 < times.size() ? times[k + 1] : t;
     if (row[it] >= 0.5 * (times[k] + end) && row[it] < end) {
@@ -465,9 +465,9 @@ TEST(FrictionFitCli, BadInputExitTwoWithFileLineAndNoOutput) {
       {"missing_column", "velocity[rad/s],torque[N*m]\n" + good_rows,
        "missing_column.csv:1: missing column 'friction_torque"},
       {"nan_cell", "velocity[rad/s],friction_torque[N*m]\n" + good_rows + "0.003,nan\n",
-       "nan_cell.csv:4: column 'friction_torque[N*m]'"},
+       "nan_cell.csv:4:2: column 'friction_torque[N*m]'"},
       {"non_numeric", "velocity[rad/s],friction_torque[N*m]\n0.001,9.4\nfast,9.3\n",
-       "non_numeric.csv:3: column 'velocity[rad/s]': expected a number, got 'fast'"},
+       "non_numeric.csv:3:1: column 'velocity[rad/s]': expected a number, got 'fast'"},
       {"wrong_unit", "velocity[deg/s],friction_torque[N*m]\n" + good_rows,
        "wrong_unit.csv:1: column 'velocity[deg/s]': expected the unit rad/s"},
       {"empty", "velocity[rad/s],friction_torque[N*m]\n", "empty.csv: no data rows"},

@@ -11,19 +11,19 @@
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/strain_wave_gear.hpp"
 #include "jointsim/drive/transmissions.hpp"
-#include "jointsim/experiments/tracking.hpp"
+#include "jointsim/systems/robot_with_drives.hpp"
 #include "jointsim/sim/cvode_integrator.hpp"
-#include "jointsim/sim/faults.hpp"
+#include "jointsim/systems/faults.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;
-using sim::Fault;
-using sim::FaultType;
+using systems::Fault;
+using systems::FaultType;
 using ::testing::HasSubstr;
 
 namespace {
-sim::DriveSpec elasticDrive() {
-  sim::DriveSpec d;
+systems::DriveSpec elasticDrive() {
+  systems::DriveSpec d;
   d.joint = "j";
   drive::ElasticGearParams p;
   p.ratio = 101;
@@ -43,8 +43,8 @@ sim::DriveSpec elasticDrive() {
 // The UR5 twin (elastic gears) holding `q0` for 1.5 s with the given faults; returns the final state's
 // joint angles and motor currents.
 std::pair<Eigen::VectorXd, Eigen::VectorXd> hold(const std::vector<Fault>& faults) {
-  sim::RobotSystem sys =
-      experiments::loadRobotWithDrives(test::sourcePath("config/robots/ur5_drives_elastic.yaml"), faults);
+  systems::RobotSystem sys =
+      systems::loadRobotWithDrives(test::sourcePath("config/robots/ur5_drives_elastic.yaml"), faults);
   Eigen::VectorXd q0(6);
   q0 << 0.2, -1.2, 1.0, -0.8, 0.5, 0.1;
   sys.setSetpoints([q0](double, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
@@ -62,41 +62,41 @@ std::pair<Eigen::VectorXd, Eigen::VectorXd> hold(const std::vector<Fault>& fault
   Eigen::VectorXd y = sys.initialState(q0);
   integ.initialize(0.0, y);
   integ.advance(1.5, y);
-  const auto& s = sys.signals(1.5, y);
+  const auto& s = sys.driveSignals(1.5, y);
   return {y.head(6), s.current};
 }
 }  // namespace
 
 TEST(Faults, EachTypeChangesTheParameterItNames) {
-  sim::DriveSpec d = elasticDrive();
-  sim::applyFault(d, {FaultType::GearStiffnessScale, "j", 0.8});
+  systems::DriveSpec d = elasticDrive();
+  systems::applyFault(d, {FaultType::GearStiffnessScale, "j", 0.8});
   EXPECT_DOUBLE_EQ(dynamic_cast<const drive::ElasticGear&>(*d.transmission).params().stiffness, 0.8 * 1.4e5);
-  sim::applyFault(d, {FaultType::BacklashAdd, "j", 1e-3});
+  systems::applyFault(d, {FaultType::BacklashAdd, "j", 1e-3});
   const auto& eb = dynamic_cast<const drive::ElastoBacklash&>(*d.transmission).params();
   EXPECT_DOUBLE_EQ(eb.backlash, 1e-3);
   EXPECT_DOUBLE_EQ(eb.stiffness, 0.8 * 1.4e5);
   EXPECT_EQ(eb.side, drive::ComplianceSide::Output);
   EXPECT_DOUBLE_EQ(eb.ratio, 101);
-  sim::applyFault(d, {FaultType::BacklashAdd, "j", 5e-4});
+  systems::applyFault(d, {FaultType::BacklashAdd, "j", 5e-4});
   EXPECT_DOUBLE_EQ(dynamic_cast<const drive::ElastoBacklash&>(*d.transmission).params().backlash, 1.5e-3);
-  sim::applyFault(d, {FaultType::CoulombFrictionScale, "j", 1.5});
+  systems::applyFault(d, {FaultType::CoulombFrictionScale, "j", 1.5});
   EXPECT_DOUBLE_EQ(dynamic_cast<const drive::LuGreUr5Friction&>(*d.friction).params().f_c, 6.0);
   const double s0 = dynamic_cast<const drive::LuGreUr5Friction&>(*d.friction).params().sigma0;
-  sim::applyFault(d, {FaultType::Sigma0Scale, "j", 2.0});
+  systems::applyFault(d, {FaultType::Sigma0Scale, "j", 2.0});
   EXPECT_DOUBLE_EQ(dynamic_cast<const drive::LuGreUr5Friction&>(*d.friction).params().sigma0, 2.0 * s0);
   const double kt = d.motor.kt, ke = d.motor.ke;
-  sim::applyFault(d, {FaultType::TorqueConstantScale, "j", 0.9});
+  systems::applyFault(d, {FaultType::TorqueConstantScale, "j", 0.9});
   EXPECT_DOUBLE_EQ(d.motor.kt, 0.9 * kt);
   EXPECT_DOUBLE_EQ(d.motor.ke, 0.9 * ke);
   d.controller.type = control::ControllerType::Cascade002;
-  sim::applyFault(d, {FaultType::SensorBias, "j", -2e-3});
+  systems::applyFault(d, {FaultType::SensorBias, "j", -2e-3});
   EXPECT_DOUBLE_EQ(d.sensors.joint_bias, -2e-3);
 
   // The strain-wave gear scales all five stiffnesses; table friction scales its torques.
-  sim::DriveSpec w;
+  systems::DriveSpec w;
   w.joint = "w";
   w.transmission = std::make_shared<drive::StrainWaveGear>(drive::StrainWaveGearParams{});
-  sim::applyFault(w, {FaultType::GearStiffnessScale, "w", 0.5});
+  systems::applyFault(w, {FaultType::GearStiffnessScale, "w", 0.5});
   const auto& sp = dynamic_cast<const drive::StrainWaveGear&>(*w.transmission).params();
   const drive::StrainWaveGearParams ref;
   EXPECT_DOUBLE_EQ(sp.K_m, 0.5 * ref.K_m);
@@ -105,35 +105,35 @@ TEST(Faults, EachTypeChangesTheParameterItNames) {
   drive::TableFrictionParams tp;
   tp.tau_pos = {{{0.0, 1.0}}, {{1.0, 2.0}}};
   w.friction = std::make_shared<drive::TableFriction>(tp);
-  sim::applyFault(w, {FaultType::CoulombFrictionScale, "w", 3.0});
+  systems::applyFault(w, {FaultType::CoulombFrictionScale, "w", 3.0});
   EXPECT_DOUBLE_EQ(dynamic_cast<const drive::TableFriction&>(*w.friction).params().tau_pos[1][1], 6.0);
 }
 
 TEST(Faults, InapplicableOrOutOfRangeFaultsAreInputErrors) {
-  sim::DriveSpec w;
+  systems::DriveSpec w;
   w.joint = "w";
   w.transmission = std::make_shared<drive::StrainWaveGear>(drive::StrainWaveGearParams{});
   try {
-    sim::applyFault(w, {FaultType::BacklashAdd, "w", 1e-3});
+    systems::applyFault(w, {FaultType::BacklashAdd, "w", 1e-3});
     FAIL();
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("backlash_add@w=0.001"));
     EXPECT_THAT(e.what(), HasSubstr("strain_wave_gear"));
   }
   w.friction = std::make_shared<drive::CoulombViscousFriction>(drive::CoulombViscousParams{});
-  EXPECT_THROW(sim::applyFault(w, {FaultType::Sigma0Scale, "w", 2.0}), InputError);
-  EXPECT_THROW(sim::applyFault(w, {FaultType::GearStiffnessScale, "w", -1.0}), InputError);
-  EXPECT_THROW(sim::applyFault(w, {FaultType::BacklashAdd, "w", -1e-3}), InputError);
-  std::vector<sim::DriveSpec> drives{w};
-  EXPECT_THROW(sim::applyFaults(drives, {{FaultType::SensorBias, "nope", 1e-3}}), InputError);
-  EXPECT_THROW(sim::faultTypeFromString("gear_wear"), InputError);
+  EXPECT_THROW(systems::applyFault(w, {FaultType::Sigma0Scale, "w", 2.0}), InputError);
+  EXPECT_THROW(systems::applyFault(w, {FaultType::GearStiffnessScale, "w", -1.0}), InputError);
+  EXPECT_THROW(systems::applyFault(w, {FaultType::BacklashAdd, "w", -1e-3}), InputError);
+  std::vector<systems::DriveSpec> drives{w};
+  EXPECT_THROW(systems::applyFaults(drives, {{FaultType::SensorBias, "nope", 1e-3}}), InputError);
+  EXPECT_THROW(systems::faultTypeFromString("gear_wear"), InputError);
   // Faults that would leave the dynamics unchanged are refused rather than silently ignored.
-  sim::DriveSpec ppi = elasticDrive();
+  systems::DriveSpec ppi = elasticDrive();
   ppi.electrics = false;
   ppi.controller.type = control::ControllerType::MotorPPI000;
-  EXPECT_THROW(sim::applyFault(ppi, {FaultType::TorqueConstantScale, "j", 0.8}), InputError);
-  EXPECT_THROW(sim::applyFault(ppi, {FaultType::SensorBias, "j", 1e-3}), InputError);
-  for (const auto& n : sim::faultTypeNames()) EXPECT_EQ(sim::toString(sim::faultTypeFromString(n)), n);
+  EXPECT_THROW(systems::applyFault(ppi, {FaultType::TorqueConstantScale, "j", 0.8}), InputError);
+  EXPECT_THROW(systems::applyFault(ppi, {FaultType::SensorBias, "j", 1e-3}), InputError);
+  for (const auto& n : systems::faultTypeNames()) EXPECT_EQ(systems::toString(systems::faultTypeFromString(n)), n);
 }
 
 TEST(Faults, ClosedLoopSensorBiasShiftsThePostureAndWeakMotorDrawsMoreCurrent) {

@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "jointsim/experiments/passive_robot.hpp"
+#include "jointsim/systems/passive_robot.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
 #include "test_util.hpp"
 
@@ -16,8 +16,8 @@ struct Log {
   std::vector<Eigen::VectorXd> rows;
 };
 
-experiments::PassiveRobotParams ur5Fall() {
-  experiments::PassiveRobotParams p;
+systems::PassiveRobotParams ur5Fall() {
+  systems::PassiveRobotParams p;
   p.q0.resize(6);
   p.q0 << 0.0, -1.2, 0.8, -0.5, 0.7, 0.0;
   p.qd0 = Eigen::VectorXd::Zero(6);
@@ -36,14 +36,15 @@ TEST(Ur5Fall, EnergyConservedAtTightTolerance) {
   const int n = model.nq, iT = 1 + 2 * n, iE = 3 + 2 * n;
   double E0 = 0, max_drift = 0, max_T = 0;
   bool first = true;
-  const auto r = experiments::simulatePassiveRobot(model, p, [&](const Eigen::VectorXd& row) {
+  systems::PassiveRobot plant(model, p);
+  const auto r = sim::simulate(plant, plant.simulateOptions(), [&](const Eigen::VectorXd& row) {
     if (first) E0 = row[iE];
     first = false;
     max_drift = std::max(max_drift, std::abs(row[iE] - E0));
     max_T = std::max(max_T, row[iT]);
   });
   EXPECT_NEAR(r.sim_time_s, 5.0, 1e-12);
-  EXPECT_EQ(r.samples, 5001u);
+  EXPECT_EQ(r.outputs, 5001);
   ASSERT_GT(max_T, 10.0) << "the robot should really fall (kinetic energy of tens of joules)";
   // Drift relative to the energy exchanged (the peak kinetic energy): the potential energy's zero is
   // arbitrary, so |E0| is no meaningful scale.
@@ -62,7 +63,8 @@ TEST(Ur5Fall, DampingDissipatesExactlyTheDampingPower) {
   p.solver.atol = 1e-12;
   const int n = model.nq, iE = 3 + 2 * n;
   std::vector<Eigen::VectorXd> rows;
-  experiments::simulatePassiveRobot(model, p, [&](const Eigen::VectorXd& row) { rows.push_back(row); });
+  systems::PassiveRobot plant(model, p);
+  sim::simulate(plant, plant.simulateOptions(), [&](const Eigen::VectorXd& row) { rows.push_back(row); });
   double dissipated = 0, prev_power = 0, max_power = 0;
   bool energy_monotone = true;
   for (size_t k = 0; k < rows.size(); ++k) {

@@ -12,7 +12,7 @@
 #include "jointsim/multibody/algorithms.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
 #include "jointsim/sim/cvode_integrator.hpp"
-#include "jointsim/sim/robot_system.hpp"
+#include "jointsim/systems/robot_system.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;
@@ -21,11 +21,11 @@ namespace {
 const double kGains[6][5] = {{7400, 1.0, 0.1, 10, 10000}, {7500, 1.0, 0.2, 10, 10000}, {7500, 0.5, 0.1, 30, 10000},
                              {2900, 0.8, 0.2, 30, 10000}, {3000, 1.0, 0.2, 30, 10000}, {3250, 1.0, 0.2, 30, 10000}};
 
-std::vector<sim::DriveSpec> ur5Drives(const multibody::Model& m, const std::function<std::shared_ptr<const drive::Transmission>(int)>& gear,
+std::vector<systems::DriveSpec> ur5Drives(const multibody::Model& m, const std::function<std::shared_ptr<const drive::Transmission>(int)>& gear,
                                       bool controlled) {
-  std::vector<sim::DriveSpec> drives;
+  std::vector<systems::DriveSpec> drives;
   for (int k = 0; k < 6; ++k) {
-    sim::DriveSpec d;
+    systems::DriveSpec d;
     d.joint = m.joint_names[static_cast<size_t>(k)];
     d.motor = drive::DcMotorParams::ur5(k + 1);
     d.transmission = gear(k);
@@ -45,7 +45,7 @@ std::vector<sim::DriveSpec> ur5Drives(const multibody::Model& m, const std::func
 }
 
 // Smooth reference: q_set = q0 + A sin(ω t) with its derivatives.
-sim::SetpointFunction sineSetpoints(Eigen::VectorXd q0, double A, double w) {
+systems::SetpointFunction sineSetpoints(Eigen::VectorXd q0, double A, double w) {
   return [q0, A, w](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
     q = q0.array() + A * std::sin(w * t);
     qd.setConstant(A * w * std::cos(w * t));
@@ -62,7 +62,7 @@ Eigen::VectorXd homePose() {
 
 TEST(RobotSystem, RigidGearJointTorqueEqualsRneaOfSimulatedMotion) {
   const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
-  sim::RobotSystem sys(ur5, ur5Drives(ur5, [](int) { return std::make_shared<drive::RigidGear>(101.0); }, true));
+  systems::RobotSystem sys(ur5, ur5Drives(ur5, [](int) { return std::make_shared<drive::RigidGear>(101.0); }, true));
   sys.setSetpoints(sineSetpoints(homePose(), 0.3, 2.0));
   sim::CvodeOptions o;
   o.rtol = 1e-8;
@@ -77,7 +77,7 @@ TEST(RobotSystem, RigidGearJointTorqueEqualsRneaOfSimulatedMotion) {
   double max_track = 0;
   for (double t = 0.1; t <= 1.0 + 1e-9; t += 0.1) {
     integ.advance(t, y);
-    const auto& s = sys.signals(t, y);
+    const auto& s = sys.driveSignals(t, y);
     // The drives' output torques are exactly what the rigid arm needs for the simulated motion.
     const Eigen::VectorXd tau = multibody::rnea(ur5, data, y.head(6), y.segment(6, 6), s.qdd);
     EXPECT_TRUE(test::MatricesNear(s.tau_gear, tau, 1e-9)) << "t = " << t;
@@ -88,7 +88,7 @@ TEST(RobotSystem, RigidGearJointTorqueEqualsRneaOfSimulatedMotion) {
 
 TEST(RobotSystem, StartsAtRestHoldingGravity) {
   const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
-  sim::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
+  systems::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
     return std::make_shared<drive::StrainWaveGear>(k < 3 ? drive::StrainWaveGearParams::ur5SizeA() : drive::StrainWaveGearParams::ur5SizeB());
   }, true));
   const Eigen::VectorXd y0 = sys.initialState(homePose());
@@ -100,7 +100,7 @@ TEST(RobotSystem, StartsAtRestHoldingGravity) {
 
 TEST(RobotSystem, StrainWaveGearSpeedRatio101) {
   const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
-  sim::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
+  systems::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
     auto p = k < 3 ? drive::StrainWaveGearParams::ur5SizeA() : drive::StrainWaveGearParams::ur5SizeB();
     return std::make_shared<drive::StrainWaveGear>(p);
   }, true));
@@ -134,7 +134,7 @@ TEST(RobotSystem, StrainWaveGearSpeedRatio101) {
   integ.advance(0.2, y);
   integ.initialize(0.2, y);
   integ.advance(1.0, y);
-  const auto& s = sys.signals(1.0, y);
+  const auto& s = sys.driveSignals(1.0, y);
   EXPECT_NEAR(y[6], 0.5, 1e-4);
   EXPECT_NEAR(s.qdm[0] / y[6], 101.0, 1e-4);
 }
@@ -142,7 +142,7 @@ TEST(RobotSystem, StrainWaveGearSpeedRatio101) {
 TEST(RobotSystem, TorqueFreeFrictionlessRunConservesEnergy) {
   // Uncontrolled, frictionless, undamped elastic gears with rotor inertias: all energy is mechanical.
   const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
-  sim::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
+  systems::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
     return std::make_shared<drive::ElasticGear>(drive::ElasticGearParams{101.0, k < 3 ? 1.4e5 : 2.6e4, 0.0, drive::ComplianceSide::Output});
   }, false));
   sim::CvodeOptions o;
@@ -173,9 +173,9 @@ TEST(RobotSystem, Irb140CoupledWristWith000ControllersHoldsAndBalancesTorques) {
   const double ratio[6] = {104.4, 104.4, 100.74, 1, 1, 1};
   const double kp[6] = {0.008, 0.008, 0.008, 0.008, 0.008, 0.008}, ks[6] = {0.01, 0.01, 0.01, 0.002, 0.005, 0.001},
                Ts[6] = {0.11, 0.12, 0.28, 0.15, 0.24, 0.12};
-  std::vector<sim::DriveSpec> drives;
+  std::vector<systems::DriveSpec> drives;
   for (int k = 0; k < 6; ++k) {
-    sim::DriveSpec d;
+    systems::DriveSpec d;
     d.joint = irb.joint_names[static_cast<size_t>(k)];
     d.motor.J_M = 0.014;
     d.electrics = false;
@@ -188,7 +188,7 @@ TEST(RobotSystem, Irb140CoupledWristWith000ControllersHoldsAndBalancesTorques) {
   }
   Eigen::MatrixXd G = Eigen::MatrixXd::Identity(6, 6);
   G.bottomRightCorner(3, 3) = drive::CouplingMatrix::irb140Wrist();
-  sim::RobotSystem sys(irb, drives, G);
+  systems::RobotSystem sys(irb, drives, G);
   Eigen::VectorXd q0(6);
   q0 << 0.1, 0.2, -0.3, 0.2, 0.4, -0.1;
   sys.setSetpoints([q0](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
@@ -220,7 +220,7 @@ TEST(RobotSystem, Irb140CoupledWristWith000ControllersHoldsAndBalancesTorques) {
   EXPECT_GT(std::abs(R(4, 3)), 1e-3) << "the wrist coupling matters";
   for (double t = 0.2; t <= 1.0 + 1e-9; t += 0.2) {
     integ.advance(t, y);
-    const auto& s = sys.signals(t, y);
+    const auto& s = sys.driveSignals(t, y);
     // Joint torques from the motors = rigid-body torques + reflected rotor inertia.
     const Eigen::VectorXd rhs = multibody::rnea(irb, data, y.head(6), y.segment(6, 6), s.qdd) + R * s.qdd;
     EXPECT_TRUE(test::MatricesNear(s.tau_joint, rhs, 1e-8)) << "t = " << t;

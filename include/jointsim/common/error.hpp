@@ -6,6 +6,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace jointsim {
 
@@ -18,9 +19,48 @@ class Error : public std::runtime_error {
 /// Bad user input: a configuration or robot file that does not parse or validate, a bad command-line
 /// value, an argument of the wrong size. The message names the file, the key path (and line when the
 /// parser gives one) and what was expected.
+///
+/// Structured: besides the message, an InputError carries where the bad value was, as far as the thrower
+/// knows it: the file and line (file readers), and the key path ("friction.model.positive.alpha0",
+/// "tau_pos[2]"). A parameter check (common/check.hpp) knows only the key path relative to its component;
+/// a file reader that catches it re-throws it at that key's file and line (io::YamlValue::relocate), so a
+/// message always points at the line to fix.
 class InputError : public Error {
  public:
-  using Error::Error;
+  /// An error without structure: what() is `message`.
+  explicit InputError(const std::string& message) : Error(message), message_(message) {}
+  /// what() = "FILE:LINE: KEY.PATH: MESSAGE" with the empty parts (and a line of 0) left out.
+  InputError(std::string file, int line, std::string key_path, const std::string& message)
+      : Error(compose(file, line, key_path, message)),
+        file_(std::move(file)),
+        key_path_(std::move(key_path)),
+        message_(message),
+        line_(line) {}
+  /// An invalid parameter of a component, without a file: what() = "COMPONENT: KEY: MESSAGE"; keyPath() is the
+  /// key (relative to the component's mapping), message() the rule ("expected a finite value > 0 N·m, got -1").
+  static InputError parameter(const std::string& component, const std::string& key, const std::string& message) {
+    InputError e(component + ": " + key + ": " + message);
+    e.key_path_ = key;
+    e.message_ = message;
+    return e;
+  }
+  const std::string& file() const noexcept { return file_; }        ///< empty when unknown
+  int line() const noexcept { return line_; }                       ///< 1-based; 0 when unknown
+  const std::string& keyPath() const noexcept { return key_path_; } ///< empty when unknown
+  const std::string& message() const noexcept { return message_; }  ///< what() without the location
+  /// True when the error names a file (it needs no relocation by a caller).
+  bool located() const noexcept { return !file_.empty(); }
+
+  static std::string compose(const std::string& file, int line, const std::string& key_path, const std::string& message) {
+    std::string s;
+    if (!file.empty()) s += file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": ";
+    if (!key_path.empty()) s += key_path + ": ";
+    return s + message;
+  }
+
+ private:
+  std::string file_, key_path_, message_;
+  int line_ = 0;
 };
 
 /// Data that parse and validate but cannot determine a requested quantity (e.g. a clamping curve that

@@ -6,7 +6,8 @@
 /// solver failure only fails that run) and writes into `<output_dir>/<run name>/`; `manifest.csv` lists
 /// every run with its overrides, status, wall time and output folder, and is rewritten atomically after
 /// each run, so an interrupted batch leaves a consistent manifest. Re-running skips runs whose folder
-/// already holds a summary.json with status "ok" (resume). `shard_index/shard_count` selects every
+/// already holds a summary.json with status "ok", the same settings (experiment, overrides, faults) and
+/// input files whose content hashes still match the summary's (resume). `shard_index/shard_count` selects every
 /// shard_count-th run starting at shard_index, so a scheduler's job array can spread one sweep over many
 /// machines sharing a file system; each shard writes `manifest.shard-I-of-N.csv`, and `collect` rebuilds
 /// the full `manifest.csv` from the run folders. Format: docs/batch.md.
@@ -14,14 +15,14 @@
 #include <string>
 #include <vector>
 
-#include "jointsim/sim/faults.hpp"
+#include "jointsim/systems/faults.hpp"
 
 namespace jointsim::experiments {
 
 struct BatchRun {
   std::string name;                    ///< unique; also the run's folder name
   std::vector<std::string> overrides;  ///< "key.path=value", the sweep's common overrides first
-  std::vector<sim::Fault> faults;
+  std::vector<systems::Fault> faults;
   std::string describe() const;        ///< overrides and faults joined by "; "
 };
 
@@ -48,6 +49,8 @@ struct BatchRecord {
   std::string run, status;  ///< status: ok, failed (solver), error (bad input or crash), pending (not run)
   double wall_time_s = 0.0, sim_time_s = 0.0, real_time_factor = 0.0;
   std::string output_dir, overrides;
+  std::string jointsim_version, git_commit, started_utc;  ///< from the run's summary.json
+  std::string inputs;       ///< "path=hash;..." of every input file the run read
   bool skipped = false;     ///< finished in an earlier invocation
 };
 

@@ -1,7 +1,9 @@
 #pragma once
 /// \file
-/// Reading numeric CSV tables (jointsim's own logs and measured data): a header line of column names
-/// (conventionally `name[unit]`), then rows of numbers. Errors name the file and the line.
+/// The one CSV reader: every CSV input of jointsim (logs, measured data, input profiles, trajectories, batch
+/// manifests) is read here. A header line of column names (conventionally `name[unit]`), then rows; blank lines
+/// are skipped and '#' starts a comment line; cells may be quoted (RFC 4180: "a ""b""" is a "b"). Errors name
+/// the file, the line and the column: "data.csv:59:3: column 'motor_angle[rad]': expected a finite number, got 'nan'".
 
 #include <string>
 #include <vector>
@@ -10,6 +12,15 @@
 
 namespace jointsim::io {
 
+/// Rows of text cells.
+struct CsvText {
+  std::string path;                            ///< file it was read from (for messages)
+  std::vector<std::string> header;             ///< column names as written (trimmed)
+  std::vector<std::vector<std::string>> rows;  ///< cells of each data row (as many as the header)
+  std::vector<int> lines;                      ///< 1-based file line of each data row
+};
+
+/// A numeric table.
 struct CsvTable {
   std::string path;                  ///< file it was read from (for messages)
   std::vector<std::string> header;   ///< column names as written (trimmed)
@@ -22,14 +33,16 @@ struct CsvTable {
   /// As find(); throws InputError "PATH:1: missing column 'NAME' (expected WHAT; columns are: ...)".
   int require(const std::string& name, const std::string& what) const;
   Eigen::Index rows() const { return data.rows(); }
+  /// "PATH:LINE:COLUMN" of data row r, column c (1-based line and column), for messages.
+  std::string where(Eigen::Index r, int c) const;
 };
 
-/// Reads a CSV file. Blank lines are skipped; '#' starts a comment line. Throws InputError on an
-/// unreadable file, an empty file, a row with the wrong number of cells, a cell that is not a number,
-/// or (when `require_finite`) a NaN or infinite value — naming the file, line and column.
-CsvTable readCsv(const std::string& path, bool require_finite = true);
+/// Reads a CSV file of text cells (read through io::readInputFile). Throws InputError on an unreadable or
+/// empty file, an empty column name or a row with the wrong number of cells.
+CsvText readCsvText(const std::string& path);
 
-/// The column's base name: "motor_angle[rad]" -> "motor_angle".
-std::string columnBaseName(const std::string& header);
+/// Reads a numeric CSV file. As readCsvText, and throws InputError on a cell that is not a number or (when
+/// `require_finite`) a NaN or infinite value — naming the file, line and column.
+CsvTable readCsv(const std::string& path, bool require_finite = true);
 
 }  // namespace jointsim::io

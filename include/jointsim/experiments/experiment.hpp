@@ -1,0 +1,116 @@
+#pragma once
+/// \file
+/// Experiments: a YAML file describing a simulated model and how to run it (`jointsim run FILE.yaml`),
+/// loaded into an Experiment (its plant, run settings and resolved parameters) through the registry of
+/// experiment types (registry.hpp). Everything the CLI does is here as library calls:
+///
+///   auto e = experiments::loadExperiment("config/experiments/ur5_fall.yaml", {"duration=0.5"});
+///   experiments::ExperimentResult r = experiments::runInMemory(*e);      // nothing written
+///   double q = r.log.values(r.log.values.rows() - 1, r.log.column("q_shoulder_pan_joint"));
+///
+///   experiments::runExperimentFile("config/experiments/ur5_fall.yaml", {});   // out/ur5_fall/*.csv, summary.json
+///
+/// Outputs of runExperimentFile: `<dir>/<name>.csv` (the log), extra tables `<dir>/<name>_<suffix>.csv` (e.g.
+/// clamping curves) and `<dir>/summary.json` (status, timing, solver statistics, resolved parameters, the
+/// jointsim version and commit, the UTC start time and a content hash of every input file). Each is written
+/// to a temporary name and renamed into place; the summary comes last.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json_fwd.hpp>
+
+#include "jointsim/io/input_files.hpp"
+#include "jointsim/sim/plant.hpp"
+#include "jointsim/sim/simulate.hpp"
+#include "jointsim/systems/faults.hpp"
+
+namespace jointsim::experiments {
+
+/// A table produced besides the log (e.g. one clamping curve per axis): written as `<name>_<suffix>.csv`.
+struct ExtraTable {
+  std::string suffix;
+  sim::SignalTable table;
+};
+
+/// A loaded experiment, ready to run. Implemented once per experiment type.
+class Experiment {
+ public:
+  virtual ~Experiment() = default;
+  /// The simulated model.
+  virtual sim::Plant& plant() = 0;
+  /// End time, output grid and solver settings of the run.
+  virtual sim::SimulateOptions simulateOptions() const = 0;
+  /// Resolved parameters, written as "parameters" in summary.json, after the run (`result` holds its
+  /// statistics, e.g. the number of events).
+  virtual void describe(nlohmann::ordered_json& parameters, const sim::SimulationResult& result) const = 0;
+  /// Sees every output row during the run (e.g. to collect a maximum or extra tables).
+  virtual void observe(const Eigen::VectorXd& /*row*/) {}
+  /// Tables to write besides the log after a successful run.
+  virtual std::vector<ExtraTable> extraTables() const { return {}; }
+
+  const std::string& name() const { return name_; }  ///< experiment.name
+  const std::string& type() const { return type_; }  ///< experiment.type
+  const std::string& file() const { return file_; }  ///< the experiment file ("" when built in code)
+  /// The experiment file's document as JSON (copied into the summary's parameters.config).
+  const nlohmann::ordered_json& config() const;
+  /// Every file read while loading (experiment, robot, drives, CSV inputs) with its content hash.
+  const std::vector<io::InputFile>& inputs() const { return inputs_; }
+  void setIdentity(std::string name, std::string type, std::string file);
+  void setConfig(const nlohmann::ordered_json& config);
+  void setInputs(std::vector<io::InputFile> inputs) { inputs_ = std::move(inputs); }
+
+ private:
+  std::string name_, type_, file_;
+  std::shared_ptr<nlohmann::ordered_json> config_;
+  std::vector<io::InputFile> inputs_;
+};
+
+struct RunOptions {
+  std::string output_dir;              ///< empty: out/<experiment name>/ relative to the working directory
+  std::vector<std::string> overrides;  ///< "key.path=value" (e.g. "load.inertia=2", "input.profile.values[1]=3")
+  /// Faults injected into the drives (systems/faults.hpp); only experiment types with a robot with drives
+  /// (`tracking`) accept them, the others reject a non-empty list with InputError.
+  std::vector<systems::Fault> faults;
+  /// Progress on stderr (simulated time, real-time factor, ETA) for runs longer than ~2 s; the CLI sets it
+  /// when stderr is a terminal.
+  bool progress = false;
+};
+
+struct RunReport {
+  std::string experiment;         ///< experiment name
+  std::string status;             ///< "ok" or "failed"
+  std::string csv_path;           ///< log file written (empty when failed)
+  std::string summary_path;       ///< summary.json written
+  double sim_time_s = 0.0;        ///< simulated time [s]
+  double wall_time_s = 0.0;       ///< wall-clock time [s]
+  double real_time_factor = 0.0;  ///< sim_time_s / wall_time_s
+  sim::SolverStats stats;
+};
+
+/// The outcome of a run in memory.
+struct ExperimentResult {
+  sim::SignalTable log;             ///< the log (the CSV's content)
+  std::vector<ExtraTable> extras;   ///< extra tables (e.g. clamping curves)
+  sim::SimulationResult result;     ///< statistics
+  std::string summary_json;         ///< summary.json's content (status "ok")
+};
+
+/// Loads an experiment file: parses it, applies `overrides` ("key.path=value"; InputError for a key the file
+/// lacks) and builds the experiment of its `experiment.type` through the registry. Bad input: InputError
+/// naming the file, line and key path.
+std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::vector<std::string>& overrides = {},
+                                           const std::vector<systems::Fault>& faults = {});
+/// Runs a loaded experiment in memory: nothing is written. SolverError on failure.
+ExperimentResult runInMemory(Experiment& experiment);
+/// Loads and runs an experiment file, writing the log, extra tables and summary.json (see the file comment).
+/// Bad input: InputError (nothing written). Solver failure: summary.json with status "failed" and the reason
+/// (no log), and the SolverError rethrown.
+RunReport runExperimentFile(const std::string& config_path, const RunOptions& options = {});
+/// Runs a loaded experiment and writes its outputs into `options.output_dir` (overrides and faults of
+/// `options` are ignored: they belong to loading).
+RunReport runAndRecord(Experiment& experiment, const RunOptions& options);
+
+}  // namespace jointsim::experiments

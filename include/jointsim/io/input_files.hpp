@@ -1,0 +1,45 @@
+#pragma once
+/// \file
+/// Reading input files (experiment, robot, drive and sweep files, CSV data) through one function, which
+/// also records what a run read: summary.json lists every input file with a content hash, and a batch reuses a
+/// finished run only while those hashes still match (experiments/batch.hpp).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace jointsim::io {
+
+/// One file read by readInputFile.
+struct InputFile {
+  std::string path;  ///< absolute, normalised path
+  std::string hash;  ///< content hash, "xxh3:" + 16 hex digits (XXH3 64-bit of the bytes)
+  std::uint64_t size = 0;  ///< bytes
+};
+
+/// The whole file `path` as bytes. Throws InputError "PATH: cannot open WHAT for reading". While an
+/// InputRecord is alive on this thread, the file is added to it (once per path).
+std::string readInputFile(const std::string& path, const std::string& what = "file");
+
+/// Collects the files read by readInputFile on this thread during its lifetime (records nest: a file goes to
+/// every record alive).
+class InputRecord {
+ public:
+  InputRecord();
+  ~InputRecord();
+  InputRecord(const InputRecord&) = delete;
+  InputRecord& operator=(const InputRecord&) = delete;
+  const std::vector<InputFile>& files() const { return files_; }
+  void add(const InputFile& file);
+
+ private:
+  std::vector<InputFile> files_;
+  InputRecord* outer_ = nullptr;
+};
+
+/// "xxh3:" + the XXH3 64-bit hash of `bytes` in hex.
+std::string contentHash(const std::string& bytes);
+/// contentHash of the file's bytes; empty when the file cannot be read.
+std::string fileHash(const std::string& path);
+
+}  // namespace jointsim::io

@@ -1,0 +1,92 @@
+#pragma once
+/// \file
+/// The one simulate loop: runs any sim::Plant (plant.hpp) with CVODE from t = 0 to t_end, handling root
+/// events, time events and the sampled part, and hands the outputs on a grid to a sink.
+///
+/// Event handling. The integrator carries a stop time at the next time event or sample, so no step crosses
+/// one. At a located root or a time event the plant updates its modes (updateModes) and CVODE is restarted
+/// (its multistep history is discarded: the right-hand side may jump there); outputs at that instant show the
+/// state after the update. At a sample t_k the plant's sampled part is updated (sample) and CVODE is
+/// restarted; an output due at t_k (within 1e-12 s) is taken before the update, i.e. it shows the inputs held
+/// over the interval that ends at t_k, as a sampled-data recorder would.
+///
+/// Output grid: either a rate (t_k = min(t_end, k / rate), k = 1 .. ⌈t_end·rate − 1e-9⌉, the experiments
+/// with `log_rate`) or an interval (t_k = min(t_end, k·interval) until t_end, the Modelica-style experiments
+/// with an output interval); plus the row at t = 0. Every row starts with the time [s] followed by
+/// plant.signals().
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "jointsim/sim/cvode_integrator.hpp"
+#include "jointsim/sim/plant.hpp"
+
+namespace jointsim::sim {
+
+struct SimulateOptions {
+  double t_end = 1.0;             ///< end of the run [s], > 0
+  double output_rate = 0.0;       ///< output grid as a rate [Hz] (> 0), or
+  double output_interval = 0.0;   ///< output grid as an interval [s] (> 0); exactly one of the two is set
+  CvodeOptions solver;            ///< integrator settings (component defaults to plant.name())
+  /// Stop exactly at t_end (a stop time there). False lets the last internal step overshoot t_end and the
+  /// last outputs be interpolated, which is fine for a smooth right-hand side that is valid beyond t_end.
+  bool stop_at_end = true;
+  /// More root/time events than this between two outputs is chattering: SolverError EVENT_CHATTERING.
+  long max_events_per_output = 100000;
+  /// Throws InputError for a bad end time, grid or event budget.
+  void validate() const;
+};
+
+struct SimulationResult {
+  SolverStats stats;        ///< CVODE counters, cumulative over all restarts
+  double sim_time_s = 0.0;  ///< simulated time reached [s]
+  double wall_time_s = 0.0; ///< wall-clock time of the run [s]
+  long events = 0;          ///< root and time events handled
+  long samples = 0;         ///< updates of the sampled part (including the one at t = 0)
+  long outputs = 0;         ///< rows handed to the sink (including t = 0)
+  double realTimeFactor() const { return wall_time_s > 0.0 ? sim_time_s / wall_time_s : 0.0; }
+};
+
+/// Receives one output row: [t, signals...] (size 1 + plant.signalNames().size()). May throw: the run stops.
+using OutputSink = std::function<void(const Eigen::VectorXd& row)>;
+
+/// Runs `plant` from its initialState() at t = 0 to options.t_end. Throws InputError for bad options,
+/// SolverError (with the simulated time, the CVODE flag and the plant's name) when the integration fails or
+/// events chatter.
+SimulationResult simulate(Plant& plant, const SimulateOptions& options, const OutputSink& sink);
+
+/// Time series of named signals, in memory (what `jointsim run` writes as CSV).
+struct SignalTable {
+  std::vector<std::string> columns;  ///< "time[s]", then the plant's signals `name[unit]`
+  Eigen::MatrixXd values;            ///< one row per output time
+  /// Column index by name, with or without its unit ("motor_angle" or "motor_angle[rad]"); throws
+  /// InputError listing the columns when absent.
+  int column(const std::string& name) const;
+  /// The column as a vector.
+  Eigen::VectorXd operator[](const std::string& name) const { return values.col(column(name)); }
+};
+
+/// Sink that collects rows into a SignalTable (reserve() the expected row count to avoid reallocation).
+class TableSink {
+ public:
+  explicit TableSink(std::vector<std::string> columns);
+  void operator()(const Eigen::VectorXd& row);
+  SignalTable table() const;
+  long rows() const { return rows_; }
+
+ private:
+  std::vector<std::string> columns_;
+  std::vector<double> data_;
+  long rows_ = 0;
+};
+
+/// CSV/table column names of a plant: "time[s]" followed by its signal names.
+std::vector<std::string> tableColumns(const Plant& plant);
+
+/// simulate() into memory.
+SignalTable simulateTable(Plant& plant, const SimulateOptions& options, SimulationResult* result = nullptr);
+
+}  // namespace jointsim::sim

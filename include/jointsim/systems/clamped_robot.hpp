@@ -1,0 +1,152 @@
+#pragma once
+/// \file
+/// Seed 000's clamping experiment on a whole robot (MODEL_REFERENCE §1.5, §2.2–2.6, §6.2, §7.1–7.2): the
+/// end effector is held by a 6-D spring–damper clamp at its start pose while the axis controllers drive
+/// the motors back and forth along ClampingPathPlanning references, so each motor winds up its
+/// transmission against the clamped structure. Motor torque against motor angle is the axis's clamping
+/// curve.
+///
+/// Per axis (000 §3.8, A.7): controller torque → motor inertia J → bearing friction (table with peak,
+/// exact MSL stick–slip logic on the motor shaft) → ElastoBacklash (c, d, b; motor side) → ideal gear r →
+/// gear output angle φ_out. An optional coupling matrix G (the wrist) maps gear output angles to joint
+/// angles, q = G φ_out, and τ_out = Gᵀ τ_joint (000 eqs. 2.1–2.2). Joints with c_orth > 0 get two extra
+/// rotational degrees of freedom orthogonal to their axis (000 §3.7's bending compliance, axes from
+/// getOrthVectors), each restrained by c_orth and d_orth.
+///
+/// Clamp (000 §3.9, A.11): on the clamp frame, force f = −(c_lin Δp + d_lin v) with Δp the frame
+/// origin's displacement from its start position and v its velocity (world frame), and moment
+/// m = −(c_rot θ + d_rot ω) with θ the rotation vector of R₀ᵀR and ω the angular velocity, both in the
+/// frame's own axes. 000 integrates ω for θ; the two agree to second order in the (µrad) rotation, and
+/// the rotation vector needs no extra states and makes an isotropic c_rot exactly conservative.
+///
+/// Controller (000 A.12): u = r_c q̇_ref + k_p (φ_ref − φ_m) − ω_m, τ_m = k_s (u + x), ẋ = u / T_s, with
+/// φ_ref = φ_m(0) + r_c q_ref(t): the reference is the axis's ClampingPath scaled by the controller ratio
+/// r_c (the wrist controllers ignore the coupling, as in 000) and offset by the start motor angle.
+///
+/// State vector: [q, q̇] of the arm (joints and orthogonal-compliance angles), then per axis [φ_m, ω_m, x].
+/// Units: SI throughout (rad, rad/s, N·m, N, m, kg·m²).
+
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "jointsim/control/clamping_path.hpp"
+#include "jointsim/drive/transmissions.hpp"
+#include "jointsim/drive/msl_friction.hpp"
+#include "jointsim/multibody/data.hpp"
+#include "jointsim/multibody/model.hpp"
+#include "jointsim/sim/plant.hpp"
+#include "jointsim/sim/simulate.hpp"
+
+namespace jointsim::systems {
+
+using drive::FrictionMode;
+
+struct ClampingAxisParams {
+  std::string joint;               ///< joint this axis drives (through G for a coupled wrist)
+  double ratio = 1.0;              ///< gear ratio r = φ_motor / φ_out [-], != 0 (wrist axes in 000: 1)
+  double inertia = 0.01;           ///< motor (rotor) inertia J [kg·m²], > 0
+  double c = 50.0;                 ///< ElastoBacklash stiffness, motor side [N·m/rad], > 0
+  double d = 10.0;                 ///< ElastoBacklash damping, motor side [N·m·s/rad], >= 0
+  double b = 0.001;                ///< total backlash, motor side [rad], >= 0
+  std::vector<std::array<double, 2>> tau_pos{{0.0, 1.0}, {1.0, 1.1}};  ///< friction table rows [rad/s, N·m]
+  double peak = 1.0;               ///< stiction factor (breakaway = peak · tau_pos(0)) [-], >= 1
+  double c_orth = 0.0;             ///< orthogonal (bending) stiffness [N·m/rad]; 0 = rigid
+  double d_orth = 30.0;            ///< orthogonal damping [N·m·s/rad], >= 0 (000 default 30)
+  double kp = 10.0;                ///< position gain [1/s]
+  double ks = 1.0;                 ///< speed PI gain [N·m·s/rad]
+  double Ts = 0.01;                ///< PI time constant [s], > 0
+  double controller_ratio = 1.0;   ///< r_c scaling the arm-side reference to the motor [-]
+  control::ClampingPathParams path{0.0};  ///< reference swing (q_pos = 0: hold the start angle)
+  void validate() const;           ///< throws InputError naming the axis
+};
+
+struct ClampSpec {
+  std::string frame;                                      ///< clamped frame (empty: the model's tip frame)
+  Eigen::Matrix3d c_lin = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N/m] (000 A.11 default)
+  Eigen::Matrix3d d_lin = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N·s/m]
+  Eigen::Matrix3d c_rot = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N·m/rad]
+  Eigen::Matrix3d d_rot = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N·m·s/rad]
+};
+
+struct ClampingSetup {
+  std::string name = "clamping";
+  multibody::Model arm;                  ///< rigid robot (without orthogonal compliance)
+  std::vector<ClampingAxisParams> axes;  ///< one per movable joint of `arm`, any order
+  /// Coupling between gear outputs and joints, q = G φ_out, over the joints in `coupled_joints` order
+  /// (e.g. the IRB140 wrist's 3×3 G). Empty: no coupling.
+  Eigen::MatrixXd coupling;
+  std::vector<std::string> coupled_joints;
+  ClampSpec clamp;
+  Eigen::VectorXd q0;                    ///< start posture [rad] (empty: zeros); the clamp holds this pose
+  double duration = 15.0;                ///< [s]
+  double log_interval = 0.001;           ///< [s]
+  sim::CvodeOptions solver = defaultSolver();
+  /// BDF capped at order 2 (lightly damped clamp/bending modes, docs/design.md), rtol 1e-6, atol 1e-9.
+  static sim::CvodeOptions defaultSolver();
+  void validate() const;
+};
+
+class ClampedRobot : public sim::Plant {
+ public:
+  explicit ClampedRobot(ClampingSetup setup);
+  const ClampingSetup& setup() const { return s_; }
+  /// t_end = duration, outputs every log_interval (also the max step when the solver sets none).
+  sim::SimulateOptions simulateOptions() const;
+  /// The arm with the orthogonal-compliance joints inserted.
+  const multibody::Model& model() const { return model_; }
+  int axisCount() const { return n_; }
+  /// Index in model() of the joint driven by axis k, and of its two orthogonal joints (-1 if none).
+  int jointOfAxis(int k) const { return joint_[static_cast<size_t>(k)]; }
+  std::array<int, 2> orthOfAxis(int k) const { return orth_[static_cast<size_t>(k)]; }
+  /// State index of axis k's motor angle (ω_m and the controller state x follow).
+  int motorState(int k) const { return 2 * model_.nq + 3 * k; }
+
+  const std::vector<FrictionMode>& modes() const { return modes_; }
+  /// Indices of axis k's motor angle [rad] and motor torque [N·m] in signalNames().
+  int motorAngleSignal(int k) const { return 10 * k; }
+  int motorTorqueSignal(int k) const { return 10 * k + 2; }
+
+  std::string name() const override;
+  int stateSize() const override { return n_states_; }
+  Eigen::VectorXd initialState() const override;
+  void start(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override { updateModes(t, y, {}); }
+  /// Sets the friction modes consistently with state y at time t (MSL event iteration).
+  void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  int rootCount() const override { return 2 * n_; }
+  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
+  /// Time events of the references (segment slots, phase switches) [s].
+  std::vector<double> timeEvents(double t_end) const override;
+  const std::vector<std::string>& signalNames() const override { return signals_; }
+  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override;
+
+  /// Clamp displacement Δp [m] (world) and rotation vector θ [rad] (frame axes) at arm posture q.
+  void clampDeflection(const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Vector3d& dp, Eigen::Vector3d& theta) const;
+
+ private:
+  void solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  ClampingSetup s_;
+  multibody::Model model_;
+  int n_ = 0, n_states_ = 0, clamp_frame_ = -1;
+  std::vector<int> joint_;
+  std::vector<std::array<int, 2>> orth_;
+  std::vector<drive::ElastoBacklash> eb_;
+  std::vector<control::ClampingPath> paths_;
+  Eigen::MatrixXd Gfull_, GfullInv_;    // over the axes, in axis order: q_axis = G φ_out
+  bool coupled_ = false;
+  Eigen::VectorXd phi_m0_;
+  Eigen::Vector3d p0_;
+  Eigen::Matrix3d R0_;
+  std::vector<FrictionMode> modes_;
+  std::vector<std::string> signals_;
+  mutable multibody::Data data_;
+  mutable multibody::Matrix6Xd fext_;
+  mutable Eigen::VectorXd tau_, tau_out_, qa_, qda_, phi_out_, phid_out_, tau_s_, tau_m_, tau_f_, stuck_, wdot_, u_, ref_;
+  mutable Eigen::Vector3d dp_, theta_, f_w_, m_w_;
+};
+
+}  // namespace jointsim::systems

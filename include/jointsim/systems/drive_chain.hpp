@@ -1,0 +1,120 @@
+#pragma once
+/// \file
+/// One-dimensional rotational drive chain (generalises the joint rig): rigid inertias joined by elements
+/// — linear spring–damper, elasto-backlash, clutch between two inertias, brake or bearing friction to
+/// ground — and driven by torque sources. Friction elements follow the Modelica PartialFriction
+/// semantics exactly (ROBOTR3.md §5): modes stuck / start forward / start backward / forward / backward
+/// / free; while stuck the relative acceleration is constrained to zero and the friction torque comes
+/// from the torque balance of the whole chain (all stuck elements solved together); mode switches are
+/// located by CVODE root functions and the integrator is re-initialised at every event.
+///
+/// Two-flange conventions (MSL): an element joins input node `a` and output node `b` (−1 = ground);
+/// φ_rel = φ_b − φ_a, w_rel = ω_b − ω_a; its torque τ acts with +τ on the input body and −τ on the output
+/// body. A torque source applies +τ(t) to its node `b`. An ideal gear (MSL IdealGear) couples two inertias
+/// by φ_a = ratio·φ_b: it is a kinematic constraint solved together with the stuck friction elements; it
+/// exerts τ on the input and −ratio·τ on the output (lossless). Initial states must satisfy it.
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "jointsim/control/profile.hpp"
+#include "jointsim/drive/msl_friction.hpp"
+#include "jointsim/sim/plant.hpp"
+#include "jointsim/sim/simulate.hpp"
+
+namespace jointsim::systems {
+
+using drive::FrictionMode;
+
+struct ChainInertia {
+  std::string name;
+  double J = 1.0;     ///< inertia [kg·m²], > 0
+  double phi0 = 0.0;  ///< initial angle [rad]
+  double w0 = 0.0;    ///< initial speed [rad/s]
+};
+
+enum class ChainElementType { SpringDamper, ElastoBacklash, Clutch, Brake, BearingFriction, TorqueSource, Gear };
+
+struct ChainElement {
+  std::string name;
+  ChainElementType type = ChainElementType::SpringDamper;
+  int a = -1;  ///< input node: inertia index, −1 = ground
+  int b = -1;  ///< output node
+  // SpringDamper / ElastoBacklash
+  double c = 0.0;         ///< stiffness [N·m/rad]
+  double d = 0.0;         ///< damping [N·m·s/rad]
+  double backlash = 0.0;  ///< total backlash b [rad]
+  // Clutch / Brake: fn = fn_max · normalized(t); sliding torque cgeo·fn·μ(|w|); τ0 = cgeo·fn·μ(0)
+  double fn_max = 0.0;                                   ///< maximum normal force [N]
+  control::Profile normalized = control::Profile::constant(1.0);  ///< normalised normal force [-]
+  double cgeo = 1.0;                                     ///< geometry constant [m]
+  // BearingFriction: sliding torque f(v) from the table directly [N·m]
+  std::vector<std::array<double, 2>> table{{{0.0, 0.5}}};  ///< μ(v) [-] (clutch, brake) or f(v) [N·m] (bearing)
+  double peak = 1.0;                                     ///< stiction factor, τ0max = peak·τ0, >= 1
+  // TorqueSource
+  control::Profile torque = control::Profile::constant(0.0);  ///< [N·m]
+  // Gear: ideal, lossless, φ_a = ratio·φ_b; its torque is the constraint torque on the input flange [N·m]
+  double ratio = 1.0;
+  bool isFriction() const;
+};
+
+struct DriveChainSetup {
+  std::string name = "chain";
+  std::vector<ChainInertia> inertias;
+  std::vector<ChainElement> elements;
+  double duration = 1.0;   ///< [s]
+  double log_rate = 1000;  ///< [Hz]
+  sim::CvodeOptions solver = defaultSolver();
+  static sim::CvodeOptions defaultSolver();  ///< BDF order ≤ 2, rtol 1e-6, atol 1e-8
+  void validate() const;
+};
+
+/// The drive chain as a plant: modes of the friction elements as discrete state, two root functions per
+/// element (friction switching, elasto-backlash contact edges), the torque sources' and normal forces'
+/// breakpoints as time events.
+class DriveChain : public sim::Plant {
+ public:
+  explicit DriveChain(DriveChainSetup setup);
+  const DriveChainSetup& setup() const { return s_; }
+  /// t_end = duration, outputs at log_rate, its solver with max_step = one log interval when 0.
+  sim::SimulateOptions simulateOptions() const;
+  const std::vector<FrictionMode>& modes() const { return modes_; }
+
+  std::string name() const override;
+  int stateSize() const override { return 2 * static_cast<int>(s_.inertias.size()); }
+  Eigen::VectorXd initialState() const override;
+  /// Initial modes (MSL initialization rules: sliding where the element moves, then the event iteration).
+  void start(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override;
+  /// Event iteration at time t: `fired[k]` marks root functions that crossed.
+  void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
+  /// ẏ for the current modes (pure given the modes; no heap allocation).
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  int rootCount() const override { return 2 * static_cast<int>(s_.elements.size()); }
+  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
+  std::vector<double> timeEvents(double t_end) const override;
+  const std::vector<std::string>& signalNames() const override { return signals_; }
+  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const override;
+  /// Friction/compliant torque of element e at the current modes [N·m].
+  double elementTorque(int e, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+
+ private:
+  void solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // fills acc_, tau_el_
+  double tau0(int e, double t) const;
+  double slidingTorque(int e, double t, double w) const;  // signed: opposes w
+  double relSpeed(int e, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  double relAccel(int e) const;
+  DriveChainSetup s_;
+  std::vector<FrictionMode> modes_;
+  std::vector<std::string> signals_;
+  mutable Eigen::VectorXd acc_, tau_el_, known_;
+  mutable Eigen::MatrixXd A_;
+  mutable Eigen::VectorXd rhs_;
+  mutable std::vector<int> stuck_;
+};
+
+}  // namespace jointsim::systems

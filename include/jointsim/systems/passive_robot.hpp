@@ -1,0 +1,60 @@
+#pragma once
+/// \file
+/// Passive robot: a rigid robot moving under gravity with no actuation (optionally with viscous joint
+/// damping). The main demo job ("the UR5 falling") and the energy-conservation check of the multibody core
+/// with CVODE. State y = [q, q̇]; ẏ = [q̇, ABA(q, q̇, −b q̇)].
+
+#include <string>
+#include <vector>
+
+#include "jointsim/multibody/data.hpp"
+#include "jointsim/multibody/model.hpp"
+#include "jointsim/sim/plant.hpp"
+#include "jointsim/sim/simulate.hpp"
+
+namespace jointsim::systems {
+
+struct PassiveRobotParams {
+  std::string name = "passive_robot";  ///< experiment name (output file names)
+  Eigen::VectorXd q0;                  ///< (nq) initial joint positions [rad or m]; empty = zeros
+  Eigen::VectorXd qd0;                 ///< (nq) initial joint velocities [rad/s or m/s]; empty = zeros
+  Eigen::VectorXd damping;             ///< (nq) viscous joint damping [N·m·s/rad or N·s/m]; empty = zeros
+  double duration = 1.0;               ///< simulated time [s], > 0
+  double log_rate = 1000.0;            ///< log samples per second [Hz], > 0
+  sim::CvodeOptions solver = defaultSolver();  ///< integrator settings
+
+  /// Adams (non-stiff: a rigid robot has no fast modes) with tight tolerances.
+  static sim::CvodeOptions defaultSolver();
+  /// Throws InputError when a value is out of range or a vector has the wrong size for `model`.
+  void validate(const multibody::Model& model) const;
+};
+
+class PassiveRobot : public sim::Plant {
+ public:
+  /// Validates `params` against `model` (InputError).
+  PassiveRobot(multibody::Model model, PassiveRobotParams params);
+  const multibody::Model& model() const { return model_; }
+  const PassiveRobotParams& params() const { return p_; }
+  /// t_end = duration, outputs at log_rate, the solver as given (no step limit: the right-hand side is smooth
+  /// and valid beyond the end, so the last step may overshoot and the last rows are interpolated).
+  sim::SimulateOptions simulateOptions() const;
+
+  std::string name() const override;
+  int stateSize() const override { return 2 * model_.nq; }
+  Eigen::VectorXd initialState() const override;
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  /// q_i, qd_i per joint (joint names), kinetic, potential and total energy [J], tip frame position [m].
+  const std::vector<std::string>& signalNames() const override { return signals_; }
+  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override;
+
+ private:
+  multibody::Model model_;
+  PassiveRobotParams p_;
+  Eigen::VectorXd damping_;
+  int tip_ = 0;
+  std::vector<std::string> signals_;
+  mutable multibody::Data data_, log_data_;
+  mutable Eigen::VectorXd tau_;
+};
+
+}  // namespace jointsim::systems

@@ -1,0 +1,198 @@
+#pragma once
+/// \file
+/// A robot with drives: the multibody core plus one drive chain per joint, assembled into one state vector
+/// for CVODE (a sim::Plant). Per drive: controller → voltage (saturated PWM) → motor electrics → motor inertia
+/// → transmission → gear output shaft, with friction on the gear output shaft; an optional coupling matrix G
+/// maps gear output angles to joint angles (q = G φ_out, τ_joint = G⁻ᵀ τ_out).
+///
+/// State vector: [q (n), q̇ (n)], then per drive k (absent parts skipped):
+///   [q_m, q̇_m] (compliant transmission), [i] (motor electrics), [x_gear...], [z_friction...], and finally
+///   [x_ctrl...] of every drive (continuous control only).
+/// A rigid transmission merges the motor into the joint: q_m = N φ_out and its rotor inertia N² J_M is
+/// added to the joint-space inertia (the gear output torque is then N τ_M − N² J_M φ̈_out).
+/// Sensors are ideal (the controllers see the true states) unless sampled control adds quantisation and
+/// noise (setSampledControl) or a fault adds a joint-angle bias (SensorSpec::joint_bias, both modes).
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include "jointsim/control/joint_controller.hpp"
+#include "jointsim/control/trajectory.hpp"
+#include "jointsim/drive/dc_motor.hpp"
+#include "jointsim/drive/friction.hpp"
+#include "jointsim/drive/transmission.hpp"
+#include "jointsim/multibody/data.hpp"
+#include "jointsim/multibody/model.hpp"
+#include "jointsim/sim/plant.hpp"
+
+namespace jointsim::systems {
+
+/// Sensor imperfections. Quantisation and noise are used only with sampled (discrete-time) control; the
+/// joint-angle bias (a fault, systems/faults.hpp) applies in both modes.
+struct SensorSpec {
+  double joint_bias = 0.0;             ///< constant offset of the measured joint angle [rad]
+  double joint_quantum = 0.0;          ///< joint encoder resolution [rad] (0: none)
+  double motor_quantum = 0.0;          ///< motor encoder resolution [rad]; > 0: speed = Δ(quantised angle)/T_s
+  double current_quantum = 0.0;        ///< current sensor resolution [A]
+  double joint_noise = 0.0;            ///< std of additive Gaussian noise on the joint angle [rad]
+  double motor_velocity_noise = 0.0;   ///< std on the motor speed [rad/s]
+  double current_noise = 0.0;          ///< std on the current [A]
+};
+
+struct DriveSpec {
+  std::string joint;                                      ///< name of the joint this drive moves
+  drive::DcMotorParams motor;                             ///< motor (J_M always used; electrics if `electrics`)
+  bool electrics = true;                                  ///< false: torque-controlled motor, no current state
+  std::shared_ptr<const drive::Transmission> transmission;
+  std::shared_ptr<const drive::Friction> friction;        ///< on the gear output shaft; may be null
+  control::JointControllerParams controller;
+  SensorSpec sensors;                                     ///< used with sampled control only
+};
+
+/// Joint-space reference at time t (writes q_set, q̇_set, q̈_set of size n).
+using SetpointFunction = std::function<void(double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
+                                            Eigen::Ref<Eigen::VectorXd> qdd)>;
+
+/// External wrenches on the bodies at (t, kinematics in `data`): fills `fext` (6 × n, body frames, as in
+/// multibody::rnea). Used for clamps and contacts.
+using WrenchFunction = std::function<void(double t, const multibody::Model& model, const multibody::Data& data,
+                                          const Eigen::Ref<const Eigen::VectorXd>& q,
+                                          const Eigen::Ref<const Eigen::VectorXd>& qd, multibody::Matrix6Xd& fext)>;
+
+/// Signals of one evaluation, per joint (size n each).
+struct RobotSignals {
+  Eigen::VectorXd q_set, qd_set, qdd_set;
+  Eigen::VectorXd q_fb;           ///< measured joint angle [rad]
+  Eigen::VectorXd qm, qdm;        ///< motor angle [rad] and speed [rad/s]
+  Eigen::VectorXd current, i_ref; ///< motor current and its reference [A]
+  Eigen::VectorXd u;              ///< controller output: voltage command [V] or motor torque command [N·m]
+  Eigen::VectorXd voltage;        ///< supply voltage [V]
+  Eigen::VectorXd tau_motor;      ///< electromagnetic motor torque [N·m]
+  Eigen::VectorXd tau_gear;       ///< gear output torque [N·m] (before friction, output shaft)
+  Eigen::VectorXd tau_friction;   ///< friction torque on the output shaft [N·m]
+  Eigen::VectorXd tau_joint;      ///< torque applied to the joints by the drives [N·m]
+  Eigen::VectorXd qdd;            ///< joint accelerations [rad/s²]
+  void resize(int n);
+};
+
+class RobotSystem : public sim::Plant {
+ public:
+  /// `drives` must name every movable joint of `model` exactly once. `coupling` (n × n, optional, empty =
+  /// identity) maps gear output angles to joint angles. Throws InputError on inconsistencies.
+  RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, Eigen::MatrixXd coupling = {});
+
+  const multibody::Model& model() const { return model_; }
+  const std::vector<DriveSpec>& drives() const { return drives_; }
+  int dof() const { return model_.nq; }
+
+  /// Reference of every joint from a function (no time events: a reference whose q̈ jumps should come
+  /// through setTrajectory, so the integrator restarts at its breakpoints).
+  void setSetpoints(SetpointFunction f);
+  /// Reference from a trajectory (its breakpoints become time events under continuous control).
+  void setTrajectory(std::shared_ptr<const control::JointTrajectory> trajectory);
+  void setExternalWrenches(WrenchFunction f) { wrenches_ = std::move(f); }
+  /// Joint positions [rad] at t = 0 for initialState() (default: the reference at t = 0, or zeros).
+  void setInitialPositions(const Eigen::VectorXd& q0);
+
+  /// Switches to sampled (discrete-time) control at `rate` [Hz]: the controller states leave the ODE state
+  /// vector (stateSize() shrinks) and live in the sampled-control state; between samples the controller
+  /// outputs are held (zero-order hold). Call before initialState(). `seed` fixes the sensor noise sequence.
+  void setSampledControl(double rate, unsigned seed);
+  bool sampled() const { return sample_rate_ > 0.0; }
+  double sampleRate() const { return sample_rate_; }
+  /// One control period at time t: measure (noise, quantisation, encoder-difference speed), advance the
+  /// discrete controllers by forward Euler over 1/rate and hold their outputs. The integrator must restart
+  /// after each call (the held inputs jump); sim::simulate does.
+  void controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y);
+
+  /// Initial state: joints at q0 (at rest), motors at N φ_out, gear internal states at static equilibrium,
+  /// friction states at rest, controller states holding the gravity load.
+  Eigen::VectorXd initialState(const Eigen::VectorXd& q0, double t0 = 0.0) const;
+  /// All drive signals at (t, y) (evaluates the right-hand side).
+  const RobotSignals& driveSignals(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  /// Mechanical energy: multibody kinetic + potential, motor rotor kinetic, stored transmission energy [J].
+  double mechanicalEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  /// Index of the first state of drive k's parts (-1 if absent).
+  struct DriveLayout {
+    int motor = -1, current = -1, gear = -1, friction = -1, controller = -1;
+    int n_gear = 0, n_friction = 0, n_controller = 0;
+    bool rigid = false;
+    double ratio = 1.0;
+  };
+  const DriveLayout& layout(int k) const { return layout_[static_cast<size_t>(k)]; }
+
+  // sim::Plant
+  std::string name() const override { return "robot with drives '" + model_.name + "'"; }
+  int stateSize() const override { return n_states_; }
+  /// initialState(q0) with the positions of setInitialPositions().
+  Eigen::VectorXd initialState() const override;
+  /// ẏ = f(t, y): pure apart from the workspace; no heap allocation.
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  /// The trajectory's breakpoints under continuous control (sampled control restarts at every sample).
+  std::vector<double> timeEvents(double t_end) const override;
+  /// Sampled control: the controllers' first sample at t0.
+  void start(double t0, const Eigen::Ref<const Eigen::VectorXd>& y) override;
+  double samplePeriod() const override { return sampled() ? 1.0 / sample_rate_ : 0.0; }
+  void sample(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override { controlStep(t, y); }
+  /// Per joint: q_set, q, q_fb, qd, motor_velocity, current, current_ref, voltage, gear_torque,
+  /// friction_torque and the inverse-dynamics reference id_torque = RNEA(q_set, q̇_set, q̈_set) + N² J_M q̈_set
+  /// + friction steady state at q̇_set (the classic rigid model, [Raviola2023, Fig. 9]); then the TCP
+  /// position [m] and roll-pitch-yaw [rad] of the tip frame.
+  const std::vector<std::string>& signalNames() const override { return signal_names_; }
+  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override;
+
+ private:
+  // The right-hand side, stage by stage as the signals flow (each fills sig_ and its part of ẏ).
+  void evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
+  void setpointStage(double t) const;
+  void measurementStage(const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  void controllerStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
+  void powerElectronicsStage() const;
+  void motorElectricsStage(double* ydot) const;
+  void transmissionStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
+  void frictionStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
+  void jointTorqueStage() const;
+  void multibodyStage(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  void rotorReactionStage() const;
+
+  multibody::Model model_;
+  std::vector<DriveSpec> drives_;
+  std::vector<drive::DcMotor> motors_;
+  std::vector<control::JointController> controllers_;
+  std::vector<DriveLayout> layout_;
+  Eigen::MatrixXd G_, Ginv_;
+  bool coupled_ = false;
+  bool crba_path_ = false;          // coupled rigid drives: non-diagonal reflected inertia
+  Eigen::MatrixXd reflected_;       // G⁻ᵀ diag(N² J_M rigid) G⁻¹ (crba path)
+  int n_states_ = 0;
+  SetpointFunction setpoints_;
+  std::vector<double> setpoint_breaks_;
+  WrenchFunction wrenches_;
+  Eigen::VectorXd q0_;
+  // Sampled control: discrete controller states, held outputs and sensor memory (not ODE states).
+  double sample_rate_ = 0.0;
+  std::vector<double> ctrl_x_;
+  Eigen::VectorXd held_u_, held_i_ref_, held_q_fb_, prev_qm_meas_;
+  bool first_sample_ = true;
+  struct Rng;
+  std::shared_ptr<Rng> rng_;
+  // Logged signals.
+  std::vector<std::string> signal_names_;
+  multibody::Model id_model_;  // rotor inertias of every drive as armature (inverse-dynamics reference)
+  int tip_ = 0;
+  // Workspace (mutable: the right-hand side is logically const).
+  mutable multibody::Data data_, id_data_;
+  mutable RobotSignals sig_;
+  mutable std::vector<char> out_is_voltage_;
+  mutable Eigen::VectorXd phi_, phid_, tau_out_, tau_, tmp_, zero_;
+  mutable multibody::Matrix6Xd fext_;
+  mutable Eigen::MatrixXd M_;
+  mutable Eigen::LLT<Eigen::MatrixXd> llt_;
+};
+
+}  // namespace jointsim::systems

@@ -1,0 +1,88 @@
+#pragma once
+/// \file
+/// A Modelica RobotR3 axis driving a 1-D load inertia (the MSL "OneAxis" example, ROBOTR3.md §6):
+/// op-amp current-controlled motor (drive/opamp_motor.hpp), motor-side bearing friction with the exact
+/// MSL stuck/start/sliding logic, motor-side spring–damper, ideal gear, load inertia; the P/PI cascade of
+/// §3 producing the current set-point; a KinematicPTP2 path; termination at end time + swing time.
+/// States (as the Modelica model): q, q̇ (load), φ_rel = ratio·q − φ_m, ω_rel, PI state x, v_C, i; then
+/// four energy integrals for bookkeeping: W_el = ∫ −5 v_C i dt (work of the power amplifier on the
+/// armature circuit), E_R = ∫ Ra i² dt, E_d = ∫ d ω_rel² dt, E_f = ∫ τ_f ω_m dt [J].
+/// Only axis type 1 (elastic gear) is modelled so far.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "jointsim/control/kinematic_ptp.hpp"
+#include "jointsim/drive/opamp_motor.hpp"
+#include "jointsim/systems/drive_chain.hpp"
+
+namespace jointsim::systems {
+
+struct RobotR3AxisSetup {
+  std::string name = "one_axis";
+  std::string prefix = "axis";          ///< prefix of the reference column names ("axis" for OneAxis)
+  drive::OpAmpMotorParams motor = drive::OpAmpMotorParams::oneAxis();
+  double ratio = 210.0;                 ///< gear ratio motor/joint [-] (sign allowed)
+  double c = 8.0;                       ///< spring, motor side [N·m/rad]
+  double d = 0.01;                      ///< damper, motor side [N·m·s/rad]
+  double Rv0 = 0.5;                     ///< friction at zero speed [N·m]
+  double Rv1 = 0.1 / 130.0;             ///< viscous friction slope [N·m·s/rad]
+  double peak = 1.0;                    ///< stiction factor (type 1 ignores the gear's peak: 1)
+  double kp = 5.0, ks = 0.5, Ts = 0.05; ///< controller gains [1/s], [A·s/rad], [s]
+  double load_inertia = 19.5;           ///< J_load [kg·m²]
+  double q_begin = 0.0, q_end = 2.0943951023931953;   ///< path [rad]
+  double qd_max = 3.0, qdd_max = 10.0;  ///< path limits [rad/s], [rad/s²]
+  double start_time = 0.0;              ///< path start [s]
+  double swing_time = 0.5;              ///< run ends at the first t >= path end + swing [s]
+  double stop_time = 1.6;               ///< requested stop time [s]
+  double sa0 = 0.0;                     ///< friction torque at t = 0 (undetermined in MSL, §9.2) [N·m]
+  double log_interval = 0.00032;        ///< output interval [s]
+  sim::CvodeOptions solver = DriveChainSetup::defaultSolver();
+  void validate() const;
+};
+
+class RobotR3Axis : public sim::Plant {
+ public:
+  explicit RobotR3Axis(RobotR3AxisSetup setup);
+  const RobotR3AxisSetup& setup() const { return s_; }
+  /// t_end = endTime(), outputs every log_interval (also the max step when the solver sets none).
+  sim::SimulateOptions simulateOptions() const;
+  static constexpr int kStates = 11;  // q, qd, phi_rel, w_rel, x, v_C, i, W_el, E_R, E_d, E_f
+  /// Stored energy at y: ½ J_L q̇² + ½ J ω_m² + ½ c φ_rel² + ½ La i² [J].
+  double storedEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  FrictionMode mode() const { return mode_; }
+  double endTime() const;  ///< termination time: path end + swing, capped at the stop time
+
+  std::string name() const override;
+  int stateSize() const override { return kStates; }
+  Eigen::VectorXd initialState() const override;
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  int rootCount() const override { return 2; }
+  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
+  /// The path's segment switches.
+  std::vector<double> timeEvents(double t_end) const override;
+  void start(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override { updateModes(t, y, {}); }
+  /// Event iteration after a located root (or at t = 0 with no flags).
+  void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
+  const std::vector<std::string>& signalNames() const override { return signals_; }
+  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const override;
+
+  /// Algebraic quantities at (t, y) for the current mode.
+  struct Eval {
+    double q_ref, qd_ref, e, i_ref, tau_s, tau_f, wm, wm_dot, qdd, stuck_torque;
+  };
+  Eval evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+
+ private:
+  RobotR3AxisSetup s_;
+  drive::OpAmpMotor motor_;
+  control::KinematicPtpTrajectory path_;
+  FrictionMode mode_ = FrictionMode::Stuck;
+  std::vector<std::string> signals_;
+};
+
+}  // namespace jointsim::systems

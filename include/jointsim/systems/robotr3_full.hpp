@@ -1,0 +1,84 @@
+#pragma once
+/// \file
+/// The Modelica RobotR3 FullRobot (ROBOTR3.md §1–§5, §8.2, §9): the Manutec r3 arm (a multibody model)
+/// driven by six axes — type 1 (op-amp motor, motor-side bearing friction, spring–damper, ideal gear) or
+/// type 2 (op-amp motor, ideal gear with the rotor inertia N² J added to the arm, joint-side bearing
+/// friction) — each with the P/PI cascade, following one synchronised KinematicPTP2 path, ending at the
+/// path end + swing time. Friction follows the exact MSL logic; the stuck torques of stuck type-2 joints
+/// are solved together with the arm dynamics (M̄ q̈ + h = τ with q̈_j = 0 for every stuck joint j).
+/// States (36 for the r3): q, q̇, then φ_rel, ω_rel of each type-1 axis, then x, v_C, i of each axis.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "jointsim/control/kinematic_ptp.hpp"
+#include "jointsim/drive/opamp_motor.hpp"
+#include "jointsim/systems/drive_chain.hpp"
+#include "jointsim/multibody/data.hpp"
+#include "jointsim/multibody/model.hpp"
+
+namespace jointsim::systems {
+
+struct RobotR3AxisParams {
+  int type = 1;                     ///< 1: elastic gear, motor-side friction; 2: rigid gear, joint-side friction
+  double ratio = 1.0;               ///< motor angle / joint angle [-]
+  drive::OpAmpMotorParams motor;
+  double c = 0.0, d = 0.0;          ///< type 1 spring [N·m/rad] and damper [N·m·s/rad], motor side
+  double Rv0 = 0.0, Rv1 = 0.0;      ///< friction f(v) = Rv0 + Rv1 v [N·m, N·m·s/rad]
+  double peak = 1.0;                ///< stiction factor (type 1 uses 1, §2.3)
+  double kp = 5.0, ks = 0.5, Ts = 0.05;
+  /// Axis j (1..6) of FullRobot (ROBOTR3.md §2.5).
+  static RobotR3AxisParams fullRobot(int j);
+};
+
+struct RobotR3FullSetup {
+  std::string name = "robotr3_full_robot";
+  multibody::Model arm;                  ///< the Manutec r3 (config/robots/robotr3.yaml)
+  std::vector<RobotR3AxisParams> axes;   ///< one per joint, base to tip
+  Eigen::VectorXd q_begin, q_end, qd_max, qdd_max;  ///< path [rad, rad/s, rad/s²]
+  double start_time = 0.0, swing_time = 0.5, stop_time = 2.0;  ///< [s]
+  double log_interval = 0.0004;          ///< [s]
+  sim::CvodeOptions solver = DriveChainSetup::defaultSolver();
+  void validate() const;
+};
+
+class RobotR3Full : public sim::Plant {
+ public:
+  explicit RobotR3Full(RobotR3FullSetup setup);
+  const RobotR3FullSetup& setup() const { return s_; }
+  /// t_end = endTime(), outputs every log_interval (also the max step when the solver sets none).
+  sim::SimulateOptions simulateOptions() const;
+  double endTime() const;  ///< termination time: path end + swing, capped at the stop time
+  const std::vector<FrictionMode>& modes() const { return modes_; }
+
+  std::string name() const override;
+  int stateSize() const override { return n_states_; }
+  Eigen::VectorXd initialState() const override;
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  int rootCount() const override { return 2 * n_; }
+  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
+  /// The path's segment switches.
+  std::vector<double> timeEvents(double t_end) const override;
+  void start(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override { updateModes(t, y, {}); }
+  void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
+  const std::vector<std::string>& signalNames() const override { return signals_; }
+  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const override;
+
+ private:
+  void solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // fills the workspace below
+  RobotR3FullSetup s_;
+  int n_ = 0, n_states_ = 0;
+  std::vector<int> rel_;   // index of φ_rel per axis (−1 for type 2)
+  std::vector<int> ctrl_;  // index of x per axis (v_C, i follow)
+  control::KinematicPtpTrajectory path_;
+  std::vector<FrictionMode> modes_;
+  std::vector<std::string> signals_;
+  mutable multibody::Data data_;
+  mutable Eigen::VectorXd q_ref_, qd_ref_, qdd_ref_, tau_, qdd_, wm_, wm_dot_, tau_f_, stuck_, e_, iref_;
+  mutable Eigen::MatrixXd Mbar_;
+};
+
+}  // namespace jointsim::systems

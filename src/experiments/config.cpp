@@ -1,0 +1,193 @@
+#include "jointsim/experiments/config.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "experiments/config_internal.hpp"
+#include "io/yaml_node.hpp"
+#include "jointsim/common/error.hpp"
+
+namespace jointsim::experiments {
+
+using io::YamlValue;
+
+sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
+  if (!node.defined()) return o;
+  node.expectMap("a solver mapping {method, rtol, atol, max_step, max_order, stability_limit_detection}");
+  node.allowKeys({"method", "rtol", "atol", "max_step", "max_order", "stability_limit_detection", "max_num_steps"});
+  if (node.has("method")) {
+    const std::string m = node["method"].asString("adams or bdf");
+    if (m == "adams") o.method = sim::Method::Adams;
+    else if (m == "bdf") o.method = sim::Method::BDF;
+    else node["method"].failExpected("adams or bdf");
+  }
+  o.rtol = node["rtol"].asDouble(o.rtol, "a relative tolerance > 0");
+  if (!(o.rtol > 0)) node["rtol"].failExpected("a relative tolerance > 0");
+  o.atol = node["atol"].asDouble(o.atol, "an absolute tolerance > 0");
+  if (!(o.atol > 0)) node["atol"].failExpected("an absolute tolerance > 0");
+  o.max_step = node["max_step"].asDouble(o.max_step, "a step in s (0 = unlimited)");
+  if (o.max_step < 0) node["max_step"].failExpected("a step >= 0 s");
+  if (node.has("max_order")) o.max_order = static_cast<int>(node["max_order"].asInt("an order 1..5 (BDF) or 1..12 (Adams)"));
+  if (node.has("max_num_steps")) o.max_num_steps = node["max_num_steps"].asInt("a positive step count");
+  if (node.has("stability_limit_detection"))
+    o.stability_limit_detection = node["stability_limit_detection"].asBool("true or false");
+  return o;
+}
+
+void readDurationAndLogRate(const YamlValue& root, double& duration, double& log_rate) {
+  const YamlValue d = root.required("duration", "simulated time in s");
+  duration = d.asDouble("a time in s");
+  if (!(duration > 0)) d.failExpected("a time > 0 s");
+  log_rate = root["log_rate"].asDouble(log_rate, "a rate in Hz");
+  if (!(log_rate > 0)) root["log_rate"].failExpected("a rate > 0 Hz");
+}
+
+control::Profile readProfile(const YamlValue& node, const std::string& unit) {
+  node.expectMap("a profile mapping {type: constant|step|ramp|triangle|sine|piecewise|csv, ...}");
+  const YamlValue type = node.required("type", "profile type");
+  const std::string t = type.asString("a profile type");
+  auto num = [&](const char* key, const std::string& what) { return node.required(key, what).asDouble(what); };
+  auto opt = [&](const char* key, double fallback, const std::string& what) { return node[key].asDouble(fallback, what); };
+  try {
+    if (t == "constant") {
+      node.allowKeys({"type", "value"});
+      return control::Profile::constant(num("value", "a value in " + unit));
+    }
+    if (t == "step") {
+      node.allowKeys({"type", "initial", "final", "time"});
+      return control::Profile::step(opt("initial", 0.0, "a value in " + unit), num("final", "a value in " + unit),
+                                    num("time", "a time in s"));
+    }
+    if (t == "ramp") {
+      node.allowKeys({"type", "offset", "slope", "t0", "t1"});
+      return control::Profile::ramp(opt("offset", 0.0, "a value in " + unit), num("slope", "a slope in " + unit + "/s"),
+                                    opt("t0", 0.0, "a time in s"), opt("t1", -1.0, "a time in s"));
+    }
+    if (t == "triangle") {
+      node.allowKeys({"type", "amplitude", "period", "offset"});
+      return control::Profile::triangle(num("amplitude", "an amplitude in " + unit), num("period", "a period in s"),
+                                        opt("offset", 0.0, "a value in " + unit));
+    }
+    if (t == "sine") {
+      node.allowKeys({"type", "amplitude", "frequency", "phase", "offset", "until"});
+      return control::Profile::sine(num("amplitude", "an amplitude in " + unit), num("frequency", "a frequency in Hz"),
+                                    opt("phase", 0.0, "a phase in rad"), opt("offset", 0.0, "a value in " + unit),
+                                    opt("until", std::numeric_limits<double>::infinity(), "a time in s"));
+    }
+    if (t == "piecewise") {
+      node.allowKeys({"type", "times", "values", "hold"});
+      const bool hold = node.has("hold") && node["hold"].asBool("true or false");
+      return control::Profile::piecewise(node.required("times", "times in s").asDoubles(0, "a list of times in s"),
+                                         node.required("values", "values").asDoubles(0, "a list of values in " + unit), hold);
+    }
+    if (t == "csv") {
+      node.allowKeys({"type", "file", "column"});
+      return control::Profile::csv(node.required("file", "CSV file, relative to this file").asPath(),
+                                   node["column"].asString("", "a column name"));
+    }
+  } catch (const InputError& e) {
+    node.relocate(e);
+  }
+  type.failExpected("a profile type (constant, step, ramp, triangle, sine, piecewise, csv)");
+}
+
+void solverJson(nlohmann::ordered_json& out, const sim::CvodeOptions& o) {
+  out = {{"method", o.method == sim::Method::BDF ? "bdf" : "adams"},
+         {"rtol", o.rtol},
+         {"atol", o.atol},
+         {"max_step", o.max_step},
+         {"max_order", o.max_order},
+         {"stability_limit_detection", o.stability_limit_detection}};
+}
+
+void solverStatsJson(nlohmann::ordered_json& out, const sim::SolverStats& s) {
+  out = {{"steps", s.steps},
+         {"rhs_evals", s.rhs_evals},
+         {"rhs_evals_jacobian", s.rhs_evals_jacobian},
+         {"jac_evals", s.jac_evals},
+         {"lin_setups", s.lin_setups},
+         {"error_test_failures", s.error_test_failures},
+         {"nonlinear_iterations", s.nonlinear_iterations},
+         {"nonlinear_conv_failures", s.nonlinear_conv_failures},
+         {"last_order", s.last_order},
+         {"last_step_s", s.last_step}};
+}
+
+namespace detail {
+
+void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& overrides) {
+  const std::string& file = root.file();
+  for (const std::string& o : overrides) {
+    const size_t eq = o.find('=');
+    if (eq == std::string::npos || eq == 0) throw InputError("--set " + o + ": expected key.path=value");
+    const std::string path = o.substr(0, eq), value = o.substr(eq + 1);
+    // Split "a.b[2].c" into a, b, 2, c.
+    std::vector<std::string> parts;
+    std::string cur;
+    for (const char ch : path) {
+      if (ch == '.' || ch == '[' || ch == ']') {
+        if (!cur.empty()) parts.push_back(cur);
+        cur.clear();
+      } else {
+        cur += ch;
+      }
+    }
+    if (!cur.empty()) parts.push_back(cur);
+    YAML::Node node = io::yamlNode(root);
+    std::string walked;
+    for (const std::string& p : parts) {
+      walked += (walked.empty() ? "" : ".") + p;
+      YAML::Node child;
+      if (node.IsMap() && node[p].IsDefined()) {
+        child = node[p];
+      } else if (node.IsSequence() && !p.empty() && p.size() < 10 && p.find_first_not_of("0123456789") == std::string::npos &&
+                 std::stoul(p) < node.size()) {
+        child = node[std::stoul(p)];
+      } else {
+        throw InputError("--set " + o + ": " + file + " has no key '" + walked + "'");
+      }
+      node.reset(child);
+    }
+    if (!node.IsScalar() && !node.IsNull()) throw InputError("--set " + o + ": '" + path + "' in " + file + " is not a scalar");
+    node = value;
+  }
+}
+
+namespace {
+nlohmann::ordered_json nodeToJson(const YAML::Node& node) {
+  if (node.IsMap()) {
+    nlohmann::ordered_json out = nlohmann::ordered_json::object();
+    for (const auto& kv : node) out[kv.first.as<std::string>()] = nodeToJson(kv.second);
+    return out;
+  }
+  if (node.IsSequence()) {
+    nlohmann::ordered_json out = nlohmann::ordered_json::array();
+    for (const auto& item : node) out.push_back(nodeToJson(item));
+    return out;
+  }
+  if (node.IsScalar()) {
+    const std::string& s = node.Scalar();
+    char* end = nullptr;
+    const double v = std::strtod(s.c_str(), &end);
+    if (!s.empty() && end && *end == '\0' && std::isfinite(v)) return v;
+    if (s == "true" || s == "false") return s == "true";
+    return s;
+  }
+  return nullptr;
+}
+}  // namespace
+
+nlohmann::ordered_json yamlToJson(const io::YamlValue& value) { return nodeToJson(io::yamlNode(value)); }
+
+nlohmann::ordered_json vectorJson(const Eigen::Ref<const Eigen::VectorXd>& v) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(v[i]);
+  return out;
+}
+
+}  // namespace detail
+}  // namespace jointsim::experiments

@@ -1,0 +1,19 @@
+#pragma once
+// Internal: the parts of experiment-file handling that work on the yaml-cpp document itself.
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "jointsim/io/yaml.hpp"
+
+namespace jointsim::experiments::detail {
+
+/// Applies `key.path=value` overrides to the document; throws InputError if a key does not exist.
+void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& overrides);
+/// A YAML value as JSON (scalars that parse as finite numbers or as booleans become numbers/booleans).
+nlohmann::ordered_json yamlToJson(const io::YamlValue& value);
+/// A vector as a JSON array.
+nlohmann::ordered_json vectorJson(const Eigen::Ref<const Eigen::VectorXd>& v);
+
+}  // namespace jointsim::experiments::detail

@@ -1,0 +1,190 @@
+// Loading experiment files through the registry, running them in memory or into files (experiment.hpp).
+#include "jointsim/experiments/experiment.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "experiments/config_internal.hpp"
+#include "jointsim/common/error.hpp"
+#include "jointsim/common/version.hpp"
+#include "jointsim/experiments/config.hpp"
+#include "jointsim/experiments/registry.hpp"
+#include "jointsim/io/output.hpp"
+
+namespace jointsim::experiments {
+
+namespace fs = std::filesystem;
+using io::YamlValue;
+
+const nlohmann::ordered_json& Experiment::config() const {
+  static const nlohmann::ordered_json empty = nlohmann::ordered_json::object();
+  return config_ ? *config_ : empty;
+}
+
+void Experiment::setIdentity(std::string name, std::string type, std::string file) {
+  name_ = std::move(name);
+  type_ = std::move(type);
+  file_ = std::move(file);
+}
+
+void Experiment::setConfig(const nlohmann::ordered_json& config) { config_ = std::make_shared<nlohmann::ordered_json>(config); }
+
+std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::vector<std::string>& overrides,
+                                           const std::vector<systems::Fault>& faults) {
+  io::InputRecord inputs;
+  const YamlValue root = YamlValue::loadFile(path);
+  detail::applyOverrides(root, overrides);
+  root.expectMap("an experiment description mapping");
+  const YamlValue exp = root.required("experiment", "mapping {name, type}");
+  exp.expectMap("a mapping {name, type}");
+  exp.allowKeys({"name", "type", "description"});
+  const std::string name = exp.required("name", "experiment name").asString("a name");
+  if (name.empty() || name.find_first_of("/\\") != std::string::npos)
+    exp["name"].failExpected("a non-empty name without path separators");
+  const YamlValue type_node = exp.required("type", "experiment type");
+  const std::string t = type_node.asString("an experiment type");
+  const ExperimentType* type = findExperimentType(t);
+  if (!type) type_node.failExpected("an experiment type (known: " + experimentTypeNames() + ")");
+  if (!faults.empty() && !type->accepts_faults)
+    type_node.fail("faults (" + systems::describe(faults.front()) + ", ...) apply to experiments with a robot with drives "
+                   "(type tracking), not to type '" + t + "'");
+  std::unique_ptr<Experiment> e = type->load(root, LoadContext{name, path, faults});
+  e->setIdentity(name, t, path);
+  e->setConfig(detail::yamlToJson(root));
+  e->setInputs(inputs.files());
+  return e;
+}
+
+namespace {
+
+/// Runs the experiment, handing every row to `sink` and to the experiment's observer; progress on stderr.
+sim::SimulationResult execute(Experiment& e, const std::function<void(const Eigen::VectorXd&)>& sink, bool progress) {
+  const sim::SimulateOptions options = e.simulateOptions();
+  // Progress (set by the CLI when stderr is a terminal): from 2 s of wall time on, at most 4 updates per second.
+  const auto start = std::chrono::steady_clock::now();
+  auto last = start;
+  bool shown = false;
+  const sim::SimulationResult r = sim::simulate(e.plant(), options, [&](const Eigen::VectorXd& row) {
+    sink(row);
+    e.observe(row);
+    if (!progress) return;
+    const auto now = std::chrono::steady_clock::now();
+    const double wall = std::chrono::duration<double>(now - start).count();
+    if (wall < 2.0 || std::chrono::duration<double>(now - last).count() < 0.25) return;
+    last = now;
+    shown = true;
+    const double t = row[0], rtf = t / wall, t_end = options.t_end;
+    if (rtf > 0.0)
+      std::fprintf(stderr, "\r  %s: t = %.4g / %.4g s (%3.0f %%), real-time factor %.3g, ETA %.1f s   ", e.name().c_str(), t,
+                   t_end, 100.0 * t / t_end, rtf, (t_end - t) / rtf);
+    else
+      std::fprintf(stderr, "\r  %s: t = %.4g s   ", e.name().c_str(), t);
+    std::fflush(stderr);
+  });
+  if (shown) std::fprintf(stderr, "\n");
+  return r;
+}
+
+struct SummaryFields {
+  std::string status, reason, csv;
+  double failed_at = 0.0;
+  std::vector<std::string> extra_files;
+};
+
+std::string summaryJson(Experiment& e, const std::string& started, const SummaryFields& f,
+                        const sim::SimulationResult& r) {
+  nlohmann::ordered_json s;
+  s["experiment"] = e.name();
+  s["type"] = e.type();
+  s["status"] = f.status;
+  if (!f.reason.empty()) {
+    s["reason"] = f.reason;
+    s["failed_at_time_s"] = f.failed_at;
+  }
+  s["jointsim_version"] = version();
+  s["git_commit"] = gitCommit();
+  s["started_utc"] = started;
+  s["sim_time_s"] = r.sim_time_s;
+  s["wall_time_s"] = r.wall_time_s;
+  s["real_time_factor"] = r.realTimeFactor();
+  solverStatsJson(s["solver_stats"], r.stats);
+  s["csv"] = f.csv;
+  if (!f.extra_files.empty()) s["extra_csv"] = f.extra_files;
+  s["columns"] = sim::tableColumns(e.plant());
+  auto& inputs = s["inputs"] = nlohmann::ordered_json::array();
+  for (const auto& in : e.inputs()) inputs.push_back({{"path", in.path}, {"hash", in.hash}, {"bytes", in.size}});
+  auto& params = s["parameters"] = nlohmann::ordered_json::object();
+  e.describe(params, r);
+  params["config"] = e.config();
+  return s.dump(2) + "\n";
+}
+
+}  // namespace
+
+ExperimentResult runInMemory(Experiment& experiment) {
+  const std::string started = utcNow();
+  sim::TableSink sink(sim::tableColumns(experiment.plant()));
+  ExperimentResult out;
+  out.result = execute(experiment, [&sink](const Eigen::VectorXd& row) { sink(row); }, false);
+  out.log = sink.table();
+  out.extras = experiment.extraTables();
+  SummaryFields f;
+  f.status = "ok";
+  out.summary_json = summaryJson(experiment, started, f, out.result);
+  return out;
+}
+
+RunReport runAndRecord(Experiment& experiment, const RunOptions& options) {
+  const std::string started = utcNow();
+  const std::string& name = experiment.name();
+  RunReport report;
+  report.experiment = name;
+  const std::string dir = options.output_dir.empty() ? "out/" + name : options.output_dir;
+  io::createDirectories(dir);
+  const std::string csv_path = (fs::path(dir) / (name + ".csv")).string();
+  report.summary_path = (fs::path(dir) / "summary.json").string();
+
+  io::CsvWriter csv(csv_path, sim::tableColumns(experiment.plant()));
+  sim::SimulationResult r;
+  SummaryFields f;
+  const auto wall_start = std::chrono::steady_clock::now();
+  try {
+    r = execute(experiment, [&csv](const Eigen::VectorXd& row) { csv.writeRow(row); }, options.progress);
+  } catch (const SolverError& e) {
+    r.sim_time_s = e.time();
+    r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    f.status = report.status = "failed";
+    f.reason = e.what();
+    f.failed_at = e.time();
+    report.sim_time_s = e.time();
+    report.wall_time_s = r.wall_time_s;
+    io::writeFileAtomically(report.summary_path, summaryJson(experiment, started, f, r));
+    throw;  // the CsvWriter's destructor removes the partial log
+  }
+  csv.commit();
+  report.csv_path = f.csv = csv_path;
+  for (const ExtraTable& t : experiment.extraTables()) {
+    const std::string path = (fs::path(dir) / (name + "_" + t.suffix + ".csv")).string();
+    io::CsvWriter w(path, t.table.columns);
+    for (Eigen::Index k = 0; k < t.table.values.rows(); ++k) w.writeRow(t.table.values.row(k).transpose());
+    w.commit();
+    f.extra_files.push_back(path);
+  }
+  f.status = report.status = "ok";
+  report.stats = r.stats;
+  report.sim_time_s = r.sim_time_s;
+  report.wall_time_s = r.wall_time_s;
+  report.real_time_factor = r.realTimeFactor();
+  io::writeFileAtomically(report.summary_path, summaryJson(experiment, started, f, r));
+  return report;
+}
+
+RunReport runExperimentFile(const std::string& config_path, const RunOptions& options) {
+  std::unique_ptr<Experiment> e = loadExperiment(config_path, options.overrides, options.faults);
+  return runAndRecord(*e, options);
+}
+
+}  // namespace jointsim::experiments

@@ -1,0 +1,221 @@
+// `type: tracking`: a robot with drives (systems/robot_system.hpp) following a joint trajectory under its
+// drive controllers, continuous or sampled; the UR5 digital twin of [Raviola2023].
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "experiments/config_internal.hpp"
+#include "jointsim/common/error.hpp"
+#include "jointsim/control/trajectory_yaml.hpp"
+#include "jointsim/experiments/config.hpp"
+#include "jointsim/experiments/types.hpp"
+#include "jointsim/systems/robot_with_drives.hpp"
+
+namespace jointsim::experiments {
+
+using io::YamlValue;
+
+TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name, const std::vector<systems::Fault>& faults) {
+  (void)name;
+  root.allowKeys({"experiment", "robot", "trajectory", "initial_state", "duration", "log_rate", "solver", "check_limits",
+                  "control"});
+  TrackingSetup s;
+  const std::string base_dir = std::filesystem::path(root.file()).parent_path().string();
+  const YamlValue robot = root.required("robot", "robot-with-drives file, relative to this file");
+  s.robot_file = robot.asPath();
+  try {
+    s.robot = std::make_shared<systems::RobotSystem>(systems::loadRobotWithDrives(s.robot_file, faults));
+  } catch (const InputError& e) {
+    robot.fail(std::string("cannot load robot: ") + e.what());
+  }
+  systems::RobotSystem& sys = *s.robot;
+  const int n = sys.dof();
+  if (const YamlValue c = root["control"]; c.defined()) {
+    c.expectMap("a mapping {rate: Hz, seed}");
+    c.allowKeys({"rate", "seed"});
+    const YamlValue rate = c.required("rate", "control sampling rate in Hz");
+    s.control_rate = rate.asDouble("a rate in Hz");
+    if (!(s.control_rate > 0.0)) rate.failExpected("a rate > 0 Hz");
+    const long seed = c["seed"].defined() ? c["seed"].asInt("an integer seed") : 1;
+    sys.setSampledControl(s.control_rate, static_cast<unsigned>(seed));
+  }
+  s.trajectory = control::trajectoryFromYaml(root.required("trajectory", "the reference trajectory"), n, base_dir);
+  const bool check = !root.has("check_limits") || root["check_limits"].asBool("true or false");
+  if (check) {
+    try {
+      control::checkLimits(*s.trajectory, sys.model().joint_names, sys.model().limits);
+    } catch (const InputError& e) {
+      root["trajectory"].fail(e.what());
+    }
+  }
+  const YamlValue duration_node = root["duration"];
+  s.duration = duration_node.asDouble(s.trajectory->duration(), "a time in s");
+  if (!(s.duration > 0)) duration_node.failExpected("a time > 0 s");
+  s.log_rate = root["log_rate"].asDouble(500.0, "a rate in Hz");
+  if (!(s.log_rate > 0)) root["log_rate"].failExpected("a rate > 0 Hz");
+  s.solver.method = sim::Method::BDF;
+  s.solver.max_order = 2;  // A-stable: lightly damped kHz gear modes (docs/design.md)
+  s.solver.rtol = 1e-6;
+  s.solver.atol = 1e-9;
+  s.solver = readSolver(root["solver"], s.solver);
+  if (s.solver.max_step == 0.0) s.solver.max_step = 1.0 / s.log_rate;
+
+  sys.setTrajectory(s.trajectory);
+  Eigen::VectorXd q0(n), tmp1(n), tmp2(n);
+  s.trajectory->evaluate(0.0, q0, tmp1, tmp2);
+  if (const YamlValue init = root["initial_state"]; init.defined()) {
+    init.expectMap("a mapping {q}");
+    init.allowKeys({"q"});
+    const auto v = init["q"].asDoubles(static_cast<size_t>(n), std::to_string(n) + " joint positions in rad");
+    q0 = Eigen::Map<const Eigen::VectorXd>(v.data(), n);
+  }
+  sys.setInitialPositions(q0);
+  return s;
+}
+
+namespace {
+
+class TrackingExperiment : public Experiment {
+ public:
+  explicit TrackingExperiment(TrackingSetup s) : s_(std::move(s)), max_err_(Eigen::VectorXd::Zero(s_.robot->dof())) {}
+  sim::Plant& plant() override { return *s_.robot; }
+  sim::SimulateOptions simulateOptions() const override {
+    sim::SimulateOptions o;
+    o.t_end = s_.duration;
+    o.output_rate = s_.log_rate;
+    o.solver = s_.solver;
+    return o;
+  }
+  void observe(const Eigen::VectorXd& row) override {
+    // Per joint the row holds [q_set, q, ...] at columns 1 + 11 k (after the time).
+    for (Eigen::Index k = 0; k < max_err_.size(); ++k)
+      max_err_[k] = std::max(max_err_[k], std::abs(row[1 + 11 * k] - row[2 + 11 * k]));
+  }
+  void describe(nlohmann::ordered_json& w, const sim::SimulationResult&) const override {
+    const systems::RobotSystem& sys = *s_.robot;
+    w["config_file"] = file();
+    w["robot_file"] = s_.robot_file;
+    w["robot"] = sys.model().name;
+    w["joints"] = sys.model().joint_names;
+    w["trajectory"] = s_.trajectory->describe();
+    w["state_size"] = sys.stateSize();
+    auto& drives = w["drives"] = nlohmann::ordered_json::array();
+    for (const auto& d : sys.drives())
+      drives.push_back({{"joint", d.joint},
+                        {"transmission", d.transmission->type()},
+                        {"ratio", d.transmission->ratio()},
+                        {"friction", d.friction ? d.friction->type() : std::string("none")},
+                        {"electrics", d.electrics}});
+    w["max_tracking_error_rad"] = detail::vectorJson(max_err_);
+    w["control_rate_hz"] = s_.control_rate;
+    w["duration"] = s_.duration;
+    w["log_rate"] = s_.log_rate;
+    solverJson(w["solver"], s_.solver);
+  }
+
+ private:
+  TrackingSetup s_;
+  Eigen::VectorXd max_err_;
+};
+
+std::vector<Figure> trackingFigures(const RunData& run) {
+  std::vector<Figure> figs;
+  const auto joints = jointsWithPrefix(run, "q_set_");
+  if (joints.empty()) return figs;
+  // Tracking error q_set − q, in mrad (or µrad) when small.
+  double max_err = 0;
+  for (const auto& j : joints) {
+    const int cs = run.col("q_set_" + j), cq = run.col("q_" + j);
+    if (cs >= 0 && cq >= 0 && run.data.rows())
+      max_err = std::max(max_err, (run.data.col(cs) - run.data.col(cq)).cwiseAbs().maxCoeff());
+  }
+  const Scaled err = readableUnit("rad", max_err);
+  Figure e{run.experiment + "_tracking_error", run.experiment + ": tracking error per joint", 1, 1, {}};
+  Figure tq{run.experiment + "_torques", run.experiment + ": gear torque vs. inverse-dynamics reference", 1, 1, {}};
+  Figure q{run.experiment + "_joint_angles", run.experiment + ": joint angles, set point and actual", 1, 1, {}};
+  Figure cur{run.experiment + "_currents", run.experiment + ": motor currents", 1, 1, {}};
+  const std::string time_label = axisLabel("time", run.unit(run.time()));
+  for (const auto& j : joints) {
+    const int cs = run.col("q_set_" + j), cq = run.col("q_" + j);
+    if (cq >= 0) {
+      Panel p;
+      p.title = j;
+      p.xlabel = time_label;
+      p.ylabel = axisLabel("q_set − q", err.unit);
+      Series s = timeSeries(run, cs, "q_set − q");
+      s.y_minus = cq;
+      s.factor = err.factor;
+      p.series.push_back(s);
+      e.panels.push_back(p);
+      Panel a;
+      a.title = j;
+      a.xlabel = time_label;
+      a.ylabel = axisLabel("joint angle", run.unit(cq));
+      a.series.push_back(timeSeries(run, cs, "q_set", 1, LineStyle::Dashed));
+      a.series.push_back(timeSeries(run, cq, "q"));
+      q.panels.push_back(a);
+    }
+    std::vector<Series> torques;
+    const int cg = run.col("gear_torque_" + j), ci = run.col("id_torque_" + j), cf = run.col("friction_torque_" + j);
+    if (cg >= 0) torques.push_back(timeSeries(run, cg, "gear torque"));
+    if (ci >= 0) torques.push_back(timeSeries(run, ci, "inverse dynamics (reference)", 1, LineStyle::Dashed));
+    if (cf >= 0) torques.push_back(timeSeries(run, cf, "friction torque"));
+    if (!torques.empty()) {
+      Panel p;
+      p.title = j;
+      p.xlabel = time_label;
+      p.ylabel = axisLabel("torque", run.unit(cg >= 0 ? cg : ci >= 0 ? ci : cf));
+      p.series = torques;
+      tq.panels.push_back(p);
+    }
+    const int cc = run.col("current_" + j), cr = run.col("current_ref_" + j);
+    if (cc >= 0) {
+      Panel p;
+      p.title = j;
+      p.xlabel = time_label;
+      p.ylabel = axisLabel("motor current", run.unit(cc));
+      if (cr >= 0) p.series.push_back(timeSeries(run, cr, "reference", 1, LineStyle::Dashed));
+      p.series.push_back(timeSeries(run, cc, "current"));
+      cur.panels.push_back(p);
+    }
+  }
+  for (Figure* f : {&e, &tq, &q, &cur})
+    if (!f->panels.empty()) {
+      grid(*f, f->panels.size());
+      figs.push_back(*f);
+    }
+  return figs;
+}
+
+std::optional<KeySignal> trackingKeySignal(const RunData& run) {
+  const auto joints = jointsWithPrefix(run, "q_set_");
+  if (joints.empty() || run.col("q_" + joints[0]) < 0 || run.data.rows() == 0) return std::nullopt;
+  const int cs = run.col("q_set_" + joints[0]), cq = run.col("q_" + joints[0]);
+  KeySignal k;
+  k.x = run.name(run.time());
+  k.y = "q_set_" + joints[0];
+  k.y_minus = "q_" + joints[0];
+  const Scaled s = readableUnit("rad", (run.data.col(cs) - run.data.col(cq)).cwiseAbs().maxCoeff());
+  k.factor = s.factor;
+  k.xlabel = axisLabel("time", run.unit(run.time()));
+  k.ylabel = axisLabel("q_set − q", s.unit);
+  k.what = "tracking error of " + joints[0];
+  return k;
+}
+
+}  // namespace
+
+ExperimentType trackingExperimentType() {
+  ExperimentType t;
+  t.name = "tracking";
+  t.description = "a robot with drives following a joint trajectory under its controllers (the UR5 digital twin)";
+  t.load = [](const YamlValue& root, const LoadContext& c) -> std::unique_ptr<Experiment> {
+    return std::make_unique<TrackingExperiment>(readTrackingSetup(root, c.name, c.faults));
+  };
+  t.figures = trackingFigures;
+  t.key_signal = trackingKeySignal;
+  t.accepts_faults = true;
+  return t;
+}
+
+}  // namespace jointsim::experiments

@@ -1,0 +1,177 @@
+#include "jointsim/sim/simulate.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
+
+namespace jointsim::sim {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+/// An output due within this time after a sample is taken at the sample, before its update [s].
+constexpr double kSampleOutputTolerance = 1e-12;
+}  // namespace
+
+void SimulateOptions::validate() const {
+  if (!(t_end > 0.0) || !std::isfinite(t_end)) throw InputError("simulate: t_end: expected a finite time > 0 s, got " + formatNumber(t_end));
+  const bool rate = output_rate > 0.0, interval = output_interval > 0.0;
+  if (rate == interval || !std::isfinite(output_rate) || !std::isfinite(output_interval))
+    throw InputError("simulate: give exactly one output grid: output_rate > 0 Hz or output_interval > 0 s");
+  if (max_events_per_output < 1) throw InputError("simulate: max_events_per_output: expected at least 1");
+}
+
+int signalIndex(const Plant& plant, const std::string& name) {
+  const auto& names = plant.signalNames();
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name || columnBaseName(names[i]) == name) return static_cast<int>(i);
+  throw InputError(plant.name() + ": no signal '" + name + "'; the signals are: " + join(names, ", "));
+}
+
+std::vector<std::string> tableColumns(const Plant& plant) {
+  std::vector<std::string> columns{"time[s]"};
+  const auto& names = plant.signalNames();
+  columns.insert(columns.end(), names.begin(), names.end());
+  return columns;
+}
+
+SimulationResult simulate(Plant& plant, const SimulateOptions& options, const OutputSink& sink) {
+  options.validate();
+  CvodeOptions solver = options.solver;
+  if (solver.component.empty()) solver.component = plant.name();
+  const int n = plant.stateSize();
+  const double t_end = options.t_end;
+  CvodeIntegrator integ(
+      n, [&plant](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) { plant.derivatives(t, y, yd); },
+      solver);
+  if (plant.rootCount() > 0)
+    integ.setRootFunction(plant.rootCount(), [&plant](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                                      Eigen::Ref<Eigen::VectorXd> g) { plant.roots(t, y, g); });
+
+  // Time events inside (0, t_end), then the end itself.
+  std::vector<double> breaks;
+  for (double b : plant.timeEvents(t_end))
+    if (b > 0.0 && b < t_end) breaks.push_back(b);
+  std::sort(breaks.begin(), breaks.end());
+  breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
+  breaks.push_back(t_end);
+  size_t next_break = 0;
+
+  // Sampled part: samples at k·T_s for k >= 1 while before t_end (the one at t = 0 is part of the start).
+  const double Ts = plant.samplePeriod();
+  if (!(Ts >= 0.0) || !std::isfinite(Ts)) throw InputError(plant.name() + ": sample period must be >= 0 s");
+  long sample_k = 1;
+  auto sampleTime = [&](long k) { return Ts > 0.0 ? std::min(t_end, static_cast<double>(k) * Ts) : kInf; };
+  double t_sample = sampleTime(sample_k);
+
+  // Output grid.
+  const bool by_rate = options.output_rate > 0.0;
+  const long n_outputs = by_rate ? static_cast<long>(std::ceil(t_end * options.output_rate - 1e-9)) : 0;
+  auto outputTime = [&](long k) {
+    return by_rate ? std::min(t_end, static_cast<double>(k) / options.output_rate)
+                   : std::min(t_end, static_cast<double>(k) * options.output_interval);
+  };
+
+  Eigen::VectorXd row(1 + static_cast<Eigen::Index>(plant.signalNames().size()));
+  SimulationResult result;
+  Eigen::VectorXd y = plant.initialState();
+  if (y.size() != n) throw InputError(plant.name() + ": initial state has " + std::to_string(y.size()) + " entries, expected " + std::to_string(n));
+  auto emit = [&](double t) {
+    row[0] = t;
+    plant.signals(t, y, row.tail(row.size() - 1));
+    sink(row);
+    ++result.outputs;
+  };
+  // The stop time at the next event or sample; at t_end only when asked to stop there.
+  auto setStop = [&]() {
+    const double stop = std::min(t_sample, breaks[next_break]);
+    if (options.stop_at_end || stop < t_end) integ.setStopTime(stop);
+  };
+
+  const auto wall_start = std::chrono::steady_clock::now();
+  plant.start(0.0, y);
+  if (Ts > 0.0) ++result.samples;  // the plant's start includes the sample at t = 0
+  integ.initialize(0.0, y);
+  setStop();
+  emit(0.0);
+  double t = 0.0;
+  for (long k = 1;; ++k) {
+    const double t_out = outputTime(k);
+    // An output due just after a sample (rounding of k / rate against k·T_s) is taken at the sample.
+    const double target = (t_out > t_sample && t_out <= t_sample + kSampleOutputTolerance) ? t_sample : t_out;
+    long events_here = 0;
+    while (t < target) {
+      t = integ.advance(std::min(target, std::min(t_sample, breaks[next_break])), y);
+      const bool root = integ.rootFound();
+      const bool at_break = t >= breaks[next_break] && next_break + 1 < breaks.size();
+      const bool at_sample = t >= t_sample && t < target && t_sample < t_end;
+      if (root || at_break) {
+        if (at_break) ++next_break;
+        plant.updateModes(t, y, root ? integ.rootDirections() : std::vector<int>{});
+        ++result.events;
+        if (++events_here > options.max_events_per_output)
+          throw SolverError(solver.component + ": more than " + std::to_string(options.max_events_per_output) +
+                                " events in one output interval (chattering) at t = " + std::to_string(t) + " s",
+                            t, "EVENT_CHATTERING", solver.component);
+      }
+      if (at_sample) {
+        plant.sample(t, y);
+        ++result.samples;
+        t_sample = sampleTime(++sample_k);
+      }
+      if (root || at_break || at_sample) {
+        integ.initialize(t, y);
+        setStop();
+      }
+    }
+    emit(t);
+    const bool done = by_rate ? k >= n_outputs : t_out >= t_end;
+    if (done) break;
+    if (t >= t_sample && t_sample < t_end) {  // the output was due at a sample: update after it
+      plant.sample(t, y);
+      ++result.samples;
+      t_sample = sampleTime(++sample_k);
+      integ.initialize(t, y);
+      setStop();
+    }
+  }
+  result.sim_time_s = t;
+  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  result.stats = integ.stats();
+  return result;
+}
+
+TableSink::TableSink(std::vector<std::string> columns) : columns_(std::move(columns)) {}
+
+void TableSink::operator()(const Eigen::VectorXd& row) {
+  if (static_cast<size_t>(row.size()) != columns_.size())
+    throw Error("TableSink: row of " + std::to_string(row.size()) + " values for " + std::to_string(columns_.size()) + " columns");
+  data_.insert(data_.end(), row.data(), row.data() + row.size());
+  ++rows_;
+}
+
+SignalTable TableSink::table() const {
+  SignalTable t;
+  t.columns = columns_;
+  t.values = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      data_.data(), rows_, static_cast<Eigen::Index>(columns_.size()));
+  return t;
+}
+
+int SignalTable::column(const std::string& name) const {
+  for (size_t i = 0; i < columns.size(); ++i)
+    if (columns[i] == name || columnBaseName(columns[i]) == name) return static_cast<int>(i);
+  throw InputError("no column '" + name + "'; the columns are: " + join(columns, ", "));
+}
+
+SignalTable simulateTable(Plant& plant, const SimulateOptions& options, SimulationResult* result) {
+  TableSink sink(tableColumns(plant));
+  const SimulationResult r = simulate(plant, options, [&sink](const Eigen::VectorXd& row) { sink(row); });
+  if (result) *result = r;
+  return sink.table();
+}
+
+}  // namespace jointsim::sim

@@ -1,0 +1,342 @@
+#include "jointsim/systems/clamped_robot.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
+#include "jointsim/common/check.hpp"
+#include "jointsim/common/error.hpp"
+#include "jointsim/multibody/algorithms.hpp"
+#include "jointsim/multibody/orthogonal_compliance.hpp"
+
+namespace jointsim::systems {
+namespace {
+
+// Rotation vector θ of a rotation matrix R (R = exp([θ]×)), accurate for small angles.
+Eigen::Vector3d rotationVector(const Eigen::Matrix3d& R) {
+  const Eigen::Vector3d v(0.5 * (R(2, 1) - R(1, 2)), 0.5 * (R(0, 2) - R(2, 0)), 0.5 * (R(1, 0) - R(0, 1)));
+  const double s = v.norm(), c = 0.5 * (R.trace() - 1.0);
+  return s > 1e-300 ? Eigen::Vector3d(v * (std::atan2(s, c) / s)) : v;
+}
+
+}  // namespace
+
+void ClampingAxisParams::validate() const {
+  // Key paths as in an experiment file's axis mapping, so that a loader can point at the line.
+  const std::string w = "clamping axis '" + joint + "'";
+  check::nonZero(w, "ratio", ratio, "(-)");
+  check::positive(w, "inertia", inertia, "kg·m²");
+  check::positive(w, "c", c, "N·m/rad");
+  check::nonNegative(w, "d", d, "N·m·s/rad");
+  check::nonNegative(w, "b", b, "rad");
+  check::that(!tau_pos.empty(), w, "friction.tau_pos", "needs at least one row [w in rad/s, tau in N·m]");
+  for (size_t i = 0; i < tau_pos.size(); ++i) {
+    const std::string row = "friction.tau_pos[" + std::to_string(i) + "]";
+    check::nonNegative(w, row, tau_pos[i][1], "N·m (friction torque)");
+    if (i == 0) check::that(tau_pos[0][0] == 0.0, w, row, "the table must start at w = 0 rad/s");
+    if (i > 0) check::that(tau_pos[i][0] > tau_pos[i - 1][0], w, row, "the table speeds must increase");
+  }
+  check::atLeast(w, "friction.peak", peak, 1.0, "(-)");
+  check::nonNegative(w, "orthogonal.c", c_orth, "N·m/rad");
+  check::nonNegative(w, "orthogonal.d", d_orth, "N·m·s/rad");
+  check::positive(w, "controller.Ts", Ts, "s");
+  check::nonNegative(w, "controller.kp", kp, "1/s");
+  check::nonNegative(w, "controller.ks", ks, "N·m·s/rad");
+  check::finite(w, "controller.ratio", controller_ratio, "(-)");
+  try {
+    path.validate();
+  } catch (const InputError& e) {
+    throw InputError::parameter(w, "path." + e.keyPath(), e.message());
+  }
+}
+
+sim::CvodeOptions ClampingSetup::defaultSolver() {
+  sim::CvodeOptions o;
+  o.method = sim::Method::BDF;
+  o.max_order = 2;
+  o.rtol = 1e-6;
+  o.atol = 1e-9;
+  return o;
+}
+
+void ClampingSetup::validate() const {
+  if (static_cast<int>(axes.size()) != arm.nq)
+    throw InputError("clamping: expected one axis per movable joint of '" + arm.name + "' (" +
+                     std::to_string(arm.nq) + "), got " + std::to_string(axes.size()));
+  std::set<std::string> seen;
+  for (const auto& a : axes) {
+    a.validate();
+    arm.jointIndex(a.joint);
+    if (!seen.insert(a.joint).second) throw InputError("clamping: joint '" + a.joint + "' has two axes");
+  }
+  if (coupling.size() > 0) {
+    if (coupling.rows() != coupling.cols() || coupling.rows() != static_cast<Eigen::Index>(coupled_joints.size()))
+      throw InputError("clamping: coupling must be square with one row per coupled joint");
+    std::set<std::string> coupled;
+    for (const auto& j : coupled_joints)
+      if (!coupled.insert(j).second) throw InputError("clamping: joint '" + j + "' appears twice in the coupling");
+    if (std::abs(coupling.determinant()) < 1e-300) throw InputError("clamping: coupling matrix is singular");
+    for (const auto& j : coupled_joints) arm.jointIndex(j);
+  }
+  if (q0.size() != 0 && q0.size() != arm.nq)
+    throw InputError("clamping: q0 needs one angle per joint (" + std::to_string(arm.nq) + ")");
+  if (!(duration > 0.0) || !(log_interval > 0.0)) throw InputError("clamping: duration and log interval must be > 0 s");
+  for (const Eigen::Matrix3d* m : {&clamp.c_lin, &clamp.d_lin, &clamp.c_rot, &clamp.d_rot})
+    if (!m->allFinite()) throw InputError("clamping: clamp matrices must be finite");
+}
+
+ClampedRobot::ClampedRobot(ClampingSetup setup) : s_((setup.validate(), std::move(setup))), data_(s_.arm) {
+  n_ = s_.arm.nq;
+  std::vector<std::string> orth_joints;
+  for (const auto& a : s_.axes)
+    if (a.c_orth > 0.0) orth_joints.push_back(a.joint);
+  model_ = multibody::withOrthogonalCompliance(s_.arm, orth_joints);
+  data_ = multibody::Data(model_);
+  n_states_ = 2 * model_.nq + 3 * n_;
+  for (const auto& a : s_.axes) {
+    joint_.push_back(model_.jointIndex(a.joint));
+    if (a.c_orth > 0.0)
+      orth_.push_back({model_.jointIndex(a.joint + "_orth_u"), model_.jointIndex(a.joint + "_orth_v")});
+    else
+      orth_.push_back({-1, -1});
+    drive::ElastoBacklashParams p;
+    p.ratio = 1.0;
+    p.stiffness = a.c;
+    p.damping = a.d;
+    p.backlash = a.b;
+    eb_.emplace_back(p);
+    paths_.emplace_back(a.path);
+  }
+  // Coupling over the axes (axis order): q_axis = G φ_out.
+  Gfull_ = Eigen::MatrixXd::Identity(n_, n_);
+  if (s_.coupling.size() > 0) {
+    std::vector<int> idx;
+    for (const auto& j : s_.coupled_joints) {
+      int k = -1;
+      for (int a = 0; a < n_; ++a)
+        if (s_.axes[static_cast<size_t>(a)].joint == j) k = a;
+      idx.push_back(k);
+    }
+    for (size_t r = 0; r < idx.size(); ++r)
+      for (size_t c = 0; c < idx.size(); ++c)
+        Gfull_(idx[r], idx[c]) = s_.coupling(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
+    coupled_ = true;
+  }
+  GfullInv_ = Gfull_.inverse();
+  clamp_frame_ = model_.frameIndex(s_.clamp.frame.empty() ? model_.tip_frame : s_.clamp.frame);
+  if (model_.frames[static_cast<size_t>(clamp_frame_)].joint < 0)
+    throw InputError("clamping: clamp frame '" + model_.frames[static_cast<size_t>(clamp_frame_)].name +
+                     "' is on the fixed base; clamp a frame of a moving link (e.g. the tool flange)");
+  // Start posture and the clamp's anchor pose.
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(model_.nq);
+  if (s_.q0.size())
+    for (int i = 0; i < n_; ++i) q[model_.jointIndex(s_.arm.joint_names[static_cast<size_t>(i)])] = s_.q0[i];
+  multibody::forwardKinematics(model_, data_, q);
+  p0_ = data_.oMf[static_cast<size_t>(clamp_frame_)].p;
+  R0_ = data_.oMf[static_cast<size_t>(clamp_frame_)].R;
+  Eigen::VectorXd qa(n_);
+  for (int k = 0; k < n_; ++k) qa[k] = q[joint_[static_cast<size_t>(k)]];
+  const Eigen::VectorXd phi_out = GfullInv_ * qa;
+  phi_m0_.resize(n_);
+  for (int k = 0; k < n_; ++k) phi_m0_[k] = s_.axes[static_cast<size_t>(k)].ratio * phi_out[k];
+  modes_.assign(static_cast<size_t>(n_), FrictionMode::Stuck);
+  fext_ = multibody::Matrix6Xd::Zero(6, model_.nq);
+  for (Eigen::VectorXd* v : {&tau_out_, &qa_, &qda_, &phi_out_, &phid_out_, &tau_s_, &tau_m_, &tau_f_, &stuck_, &wdot_, &u_, &ref_})
+    v->setZero(n_);
+  tau_.setZero(model_.nq);
+  for (const auto& a : s_.axes)
+    for (const char* c : {".motor_angle[rad]", ".motor_speed[rad/s]", ".motor_torque[N·m]", ".spring_torque[N·m]",
+                          ".deflection[rad]", ".joint_angle[rad]", ".reference[rad]", ".friction_torque[N·m]",
+                          ".friction_mode[-]", ".orth_angle[rad]"})
+      signals_.push_back(a.joint + c);
+  for (const char* c : {"clamp.dx[m]", "clamp.dy[m]", "clamp.dz[m]", "clamp.rx[rad]", "clamp.ry[rad]", "clamp.rz[rad]",
+                        "clamp.displacement[m]", "clamp.rotation[rad]", "clamp.force[N]", "clamp.moment[N·m]"})
+    signals_.emplace_back(c);
+}
+
+Eigen::VectorXd ClampedRobot::initialState() const {
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(n_states_);
+  if (s_.q0.size())
+    for (int i = 0; i < n_; ++i) y[model_.jointIndex(s_.arm.joint_names[static_cast<size_t>(i)])] = s_.q0[i];
+  for (int k = 0; k < n_; ++k) {
+    const int m = motorState(k);
+    y[m] = phi_m0_[k];
+    // PI initial output 0 (000 A.12 InitialOutput): x(0) = −u(0), u(0) = r_c q̇_ref(0) (motor at rest, on its reference).
+    double q, qd, qdd;
+    paths_[static_cast<size_t>(k)].evaluate(0.0, q, qd, qdd);
+    const auto& a = s_.axes[static_cast<size_t>(k)];
+    y[m + 2] = -(a.controller_ratio * qd + a.kp * a.controller_ratio * q);
+  }
+  return y;
+}
+
+void ClampedRobot::clampDeflection(const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Vector3d& dp,
+                                   Eigen::Vector3d& theta) const {
+  multibody::forwardKinematics(model_, data_, q);
+  const auto& X = data_.oMf[static_cast<size_t>(clamp_frame_)];
+  dp = X.p - p0_;
+  theta = rotationVector(R0_.transpose() * X.R);
+}
+
+void ClampedRobot::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const int nq = model_.nq;
+  const auto q = y.head(nq);
+  const auto qd = y.segment(nq, nq);
+  // Clamp wrench on the clamp frame, applied to the body carrying it.
+  multibody::frameJacobian(model_, data_, q, clamp_frame_);
+  const auto& X = data_.oMf[static_cast<size_t>(clamp_frame_)];
+  const Eigen::Matrix<double, 6, 1> vel = data_.J * qd;  // [v; ω] world
+  dp_ = X.p - p0_;
+  theta_ = rotationVector(R0_.transpose() * X.R);
+  const Eigen::Vector3d w_frame = X.R.transpose() * vel.tail<3>();
+  f_w_ = -(s_.clamp.c_lin * dp_ + s_.clamp.d_lin * vel.head<3>());
+  m_w_ = X.R * (-(s_.clamp.c_rot * theta_ + s_.clamp.d_rot * w_frame));
+  fext_.setZero();
+  {
+    const auto& fr = model_.frames[static_cast<size_t>(clamp_frame_)];
+    const auto& B = data_.oMi[static_cast<size_t>(fr.joint)];
+    const Eigen::Vector3d f_b = B.R.transpose() * f_w_;
+    const Eigen::Vector3d m_b = B.R.transpose() * m_w_ + fr.placement.p.cross(f_b);
+    fext_.col(fr.joint).head<3>() = m_b;
+    fext_.col(fr.joint).tail<3>() = f_b;
+  }
+  // Axes: gear output angles, transmission torques, controller, friction.
+  for (int k = 0; k < n_; ++k) {
+    qa_[k] = q[joint_[static_cast<size_t>(k)]];
+    qda_[k] = qd[joint_[static_cast<size_t>(k)]];
+  }
+  if (coupled_) {
+    phi_out_.noalias() = GfullInv_ * qa_;
+    phid_out_.noalias() = GfullInv_ * qda_;
+  } else {
+    phi_out_ = qa_;
+    phid_out_ = qda_;
+  }
+  tau_.setZero();
+  for (int k = 0; k < n_; ++k) {
+    const auto& a = s_.axes[static_cast<size_t>(k)];
+    const int m = motorState(k);
+    const double phi_m = y[m], w_m = y[m + 1], x = y[m + 2];
+    const double delta = phi_m - a.ratio * phi_out_[k], delta_d = w_m - a.ratio * phid_out_[k];
+    tau_s_[k] = eb_[static_cast<size_t>(k)].contactTorque(delta, delta_d);
+    double qr, qdr, qddr;
+    paths_[static_cast<size_t>(k)].evaluate(t, qr, qdr, qddr);
+    ref_[k] = qr;
+    u_[k] = a.controller_ratio * qdr + a.kp * (phi_m0_[k] + a.controller_ratio * qr - phi_m) - w_m;
+    tau_m_[k] = a.ks * (u_[k] + x);
+    stuck_[k] = tau_m_[k] - tau_s_[k];
+    tau_f_[k] = drive::frictionTorque(modes_[static_cast<size_t>(k)], drive::frictionTableValue(a.tau_pos, std::abs(w_m)),
+                                      stuck_[k]);
+    wdot_[k] = modes_[static_cast<size_t>(k)] == FrictionMode::Stuck ? 0.0
+                                                                      : (tau_m_[k] - tau_f_[k] - tau_s_[k]) / a.inertia;
+  }
+  // Joint torques: τ_out = r τ_s on the gear outputs, τ_joint = G⁻ᵀ τ_out.
+  auto& tau_out = tau_out_;
+  for (int k = 0; k < n_; ++k) tau_out[k] = s_.axes[static_cast<size_t>(k)].ratio * tau_s_[k];
+  for (int k = 0; k < n_; ++k) {
+    double tj = tau_out[k];
+    if (coupled_) tj = GfullInv_.col(k).dot(tau_out);
+    tau_[joint_[static_cast<size_t>(k)]] += tj;
+    const auto& o = orth_[static_cast<size_t>(k)];
+    if (o[0] >= 0) {
+      const auto& a = s_.axes[static_cast<size_t>(k)];
+      for (int j : o) tau_[j] = -a.c_orth * q[j] - a.d_orth * qd[j];
+    }
+  }
+  multibody::aba(model_, data_, q, qd, tau_, &fext_);
+}
+
+void ClampedRobot::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+  solve(t, y);
+  const int nq = model_.nq;
+  ydot.head(nq) = y.segment(nq, nq);
+  ydot.segment(nq, nq) = data_.ddq;
+  for (int k = 0; k < n_; ++k) {
+    const int m = motorState(k);
+    ydot[m] = y[m + 1];
+    ydot[m + 1] = wdot_[k];
+    ydot[m + 2] = u_[k] / s_.axes[static_cast<size_t>(k)].Ts;
+  }
+}
+
+void ClampedRobot::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
+  solve(t, y);
+  for (int k = 0; k < n_; ++k) {
+    const auto& a = s_.axes[static_cast<size_t>(k)];
+    const double t0 = drive::frictionTableValue(a.tau_pos, 0.0);
+    double g0 = 1, g1 = 1;
+    drive::frictionRoots(modes_[static_cast<size_t>(k)], stuck_[k], y[motorState(k) + 1], wdot_[k], t0, a.peak * t0, g0, g1);
+    g[2 * k] = g0;
+    g[2 * k + 1] = g1;
+  }
+}
+
+void ClampedRobot::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+  for (int iter = 0; iter < 30; ++iter) {
+    solve(t, y);
+    bool changed = false;
+    for (int k = 0; k < n_; ++k) {
+      const auto& a = s_.axes[static_cast<size_t>(k)];
+      const auto i = static_cast<size_t>(k);
+      const drive::FrictionEventFlags f = iter == 0 ? drive::frictionEventFlags(fired, i) : drive::FrictionEventFlags{};
+      const double t0 = drive::frictionTableValue(a.tau_pos, 0.0);
+      const FrictionMode m = drive::nextFrictionMode(modes_[i], false, stuck_[k], y[motorState(k) + 1], wdot_[k], t0, a.peak * t0, f);
+      if (m != modes_[i]) {
+        modes_[i] = m;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+}
+
+std::string ClampedRobot::name() const { return "clamping '" + s_.name + "'"; }
+
+sim::SimulateOptions ClampedRobot::simulateOptions() const {
+  sim::SimulateOptions o;
+  o.t_end = s_.duration;
+  o.output_interval = s_.log_interval;
+  o.solver = s_.solver;
+  if (o.solver.max_step == 0.0) o.solver.max_step = s_.log_interval;  // no step jumps over a logged sample
+  return o;
+}
+
+std::vector<double> ClampedRobot::timeEvents(double) const {
+  std::vector<double> t;
+  for (const auto& p : paths_)
+    for (double b : p.breakpoints()) t.push_back(b);
+  std::sort(t.begin(), t.end());
+  t.erase(std::unique(t.begin(), t.end()), t.end());
+  return t;
+}
+
+void ClampedRobot::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const {
+  solve(t, y);
+  Eigen::Index c = 0;
+  for (int k = 0; k < n_; ++k) {
+    const auto& a = s_.axes[static_cast<size_t>(k)];
+    const int m = motorState(k);
+    const auto& o = orth_[static_cast<size_t>(k)];
+    out[c++] = y[m];
+    out[c++] = y[m + 1];
+    out[c++] = tau_m_[k];
+    out[c++] = tau_s_[k];
+    out[c++] = y[m] - a.ratio * phi_out_[k];
+    out[c++] = qa_[k];
+    out[c++] = ref_[k];
+    out[c++] = tau_f_[k];
+    out[c++] = drive::frictionModeNumber(modes_[static_cast<size_t>(k)]);
+    out[c++] = o[0] >= 0 ? std::hypot(y[o[0]], y[o[1]]) : 0.0;
+  }
+  for (int i = 0; i < 3; ++i) out[c++] = dp_[i];
+  for (int i = 0; i < 3; ++i) out[c++] = theta_[i];
+  out[c++] = dp_.norm();
+  out[c++] = theta_.norm();
+  out[c++] = f_w_.norm();
+  out[c++] = m_w_.norm();
+}
+
+}  // namespace jointsim::systems

@@ -1,0 +1,337 @@
+#include "jointsim/systems/drive_chain.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/drive/transmissions.hpp"
+
+namespace jointsim::systems {
+
+using drive::frictionModeNumber;
+using drive::frictionTableValue;
+
+bool ChainElement::isFriction() const {
+  return type == ChainElementType::Clutch || type == ChainElementType::Brake || type == ChainElementType::BearingFriction;
+}
+
+sim::CvodeOptions DriveChainSetup::defaultSolver() {
+  sim::CvodeOptions o;
+  o.method = sim::Method::BDF;
+  o.max_order = 2;
+  o.rtol = 1e-6;
+  o.atol = 1e-8;
+  return o;
+}
+
+void DriveChainSetup::validate() const {
+  if (inertias.empty()) throw InputError("inertias: expected at least one inertia");
+  const int n = static_cast<int>(inertias.size());
+  for (const auto& in : inertias)
+    if (!(in.J > 0.0)) throw InputError("inertia '" + in.name + "': J must be > 0 kg·m²");
+  for (const auto& e : elements) {
+    const std::string where = "element '" + e.name + "'";
+    if (e.a < -1 || e.a >= n || e.b < -1 || e.b >= n) throw InputError(where + ": node out of range");
+    if (e.type == ChainElementType::TorqueSource) {
+      if (e.b < 0) throw InputError(where + ": a torque source needs an inertia");
+      continue;
+    }
+    if (e.a == e.b) throw InputError(where + ": both flanges on the same node");
+    if (e.type == ChainElementType::Gear) {
+      if (e.a < 0 || e.b < 0) throw InputError(where + ": a gear joins two inertias");
+      if (!(e.ratio != 0.0) || !std::isfinite(e.ratio)) throw InputError(where + ": ratio must be non-zero");
+      const auto& ia = inertias[static_cast<size_t>(e.a)];
+      const auto& ib = inertias[static_cast<size_t>(e.b)];
+      if (std::abs(ia.phi0 - e.ratio * ib.phi0) > 1e-12 * (1 + std::abs(ia.phi0)) ||
+          std::abs(ia.w0 - e.ratio * ib.w0) > 1e-12 * (1 + std::abs(ia.w0)))
+        throw InputError(where + ": initial angles/speeds violate φ_in = ratio·φ_out");
+      continue;
+    }
+    if ((e.type == ChainElementType::SpringDamper || e.type == ChainElementType::ElastoBacklash) && !(e.c >= 0.0 && e.d >= 0.0))
+      throw InputError(where + ": c and d must be >= 0");
+    if (e.type == ChainElementType::ElastoBacklash && !(e.backlash >= 0.0)) throw InputError(where + ": backlash must be >= 0");
+    if (e.isFriction()) {
+      if (e.table.empty()) throw InputError(where + ": empty friction table");
+      if (!(e.peak >= 1.0)) throw InputError(where + ": peak must be >= 1");
+      if (e.type != ChainElementType::BearingFriction && !(e.fn_max >= 0.0)) throw InputError(where + ": fn_max must be >= 0");
+    }
+  }
+  if (!(duration > 0.0)) throw InputError("duration: expected a time > 0 s");
+  if (!(log_rate > 0.0)) throw InputError("log_rate: expected a rate > 0 Hz");
+}
+
+DriveChain::DriveChain(DriveChainSetup setup) : s_(std::move(setup)) {
+  s_.validate();
+  const auto n = static_cast<Eigen::Index>(s_.inertias.size());
+  const auto ne = static_cast<Eigen::Index>(s_.elements.size());
+  modes_.assign(s_.elements.size(), FrictionMode::Stuck);
+  acc_.setZero(n);
+  known_.setZero(n);
+  tau_el_.setZero(ne);
+  A_.setZero(ne, ne);
+  rhs_.setZero(ne);
+  stuck_.reserve(s_.elements.size());
+  for (const auto& in : s_.inertias) {
+    signals_.push_back(in.name + ".phi[rad]");
+    signals_.push_back(in.name + ".w[rad/s]");
+  }
+  for (const auto& e : s_.elements) {
+    if (e.type == ChainElementType::TorqueSource) {
+      signals_.push_back(e.name + ".tau[N·m]");
+      continue;
+    }
+    signals_.push_back(e.name + ".phi_rel[rad]");
+    signals_.push_back(e.name + ".w_rel[rad/s]");
+    signals_.push_back(e.name + ".tau[N·m]");
+    if (e.isFriction()) {
+      signals_.push_back(e.name + ".mode[-]");
+      signals_.push_back(e.name + ".startForward[-]");
+      signals_.push_back(e.name + ".startBackward[-]");
+    }
+  }
+}
+
+Eigen::VectorXd DriveChain::initialState() const {
+  Eigen::VectorXd y(stateSize());
+  for (size_t i = 0; i < s_.inertias.size(); ++i) {
+    y[static_cast<Eigen::Index>(2 * i)] = s_.inertias[i].phi0;
+    y[static_cast<Eigen::Index>(2 * i + 1)] = s_.inertias[i].w0;
+  }
+  return y;
+}
+
+double DriveChain::relSpeed(int e, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const auto& el = s_.elements[static_cast<size_t>(e)];
+  const double wa = el.a >= 0 ? y[2 * el.a + 1] : 0.0, wb = el.b >= 0 ? y[2 * el.b + 1] : 0.0;
+  return wb - wa;
+}
+
+double DriveChain::relAccel(int e) const {
+  const auto& el = s_.elements[static_cast<size_t>(e)];
+  return (el.b >= 0 ? acc_[el.b] : 0.0) - (el.a >= 0 ? acc_[el.a] : 0.0);
+}
+
+double DriveChain::tau0(int e, double t) const {
+  const auto& el = s_.elements[static_cast<size_t>(e)];
+  if (el.type == ChainElementType::BearingFriction) return frictionTableValue(el.table, 0.0);
+  return el.cgeo * el.fn_max * el.normalized.value(t) * frictionTableValue(el.table, 0.0);
+}
+
+double DriveChain::slidingTorque(int e, double t, double w) const {
+  const auto& el = s_.elements[static_cast<size_t>(e)];
+  const double mag = el.type == ChainElementType::BearingFriction
+                         ? frictionTableValue(el.table, std::abs(w))
+                         : el.cgeo * el.fn_max * el.normalized.value(t) * frictionTableValue(el.table, std::abs(w));
+  return mag;
+}
+
+void DriveChain::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  known_.setZero();
+  stuck_.clear();
+  for (size_t k = 0; k < s_.elements.size(); ++k) {
+    const auto& el = s_.elements[k];
+    const int e = static_cast<int>(k);
+    double tau = 0.0;
+    if (el.type == ChainElementType::TorqueSource) {
+      tau_el_[e] = el.torque.value(t);
+      known_[el.b] += tau_el_[e];
+      continue;
+    }
+    if (el.type == ChainElementType::Gear) {
+      stuck_.push_back(e);  // always-active constraint
+      continue;
+    }
+    const double phi_rel = (el.b >= 0 ? y[2 * el.b] : 0.0) - (el.a >= 0 ? y[2 * el.a] : 0.0);
+    const double w_rel = relSpeed(e, y);
+    switch (el.type) {
+      case ChainElementType::SpringDamper: tau = el.c * phi_rel + el.d * w_rel; break;
+      case ChainElementType::ElastoBacklash: {
+        const drive::ElastoBacklash eb({1.0, std::max(el.c, 1e-300), el.d, el.backlash, drive::ComplianceSide::Motor});
+        tau = el.c > 0.0 ? eb.contactTorque(phi_rel, w_rel) : 0.0;
+        break;
+      }
+      default: {  // friction
+        switch (modes_[k]) {
+          case FrictionMode::Free: tau = 0.0; break;
+          case FrictionMode::Forward:
+          case FrictionMode::StartForward: tau = slidingTorque(e, t, w_rel); break;
+          case FrictionMode::Backward:
+          case FrictionMode::StartBackward: tau = -slidingTorque(e, t, w_rel); break;
+          case FrictionMode::Stuck: stuck_.push_back(e); continue;
+        }
+      }
+    }
+    tau_el_[e] = tau;
+    if (el.a >= 0) known_[el.a] += tau;
+    if (el.b >= 0) known_[el.b] -= tau;
+  }
+  // Stuck elements: find their torques S with B^T J⁻¹ (known + B S) = 0 (zero relative acceleration).
+  const auto m = static_cast<Eigen::Index>(stuck_.size());
+  auto Jinv = [&](int i) { return 1.0 / s_.inertias[static_cast<size_t>(i)].J; };
+  // Constraint row of element e: +1 at its input, −1 (friction) or −ratio (gear) at its output; the
+  // constraint torque acts along the same row (+τ on the input, −1 or −ratio × τ on the output).
+  auto bcol = [&](int e, int i) {
+    const auto& el = s_.elements[static_cast<size_t>(e)];
+    const double out = el.type == ChainElementType::Gear ? el.ratio : 1.0;
+    return (el.a == i ? 1.0 : 0.0) - (el.b == i ? out : 0.0);
+  };
+  const int n = static_cast<int>(s_.inertias.size());
+  for (Eigen::Index r = 0; r < m; ++r) {
+    const int er = stuck_[static_cast<size_t>(r)];
+    double rhs = 0.0;
+    for (int i = 0; i < n; ++i) rhs -= bcol(er, i) * Jinv(i) * known_[i];
+    rhs_[r] = rhs;
+    for (Eigen::Index c = 0; c < m; ++c) {
+      const int ec = stuck_[static_cast<size_t>(c)];
+      double a = 0.0;
+      for (int i = 0; i < n; ++i) a += bcol(er, i) * Jinv(i) * bcol(ec, i);
+      A_(r, c) = a;
+    }
+  }
+  // Gaussian elimination with partial pivoting on the m×m block (allocation-free).
+  for (Eigen::Index c = 0; c < m; ++c) {
+    Eigen::Index piv = c;
+    for (Eigen::Index r = c + 1; r < m; ++r)
+      if (std::abs(A_(r, c)) > std::abs(A_(piv, c))) piv = r;
+    if (piv != c) {
+      A_.row(c).head(m).swap(A_.row(piv).head(m));
+      std::swap(rhs_[c], rhs_[piv]);
+    }
+    if (A_(c, c) == 0.0) continue;  // redundant constraint (e.g. a loop of stuck elements)
+    for (Eigen::Index r = c + 1; r < m; ++r) {
+      const double f = A_(r, c) / A_(c, c);
+      A_.row(r).head(m) -= f * A_.row(c).head(m);
+      rhs_[r] -= f * rhs_[c];
+    }
+  }
+  for (Eigen::Index c = m; c-- > 0;) {
+    double v = rhs_[c];
+    for (Eigen::Index k = c + 1; k < m; ++k) v -= A_(c, k) * rhs_[k];
+    rhs_[c] = A_(c, c) != 0.0 ? v / A_(c, c) : 0.0;
+  }
+  for (Eigen::Index r = 0; r < m; ++r) {
+    const int e = stuck_[static_cast<size_t>(r)];
+    const auto& el = s_.elements[static_cast<size_t>(e)];
+    tau_el_[e] = rhs_[r];
+    if (el.a >= 0) known_[el.a] += rhs_[r];
+    if (el.b >= 0) known_[el.b] -= (el.type == ChainElementType::Gear ? el.ratio : 1.0) * rhs_[r];
+  }
+  for (int i = 0; i < n; ++i) acc_[i] = known_[i] * Jinv(i);
+}
+
+void DriveChain::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+  solve(t, y);
+  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(s_.inertias.size()); ++i) {
+    ydot[2 * i] = y[2 * i + 1];
+    ydot[2 * i + 1] = acc_[i];
+  }
+}
+
+void DriveChain::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
+  solve(t, y);
+  for (size_t k = 0; k < s_.elements.size(); ++k) {
+    const auto& el = s_.elements[k];
+    const int e = static_cast<int>(k);
+    double g0 = 1.0, g1 = 1.0;
+    if (el.type == ChainElementType::ElastoBacklash && el.backlash > 1e-10) {
+      const double phi_rel = (el.b >= 0 ? y[2 * el.b] : 0.0) - (el.a >= 0 ? y[2 * el.a] : 0.0);
+      g0 = phi_rel - 0.5 * el.backlash;  // contact edges: restart the integrator at the kink
+      g1 = phi_rel + 0.5 * el.backlash;
+    } else if (el.isFriction()) {
+      const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(e);
+      drive::frictionRoots(modes_[k], tau_el_[e], w, a, t0, t0max, g0, g1);
+    }
+    g[2 * e] = g0;
+    g[2 * e + 1] = g1;
+  }
+}
+
+std::string DriveChain::name() const { return "drive chain '" + s_.name + "'"; }
+
+sim::SimulateOptions DriveChain::simulateOptions() const {
+  sim::SimulateOptions o;
+  o.t_end = s_.duration;
+  o.output_rate = s_.log_rate;
+  o.solver = s_.solver;
+  if (o.solver.max_step == 0.0) o.solver.max_step = 1.0 / s_.log_rate;
+  return o;
+}
+
+std::vector<double> DriveChain::timeEvents(double t_end) const {
+  // Discontinuities of the torque sources and normal forces.
+  std::vector<double> events;
+  for (const auto& el : s_.elements) {
+    for (double b : el.torque.breakpoints(t_end)) events.push_back(b);
+    for (double b : el.normalized.breakpoints(t_end)) events.push_back(b);
+  }
+  return events;
+}
+
+void DriveChain::start(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  for (size_t k = 0; k < s_.elements.size(); ++k) {
+    const auto& el = s_.elements[k];
+    if (!el.isFriction()) continue;
+    const double w = relSpeed(static_cast<int>(k), y);
+    if (el.type != ChainElementType::BearingFriction && el.fn_max * el.normalized.value(t) <= 0.0)
+      modes_[k] = FrictionMode::Free;
+    else
+      modes_[k] = w > 0 ? FrictionMode::Forward : (w < 0 ? FrictionMode::Backward : FrictionMode::Stuck);
+  }
+  updateModes(t, y, {});
+}
+
+void DriveChain::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+  for (int iter = 0; iter < 20; ++iter) {
+    solve(t, y);
+    bool changed = false;
+    for (size_t k = 0; k < s_.elements.size(); ++k) {
+      const auto& el = s_.elements[k];
+      if (!el.isFriction()) continue;
+      const int e = static_cast<int>(k);
+      // Crossings CVODE reported at this event (first pass only): the located point may sit exactly on
+      // the threshold, so the decision follows the reported crossing rather than a strict comparison
+      // (a root function that restarts at exactly zero is not reported again).
+      const drive::FrictionEventFlags flags = iter == 0 ? drive::frictionEventFlags(fired, k) : drive::FrictionEventFlags{};
+      const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(e), S = tau_el_[e];
+      const bool free = el.type != ChainElementType::BearingFriction && el.fn_max * el.normalized.value(t) <= 0.0;
+      const FrictionMode m = drive::nextFrictionMode(modes_[k], free, S, w, a, t0, t0max, flags);
+      if (m != modes_[k]) {
+        modes_[k] = m;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+}
+
+double DriveChain::elementTorque(int e, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  solve(t, y);
+  return tau_el_[e];
+}
+
+void DriveChain::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
+  solve(t, y);
+  Eigen::Index c = 0;
+  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(s_.inertias.size()); ++i) {
+    row[c++] = y[2 * i];
+    row[c++] = y[2 * i + 1];
+  }
+  for (size_t k = 0; k < s_.elements.size(); ++k) {
+    const auto& el = s_.elements[k];
+    const int e = static_cast<int>(k);
+    if (el.type == ChainElementType::TorqueSource) {
+      row[c++] = tau_el_[e];
+      continue;
+    }
+    row[c++] = (el.b >= 0 ? y[2 * el.b] : 0.0) - (el.a >= 0 ? y[2 * el.a] : 0.0);
+    row[c++] = relSpeed(e, y);
+    row[c++] = tau_el_[e];
+    if (el.isFriction()) {
+      row[c++] = frictionModeNumber(modes_[k]);
+      row[c++] = modes_[k] == FrictionMode::StartForward ? 1.0 : 0.0;
+      row[c++] = modes_[k] == FrictionMode::StartBackward ? 1.0 : 0.0;
+    }
+  }
+}
+
+}  // namespace jointsim::systems

@@ -1,0 +1,225 @@
+#include "jointsim/systems/joint_rig.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "jointsim/common/error.hpp"
+
+namespace jointsim::systems {
+
+sim::CvodeOptions JointRigSetup::defaultSolver() {
+  sim::CvodeOptions o;
+  o.method = sim::Method::BDF;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  // BDF orders 3–5 are not A-stable: lightly damped kHz drive modes (strain-wave gear, stiff springs)
+  // then force steps of a few µs. BDF2 is A-stable and damps unresolved modes (docs/design.md).
+  o.max_order = 2;
+  return o;
+}
+
+void JointRigSetup::validate() const {
+  if (!transmission) throw InputError("transmission: missing");
+  if ((input == RigInput::Voltage || (input == RigInput::VelocityPI && pi.voltage_output)) && !motor)
+    throw InputError("motor: voltage input needs the motor electrics (motor parameters)");
+  if (motor) motor->validate();
+  if (!motor && !(rotor_inertia > 0.0)) throw InputError("rotor_inertia: expected a value > 0 kg·m²");
+  if (clamped && transmission->isRigid())
+    throw InputError("load.clamped: a rigid transmission with a clamped output locks the motor; use a compliant transmission");
+  if (!clamped && !(load_inertia > 0.0)) throw InputError("load.inertia: expected a value > 0 kg·m²");
+  if (!(load_damping >= 0.0)) throw InputError("load.damping: expected a value >= 0 N·m·s/rad");
+  if (friction && friction_side == Side::Output && clamped)
+    throw InputError("friction.side: friction on the output side of a clamped output has no effect; use side: motor");
+  if (input == RigInput::VelocityPI) {
+    if (!(pi.limit > 0.0)) throw InputError("controller.limit: expected a value > 0");
+    if (pi.measure == Side::Output && clamped) throw InputError("controller.measure: the clamped output does not move");
+  }
+  if (!(duration > 0.0)) throw InputError("duration: expected a time > 0 s");
+  if (!(log_rate > 0.0)) throw InputError("log_rate: expected a rate > 0 Hz");
+}
+
+struct JointRig::Eval {
+  double command = 0, tau_motor = 0, current = 0, voltage = 0, di = 0, de = 0;
+  double tau_in = 0, tau_out = 0, tau_f = 0;
+  double q_l = 0, qd_l = 0, qdd_m = 0, qdd_l = 0;
+};
+
+JointRig::JointRig(JointRigSetup setup) : s_(std::move(setup)) {
+  s_.validate();
+  if (s_.motor) motor_.emplace(*s_.motor);
+  J_m_ = s_.motor ? s_.motor->J_M : s_.rotor_inertia;
+  const bool electrics = s_.input == RigInput::Voltage || (s_.input == RigInput::VelocityPI && s_.pi.voltage_output);
+  n_ = 2;
+  if (electrics) i_idx_ = n_++;
+  nx_ = s_.transmission->stateSize();
+  if (nx_ > 0) {
+    x_idx_ = n_;
+    n_ += nx_;
+  }
+  nz_ = s_.friction ? s_.friction->stateSize() : 0;
+  if (nz_ > 0) {
+    z_idx_ = n_;
+    n_ += nz_;
+  }
+  if (!s_.transmission->isRigid() && !s_.clamped) {
+    l_idx_ = n_;
+    n_ += 2;
+  }
+  if (s_.input == RigInput::VelocityPI) e_idx_ = n_++;
+  if (nx_ > 64 || nz_ > 64) throw InputError("joint rig: component with more than 64 internal states");
+
+  signals_ = {"motor_angle[rad]", "motor_velocity[rad/s]", "motor_torque[N·m]"};
+  if (i_idx_ >= 0) {
+    signals_.emplace_back("motor_current[A]");
+    signals_.emplace_back("motor_voltage[V]");
+  }
+  switch (s_.input) {
+    case RigInput::MotorTorque: signals_.emplace_back("command_torque[N·m]"); break;
+    case RigInput::Voltage: signals_.emplace_back("command_voltage[V]"); break;
+    case RigInput::VelocityPI: signals_.emplace_back("reference_velocity[rad/s]"); break;
+  }
+  for (const char* c : {"transmission_torque_in[N·m]", "transmission_torque_out[N·m]", "friction_torque[N·m]",
+                        "output_angle[rad]", "output_velocity[rad/s]"})
+    signals_.emplace_back(c);
+  for (const auto& name : s_.transmission->stateNames()) signals_.push_back("gear_" + name);
+  if (s_.friction)
+    for (const auto& name : s_.friction->stateNames()) signals_.push_back("friction_" + name);
+  if (e_idx_ >= 0) signals_.emplace_back("pi_integral[rad]");
+}
+
+std::string JointRig::name() const { return "joint rig '" + s_.name + "'"; }
+
+std::vector<double> JointRig::timeEvents(double t_end) const { return s_.profile.breakpoints(t_end); }
+
+sim::SimulateOptions JointRig::simulateOptions() const {
+  sim::SimulateOptions o;
+  o.t_end = s_.duration;
+  o.output_rate = s_.log_rate;
+  o.solver = s_.solver;
+  if (o.solver.max_step == 0.0) o.solver.max_step = 1.0 / s_.log_rate;
+  return o;
+}
+
+Eigen::VectorXd JointRig::initialState() const {
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(n_);
+  y[0] = s_.q_m0;
+  y[1] = s_.qd_m0;
+  const double q_l0 = s_.transmission->isRigid() ? s_.q_m0 / s_.transmission->ratio() : (s_.clamped ? 0.0 : s_.q_l0);
+  if (nx_ > 0) s_.transmission->initialState(s_.q_m0, q_l0, y.data() + x_idx_);
+  if (nz_ > 0) s_.friction->initialState(y.data() + z_idx_);
+  if (l_idx_ >= 0) {
+    y[l_idx_] = s_.q_l0;
+    y[l_idx_ + 1] = s_.qd_l0;
+  }
+  return y;
+}
+
+JointRig::Eval JointRig::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* xdot_tr,
+                                  double* zdot) const {
+  Eval e;
+  const double q_m = y[0], qd_m = y[1];
+  const double N = s_.transmission->ratio();
+  const bool rigid = s_.transmission->isRigid();
+  if (rigid) {
+    e.q_l = q_m / N;
+    e.qd_l = qd_m / N;
+  } else if (l_idx_ >= 0) {
+    e.q_l = y[l_idx_];
+    e.qd_l = y[l_idx_ + 1];
+  }
+  // Input: torque, voltage, or the velocity PI output.
+  e.command = s_.profile.value(t);
+  double u = e.command;
+  if (s_.input == RigInput::VelocityPI) {
+    const double err = e.command - (s_.pi.measure == Side::Motor ? qd_m : e.qd_l);
+    const double raw = s_.pi.kp * err + s_.pi.ki * y[e_idx_];
+    u = std::clamp(raw, -s_.pi.limit, s_.pi.limit);
+    const bool winding_up = (raw > s_.pi.limit && err > 0) || (raw < -s_.pi.limit && err < 0);
+    e.de = winding_up ? 0.0 : err;
+  }
+  if (i_idx_ >= 0) {
+    e.current = y[i_idx_];
+    e.voltage = motor_->supplyVoltage(u);
+    e.di = motor_->currentDerivative(e.current, u, qd_m);
+    e.tau_motor = motor_->torque(e.current);
+  } else {
+    e.tau_motor = u;
+  }
+  const double* z = nz_ > 0 ? y.data() + z_idx_ : nullptr;
+  const double b_l = s_.clamped ? 0.0 : s_.load_damping;
+
+  if (rigid) {
+    // One shaft, motor side: (J_m + J_l/N²) q̈_m = τ_M − b_l q̇_l / N − τ_f (reflected when on the output).
+    const double J_eff = J_m_ + s_.load_inertia / (N * N);
+    double tau_f_motor_side = 0.0;
+    if (s_.friction) {
+      if (s_.friction_side == Side::Motor) {
+        e.tau_f = s_.friction->evaluate({qd_m, e.tau_motor - b_l * e.qd_l / N}, z, zdot);
+        tau_f_motor_side = e.tau_f;
+      } else {
+        e.tau_f = s_.friction->evaluate({e.qd_l, N * e.tau_motor - b_l * e.qd_l}, z, zdot);
+        tau_f_motor_side = e.tau_f / N;
+      }
+    }
+    e.qdd_m = (e.tau_motor - b_l * e.qd_l / N - tau_f_motor_side) / J_eff;
+    e.qdd_l = e.qdd_m / N;
+    const double tau_f_on_motor = (s_.friction && s_.friction_side == Side::Motor) ? e.tau_f : 0.0;
+    e.tau_in = e.tau_motor - tau_f_on_motor - J_m_ * e.qdd_m;
+    e.tau_out = N * e.tau_in;
+    return e;
+  }
+  const drive::PortTorques pt = s_.transmission->evaluate({q_m, qd_m, e.q_l, e.qd_l}, nx_ > 0 ? y.data() + x_idx_ : nullptr,
+                                                           xdot_tr);
+  e.tau_in = pt.tau_in;
+  e.tau_out = pt.tau_out;
+  const double drive_m = e.tau_motor - e.tau_in;
+  const double drive_l = e.tau_out - b_l * e.qd_l;
+  double tau_f_m = 0.0, tau_f_l = 0.0;
+  if (s_.friction) {
+    if (s_.friction_side == Side::Motor) {
+      e.tau_f = tau_f_m = s_.friction->evaluate({qd_m, drive_m}, z, zdot);
+    } else {
+      e.tau_f = tau_f_l = s_.friction->evaluate({e.qd_l, drive_l}, z, zdot);
+    }
+  }
+  e.qdd_m = (drive_m - tau_f_m) / J_m_;
+  e.qdd_l = s_.clamped ? 0.0 : (drive_l - tau_f_l) / s_.load_inertia;
+  return e;
+}
+
+void JointRig::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+  const Eval e = evaluate(t, y, nx_ > 0 ? ydot.data() + x_idx_ : nullptr, nz_ > 0 ? ydot.data() + z_idx_ : nullptr);
+  ydot[0] = y[1];
+  ydot[1] = e.qdd_m;
+  if (i_idx_ >= 0) ydot[i_idx_] = e.di;
+  if (l_idx_ >= 0) {
+    ydot[l_idx_] = y[l_idx_ + 1];
+    ydot[l_idx_ + 1] = e.qdd_l;
+  }
+  if (e_idx_ >= 0) ydot[e_idx_] = e.de;
+}
+
+void JointRig::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
+  // Scratch for derivatives we do not need here (state sizes are small; a fixed buffer avoids allocation).
+  double xdot[64], zdot[64];
+  const Eval e = evaluate(t, y, nx_ > 0 ? xdot : nullptr, nz_ > 0 ? zdot : nullptr);
+  Eigen::Index k = 0;
+  row[k++] = y[0];
+  row[k++] = y[1];
+  row[k++] = e.tau_motor;
+  if (i_idx_ >= 0) {
+    row[k++] = e.current;
+    row[k++] = e.voltage;
+  }
+  row[k++] = e.command;
+  row[k++] = e.tau_in;
+  row[k++] = e.tau_out;
+  row[k++] = e.tau_f;
+  row[k++] = e.q_l;
+  row[k++] = e.qd_l;
+  for (int j = 0; j < nx_; ++j) row[k++] = y[x_idx_ + j];
+  for (int j = 0; j < nz_; ++j) row[k++] = y[z_idx_ + j];
+  if (e_idx_ >= 0) row[k++] = y[e_idx_];
+}
+
+}  // namespace jointsim::systems

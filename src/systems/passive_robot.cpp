@@ -1,0 +1,89 @@
+#include "jointsim/systems/passive_robot.hpp"
+
+#include <cmath>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/multibody/algorithms.hpp"
+
+namespace jointsim::systems {
+
+using multibody::Model;
+
+sim::CvodeOptions PassiveRobotParams::defaultSolver() {
+  sim::CvodeOptions o;
+  o.method = sim::Method::Adams;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  return o;
+}
+
+void PassiveRobotParams::validate(const Model& model) const {
+  auto checkSize = [&](const Eigen::VectorXd& v, const char* what) {
+    if (v.size() != 0 && v.size() != model.nq)
+      throw InputError(std::string(what) + ": expected " + std::to_string(model.nq) + " values (one per joint of '" +
+                       model.name + "'), got " + std::to_string(v.size()));
+  };
+  checkSize(q0, "initial_state.q");
+  checkSize(qd0, "initial_state.qd");
+  checkSize(damping, "joint_damping");
+  if (damping.size() && damping.minCoeff() < 0.0) throw InputError("joint_damping: expected values >= 0 N·m·s/rad");
+  if (!(duration > 0.0) || !std::isfinite(duration)) throw InputError("duration: expected a time > 0 s");
+  if (!(log_rate > 0.0) || !std::isfinite(log_rate)) throw InputError("log_rate: expected a rate > 0 Hz");
+}
+
+PassiveRobot::PassiveRobot(Model model, PassiveRobotParams params)
+    : model_(std::move(model)), p_(std::move(params)), data_(model_), log_data_(model_) {
+  p_.validate(model_);
+  const Eigen::Index n = model_.nq;
+  damping_ = p_.damping.size() ? p_.damping : Eigen::VectorXd::Zero(n);
+  tau_.setZero(n);
+  tip_ = model_.frameIndex(model_.tip_frame);
+  auto unit = [&](size_t i, const char* rev, const char* pri) {
+    return model_.joint_types[i] == multibody::JointType::Revolute ? rev : pri;
+  };
+  for (size_t i = 0; i < static_cast<size_t>(n); ++i)
+    signals_.push_back("q_" + model_.joint_names[i] + "[" + unit(i, "rad", "m") + "]");
+  for (size_t i = 0; i < static_cast<size_t>(n); ++i)
+    signals_.push_back("qd_" + model_.joint_names[i] + "[" + unit(i, "rad/s", "m/s") + "]");
+  for (const char* c : {"kinetic_energy[J]", "potential_energy[J]", "total_energy[J]"}) signals_.emplace_back(c);
+  for (const char* axis : {"x", "y", "z"}) signals_.push_back("tip_" + std::string(axis) + "[m]");
+}
+
+std::string PassiveRobot::name() const { return "multibody (" + model_.name + ")"; }
+
+sim::SimulateOptions PassiveRobot::simulateOptions() const {
+  sim::SimulateOptions o;
+  o.t_end = p_.duration;
+  o.output_rate = p_.log_rate;
+  o.solver = p_.solver;
+  o.stop_at_end = false;
+  return o;
+}
+
+Eigen::VectorXd PassiveRobot::initialState() const {
+  const Eigen::Index n = model_.nq;
+  Eigen::VectorXd y(2 * n);
+  y.head(n) = p_.q0.size() ? p_.q0 : Eigen::VectorXd::Zero(n);
+  y.tail(n) = p_.qd0.size() ? p_.qd0 : Eigen::VectorXd::Zero(n);
+  return y;
+}
+
+void PassiveRobot::derivatives(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+  const Eigen::Index n = model_.nq;
+  tau_.noalias() = -damping_.cwiseProduct(y.tail(n));
+  ydot.head(n) = y.tail(n);
+  ydot.tail(n) = multibody::aba(model_, data_, y.head(n), y.tail(n), tau_);
+}
+
+void PassiveRobot::signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const {
+  const Eigen::Index n = model_.nq;
+  const double T = multibody::kineticEnergy(model_, log_data_, y.head(n), y.tail(n));
+  const double V = multibody::potentialEnergy(model_, log_data_, y.head(n));  // also updates oMf
+  out.head(2 * n) = y;
+  out[2 * n] = T;
+  out[2 * n + 1] = V;
+  out[2 * n + 2] = T + V;
+  out.tail(3) = log_data_.oMf[static_cast<size_t>(tip_)].p;
+}
+
+}  // namespace jointsim::systems

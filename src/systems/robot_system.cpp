@@ -1,0 +1,525 @@
+#include "jointsim/systems/robot_system.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <Eigen/LU>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/multibody/algorithms.hpp"
+
+namespace jointsim::systems {
+
+struct RobotSystem::Rng {
+  std::mt19937_64 engine;
+  std::normal_distribution<double> normal{0.0, 1.0};
+  double gauss(double sigma) { return sigma > 0.0 ? sigma * normal(engine) : 0.0; }
+};
+
+namespace {
+double quantise(double x, double quantum) { return quantum > 0.0 ? quantum * std::round(x / quantum) : x; }
+}  // namespace
+
+void RobotSignals::resize(int n) {
+  for (Eigen::VectorXd* v : {&q_set, &qd_set, &qdd_set, &q_fb, &qm, &qdm, &current, &i_ref, &u, &voltage, &tau_motor,
+                             &tau_gear, &tau_friction, &tau_joint, &qdd})
+    v->setZero(n);
+}
+
+RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, Eigen::MatrixXd coupling)
+    : model_(std::move(model)), drives_(std::move(drives)), data_(model_), id_data_(model_) {
+  const int n = model_.nq;
+  if (static_cast<int>(drives_.size()) != n)
+    throw InputError("robot '" + model_.name + "' has " + std::to_string(n) + " joints but " +
+                     std::to_string(drives_.size()) + " drives were given; expected one drive per joint");
+  // Order the drives as the joints; every joint exactly once.
+  std::vector<DriveSpec> ordered(static_cast<size_t>(n));
+  std::vector<bool> seen(static_cast<size_t>(n), false);
+  for (auto& d : drives_) {
+    const int j = model_.jointIndex(d.joint);
+    if (seen[static_cast<size_t>(j)]) throw InputError("joint '" + d.joint + "' has two drives");
+    seen[static_cast<size_t>(j)] = true;
+    ordered[static_cast<size_t>(j)] = std::move(d);
+  }
+  drives_ = std::move(ordered);
+  if (coupling.size() == 0) {
+    G_ = Ginv_ = Eigen::MatrixXd::Identity(n, n);
+  } else {
+    if (coupling.rows() != n || coupling.cols() != n)
+      throw InputError("coupling matrix must be " + std::to_string(n) + "x" + std::to_string(n));
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(coupling);
+    if (!lu.isInvertible()) throw InputError("coupling matrix must be invertible");
+    G_ = coupling;
+    Ginv_ = lu.inverse();
+    coupled_ = !G_.isIdentity(0.0);
+  }
+  const Eigen::VectorXd file_armature = model_.armature.size() == n ? model_.armature : Eigen::VectorXd::Zero(n);
+  reflected_ = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd rotor = Eigen::VectorXd::Zero(n);
+  n_states_ = 2 * n;
+  layout_.resize(static_cast<size_t>(n));
+  for (int k = 0; k < n; ++k) {
+    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const std::string where = "drive of joint '" + d.joint + "'";
+    if (!d.transmission) throw InputError(where + ": missing transmission");
+    motors_.emplace_back(d.motor);  // validates
+    d.controller.validate(where + ".controller");
+    controllers_.emplace_back(d.controller);
+    const bool voltage_out = d.controller.type == control::ControllerType::Cascade002;
+    if (voltage_out && !d.electrics) throw InputError(where + ": the cascade_002 controller needs the motor electrics");
+    if (!voltage_out && d.controller.type != control::ControllerType::None && d.electrics)
+      throw InputError(where + ": the motor_ppi_000 controller commands torque; set electrics: false");
+    DriveLayout& L = layout_[static_cast<size_t>(k)];
+    L.rigid = d.transmission->isRigid();
+    L.ratio = d.transmission->ratio();
+    if (L.rigid) {
+      rotor[k] = L.ratio * L.ratio * d.motor.J_M;
+    } else {
+      L.motor = n_states_;
+      n_states_ += 2;
+    }
+    if (d.electrics) L.current = n_states_++;
+    L.n_gear = d.transmission->stateSize();
+    if (L.n_gear > 0) {
+      L.gear = n_states_;
+      n_states_ += L.n_gear;
+    }
+    L.n_friction = d.friction ? d.friction->stateSize() : 0;
+    if (L.n_friction > 0) {
+      L.friction = n_states_;
+      n_states_ += L.n_friction;
+    }
+    L.n_controller = controllers_.back().stateSize();
+  }
+  // Controller states come last, so that sampled control can take them out of the ODE state.
+  for (auto& L : layout_) {
+    if (L.n_controller > 0) {
+      L.controller = n_states_;
+      n_states_ += L.n_controller;
+    }
+  }
+  if (coupled_ && rotor.any()) {
+    crba_path_ = true;
+    reflected_ = Ginv_.transpose() * rotor.asDiagonal() * Ginv_;
+  } else {
+    model_.armature = file_armature + rotor;  // diagonal reflected rotor inertia: ABA handles it
+  }
+  data_ = multibody::Data(model_);
+  sig_.resize(n);
+  out_is_voltage_.assign(static_cast<size_t>(n), 0);
+  zero_.setZero(n);
+  phi_.setZero(n);
+  phid_.setZero(n);
+  tau_out_.setZero(n);
+  tau_.setZero(n);
+  tmp_.setZero(n_states_);
+  fext_.setZero(6, n);
+  M_.setZero(n, n);
+  llt_ = Eigen::LLT<Eigen::MatrixXd>(n);
+
+  // The logged signals and the inverse-dynamics reference model (the rotor inertias of all drives as
+  // armature; rigid ones are already in the system's armature).
+  id_model_ = model_;
+  for (int k = 0; k < n; ++k) {
+    const auto& L = layout_[static_cast<size_t>(k)];
+    if (!L.rigid) id_model_.armature[k] += L.ratio * L.ratio * drives_[static_cast<size_t>(k)].motor.J_M;
+  }
+  id_data_ = multibody::Data(id_model_);
+  tip_ = model_.frameIndex(model_.tip_frame);
+  const char* per_joint[][2] = {{"q_set", "rad"},          {"q", "rad"},           {"q_fb", "rad"},
+                                {"qd", "rad/s"},           {"motor_velocity", "rad/s"}, {"current", "A"},
+                                {"current_ref", "A"},      {"voltage", "V"},       {"gear_torque", "N·m"},
+                                {"friction_torque", "N·m"}, {"id_torque", "N·m"}};
+  for (const auto& name : model_.joint_names)
+    for (const auto& c : per_joint) signal_names_.push_back(std::string(c[0]) + "_" + name + "[" + c[1] + "]");
+  for (const char* c : {"tcp_x[m]", "tcp_y[m]", "tcp_z[m]", "tcp_roll[rad]", "tcp_pitch[rad]", "tcp_yaw[rad]"})
+    signal_names_.emplace_back(c);
+}
+
+void RobotSystem::setSetpoints(SetpointFunction f) {
+  setpoints_ = std::move(f);
+  setpoint_breaks_.clear();
+}
+
+void RobotSystem::setTrajectory(std::shared_ptr<const control::JointTrajectory> trajectory) {
+  if (!trajectory) throw InputError(name() + ": no trajectory given");
+  if (trajectory->dof() != model_.nq)
+    throw InputError(name() + ": the trajectory has " + std::to_string(trajectory->dof()) + " joints, the robot " +
+                     std::to_string(model_.nq));
+  setpoint_breaks_ = trajectory->breakpoints();
+  setpoints_ = [trajectory](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
+                            Eigen::Ref<Eigen::VectorXd> qdd) { trajectory->evaluate(t, q, qd, qdd); };
+}
+
+void RobotSystem::setInitialPositions(const Eigen::VectorXd& q0) {
+  if (q0.size() != model_.nq)
+    throw InputError(name() + ": initial joint positions: expected " + std::to_string(model_.nq) + " values");
+  q0_ = q0;
+}
+
+Eigen::VectorXd RobotSystem::initialState() const {
+  if (q0_.size() == model_.nq) return initialState(q0_);
+  Eigen::VectorXd q0 = Eigen::VectorXd::Zero(model_.nq);
+  if (setpoints_) {
+    Eigen::VectorXd qd(model_.nq), qdd(model_.nq);
+    setpoints_(0.0, q0, qd, qdd);
+  }
+  return initialState(q0);
+}
+
+std::vector<double> RobotSystem::timeEvents(double) const {
+  // Under sampled control the right-hand side does not read the reference (the held outputs do), and every
+  // sample restarts the integrator anyway.
+  return sampled() ? std::vector<double>{} : setpoint_breaks_;
+}
+
+void RobotSystem::start(double t0, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  if (sampled()) controlStep(t0, y);
+}
+
+void RobotSystem::setSampledControl(double rate, unsigned seed) {
+  if (!(rate > 0.0)) throw InputError("control rate: expected a sampling rate > 0 Hz");
+  if (sample_rate_ > 0.0) throw InputError("sampled control already set");
+  sample_rate_ = rate;
+  int first = n_states_;
+  for (const auto& L : layout_)
+    if (L.controller >= 0) first = std::min(first, L.controller);
+  ctrl_x_.assign(static_cast<size_t>(n_states_ - first), 0.0);
+  for (auto& L : layout_)
+    if (L.controller >= 0) L.controller -= first;  // now an index into ctrl_x_
+  n_states_ = first;
+  held_u_.setZero(model_.nq);
+  held_i_ref_.setZero(model_.nq);
+  held_q_fb_.setZero(model_.nq);
+  prev_qm_meas_.setZero(model_.nq);
+  tmp_.setZero(n_states_);
+  rng_ = std::make_shared<Rng>();
+  rng_->engine.seed(seed);
+}
+
+Eigen::VectorXd RobotSystem::initialState(const Eigen::VectorXd& q0, double t0) const {
+  const int n = model_.nq;
+  if (q0.size() != n) throw InputError("initial joint positions: expected " + std::to_string(n) + " values");
+  // With sampled control the controller states live outside y: build the full vector, then split.
+  const int n_full = sampled() ? n_states_ + static_cast<int>(ctrl_x_.size()) : n_states_;
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(n_full);
+  y.head(n) = q0;
+  if (setpoints_) {
+    setpoints_(t0, sig_.q_set, sig_.qd_set, sig_.qdd_set);
+  } else {
+    sig_.q_set = q0;
+    sig_.qd_set.setZero();
+    sig_.qdd_set.setZero();
+  }
+  // Gravity preload: each drive starts holding its share of the static joint torques.
+  const Eigen::VectorXd g = multibody::gravityTorques(model_, data_, q0);
+  const Eigen::VectorXd tau_out_needed = coupled_ ? Eigen::VectorXd(G_.transpose() * g) : g;
+  const Eigen::VectorXd phi = Ginv_ * q0;
+  for (int k = 0; k < n; ++k) {
+    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    const bool holds = d.controller.type != control::ControllerType::None;
+    const double target = holds ? tau_out_needed[k] : 0.0;
+    double q_in = L.ratio * phi[k], tau_M = 0.0;
+    if (L.rigid) {
+      tau_M = target / L.ratio;
+    } else {
+      // Secant iterations on the motor angle for the static output torque (exact in one step for a linear gear).
+      double* x = L.gear >= 0 ? y.data() + L.gear : nullptr;
+      std::vector<double> xd(static_cast<size_t>(std::max(1, L.n_gear)));
+      auto outTorque = [&](double qm) {
+        d.transmission->initialState(qm, phi[k], x);
+        return d.transmission->evaluate({qm, 0.0, phi[k], 0.0}, x, xd.data());
+      };
+      double a = q_in, fa = outTorque(a).tau_out - target;
+      double b = q_in + 1e-3 * L.ratio, fb = outTorque(b).tau_out - target;
+      for (int it = 0; it < 50 && std::abs(fb) > 1e-12 * (1.0 + std::abs(target)); ++it) {
+        if (fb == fa) break;
+        const double c = b - fb * (b - a) / (fb - fa);
+        a = b;
+        fa = fb;
+        b = c;
+        fb = outTorque(b).tau_out - target;
+      }
+      q_in = b;
+      tau_M = outTorque(q_in).tau_in;
+      y[L.motor] = q_in;
+    }
+    const double i = d.electrics ? tau_M / d.motor.kt : 0.0;
+    if (L.current >= 0) y[L.current] = i;
+    if (L.friction >= 0) d.friction->initialState(y.data() + L.friction);
+    if (L.controller >= 0) {
+      const int c = sampled() ? n_states_ + L.controller : L.controller;
+      control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q0[k], q_in, 0.0, i, L.ratio, d.motor.V_supply};
+      controllers_[static_cast<size_t>(k)].initialState(in, y.data() + c);
+      if (holds && d.controller.type == control::ControllerType::Cascade002) {
+        // Integrators holding the static current and voltage: i_ref = I_vel ∫e_vel, V = I_cur ∫e_cur = R i.
+        if (d.controller.I_vel > 0) y[c] = i / d.controller.I_vel;
+        if (d.controller.I_cur > 0) y[c + 1] = d.motor.R * i / d.controller.I_cur;
+      } else if (holds && d.controller.type == control::ControllerType::MotorPPI000 && d.controller.ks > 0) {
+        y[c] += tau_M / d.controller.ks;
+      }
+    }
+  }
+  if (!sampled()) return y;
+  const_cast<RobotSystem*>(this)->ctrl_x_.assign(y.data() + n_states_, y.data() + n_full);
+  const_cast<RobotSystem*>(this)->first_sample_ = true;
+  return y.head(n_states_);
+}
+
+void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  if (!sampled()) throw InputError("controlStep: sampled control is not enabled");
+  const int n = model_.nq;
+  const double Ts = 1.0 / sample_rate_;
+  if (setpoints_) setpoints_(t, sig_.q_set, sig_.qd_set, sig_.qdd_set);
+  const Eigen::VectorXd phi = coupled_ ? Eigen::VectorXd(Ginv_ * y.head(n)) : Eigen::VectorXd(y.head(n));
+  const Eigen::VectorXd phid = coupled_ ? Eigen::VectorXd(Ginv_ * y.segment(n, n)) : Eigen::VectorXd(y.segment(n, n));
+  std::vector<double> xdot(4, 0.0);
+  for (int k = 0; k < n; ++k) {
+    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    const SensorSpec& S = d.sensors;
+    const double qm = L.rigid ? L.ratio * phi[k] : y[L.motor];
+    const double qdm = L.rigid ? L.ratio * phid[k] : y[L.motor + 1];
+    const double i = L.current >= 0 ? y[L.current] : 0.0;
+    // Measurements: noise first, then the sensor's quantiser; encoder speed by differencing.
+    const double q_meas = quantise(y[k] + S.joint_bias + rng_->gauss(S.joint_noise), S.joint_quantum);
+    const double qm_meas = quantise(qm, S.motor_quantum);
+    double qdm_meas = qdm;
+    if (S.motor_quantum > 0.0) qdm_meas = first_sample_ ? 0.0 : (qm_meas - prev_qm_meas_[k]) / Ts;
+    qdm_meas += rng_->gauss(S.motor_velocity_noise);
+    prev_qm_meas_[k] = qm_meas;
+    const double i_meas = quantise(i + rng_->gauss(S.current_noise), S.current_quantum);
+    const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q_meas, qm_meas, qdm_meas, i_meas, L.ratio,
+                                       d.motor.V_supply};
+    double* x = L.controller >= 0 ? ctrl_x_.data() + L.controller : nullptr;
+    const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(in, x, xdot.data());
+    for (int j = 0; j < L.n_controller; ++j) x[j] += Ts * xdot[static_cast<size_t>(j)];  // forward Euler
+    held_u_[k] = out.u;
+    held_i_ref_[k] = out.i_ref;
+    held_q_fb_[k] = q_meas;
+  }
+  first_sample_ = false;
+}
+
+void RobotSystem::setpointStage(double t) const {
+  if (setpoints_) setpoints_(t, sig_.q_set, sig_.qd_set, sig_.qdd_set);
+}
+
+void RobotSystem::measurementStage(const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const int n = model_.nq;
+  const auto q = y.head(n);
+  const auto qd = y.segment(n, n);
+  // Gear output angles and speeds: φ = G⁻¹ q.
+  if (coupled_) {
+    phi_.noalias() = Ginv_ * q;
+    phid_.noalias() = Ginv_ * qd;
+  } else {
+    phi_ = q;
+    phid_ = qd;
+  }
+  for (int k = 0; k < n; ++k) {
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    sig_.qm[k] = L.rigid ? L.ratio * phi_[k] : y[L.motor];
+    sig_.qdm[k] = L.rigid ? L.ratio * phid_[k] : y[L.motor + 1];
+    sig_.current[k] = L.current >= 0 ? y[L.current] : 0.0;
+    sig_.q_fb[k] = sampled() ? held_q_fb_[k] : q[k] + drives_[static_cast<size_t>(k)].sensors.joint_bias;
+  }
+}
+
+void RobotSystem::controllerStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
+  for (int k = 0; k < model_.nq; ++k) {
+    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    control::ControllerOutputs out;
+    if (sampled()) {  // zero-order hold of the last sample's outputs
+      out.voltage = d.controller.type == control::ControllerType::Cascade002;
+      out.u = held_u_[k];
+      out.i_ref = held_i_ref_[k];
+    } else {
+      const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], sig_.q_fb[k], sig_.qm[k], sig_.qdm[k],
+                                         sig_.current[k], L.ratio, d.motor.V_supply};
+      out = controllers_[static_cast<size_t>(k)].evaluate(in, L.controller >= 0 ? y.data() + L.controller : nullptr,
+                                                          L.controller >= 0 ? ydot + L.controller : nullptr);
+    }
+    sig_.i_ref[k] = out.i_ref;
+    sig_.u[k] = out.u;
+    out_is_voltage_[static_cast<size_t>(k)] = out.voltage;
+  }
+}
+
+void RobotSystem::powerElectronicsStage() const {
+  // Averaged PWM: the commanded voltage, saturated at the supply [Raviola2023, eq. 1].
+  for (int k = 0; k < model_.nq; ++k) {
+    const bool electrics = layout_[static_cast<size_t>(k)].current >= 0;
+    const double V_cmd = out_is_voltage_[static_cast<size_t>(k)] ? sig_.u[k] : 0.0;
+    sig_.voltage[k] = electrics ? motors_[static_cast<size_t>(k)].supplyVoltage(V_cmd) : 0.0;
+  }
+}
+
+void RobotSystem::motorElectricsStage(double* ydot) const {
+  // L di/dt = V − R i − k_e q̇_m, τ_M = k_t i; a motor without electrics gives the commanded torque.
+  for (int k = 0; k < model_.nq; ++k) {
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    const drive::DcMotor& motor = motors_[static_cast<size_t>(k)];
+    if (L.current >= 0) {
+      const double V_cmd = out_is_voltage_[static_cast<size_t>(k)] ? sig_.u[k] : 0.0;
+      ydot[L.current] = motor.currentDerivative(sig_.current[k], V_cmd, sig_.qdm[k]);
+      sig_.tau_motor[k] = motor.torque(sig_.current[k]);
+    } else {
+      sig_.tau_motor[k] = out_is_voltage_[static_cast<size_t>(k)] ? 0.0 : sig_.u[k];
+    }
+  }
+}
+
+void RobotSystem::transmissionStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
+  for (int k = 0; k < model_.nq; ++k) {
+    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    if (L.rigid) {
+      sig_.tau_gear[k] = L.ratio * sig_.tau_motor[k];  // the rotor's inertial reaction follows the accelerations
+      continue;
+    }
+    const drive::PortTorques pt =
+        d.transmission->evaluate({sig_.qm[k], sig_.qdm[k], phi_[k], phid_[k]}, L.gear >= 0 ? y.data() + L.gear : nullptr,
+                                 L.gear >= 0 ? ydot + L.gear : nullptr);
+    sig_.tau_gear[k] = pt.tau_out;
+    ydot[L.motor] = sig_.qdm[k];
+    ydot[L.motor + 1] = (sig_.tau_motor[k] - pt.tau_in) / d.motor.J_M;  // rotor: J_M q̈_m = τ_M − τ_in
+  }
+}
+
+void RobotSystem::frictionStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
+  // On the gear output shaft, driven by the gear output torque.
+  for (int k = 0; k < model_.nq; ++k) {
+    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    sig_.tau_friction[k] =
+        d.friction ? d.friction->evaluate({phid_[k], sig_.tau_gear[k]}, L.friction >= 0 ? y.data() + L.friction : nullptr,
+                                          L.friction >= 0 ? ydot + L.friction : nullptr)
+                   : 0.0;
+  }
+}
+
+void RobotSystem::jointTorqueStage() const {
+  // τ_out = τ_gear − τ_f on the gear outputs; τ_joint = G⁻ᵀ τ_out.
+  tau_out_ = sig_.tau_gear - sig_.tau_friction;
+  if (coupled_) tau_.noalias() = Ginv_.transpose() * tau_out_;
+  else tau_ = tau_out_;
+  sig_.tau_joint = tau_;
+}
+
+void RobotSystem::multibodyStage(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const int n = model_.nq;
+  const auto q = y.head(n);
+  const auto qd = y.segment(n, n);
+  const multibody::Matrix6Xd* fext = nullptr;
+  if (wrenches_) {
+    multibody::forwardKinematics(model_, data_, q);
+    fext_.setZero();
+    wrenches_(t, model_, data_, q, qd, fext_);
+    fext = &fext_;
+  }
+  if (crba_path_) {
+    // (M + G⁻ᵀ diag(N² J_M) G⁻¹) q̈ = τ − h(q, q̇) [− Jᵀ f_ext through RNEA]
+    if (fext) data_.nle = multibody::rnea(model_, data_, q, qd, zero_, fext);
+    else multibody::nonLinearEffects(model_, data_, q, qd);
+    M_ = multibody::crba(model_, data_, q);
+    M_ += reflected_;
+    llt_.compute(M_);
+    sig_.qdd = tau_ - data_.nle;
+    llt_.solveInPlace(sig_.qdd);
+  } else {
+    sig_.qdd = multibody::aba(model_, data_, q, qd, tau_, fext);
+  }
+}
+
+void RobotSystem::rotorReactionStage() const {
+  // Rigid drives: the gear output torque includes the rotor's inertial reaction −N² J_M φ̈.
+  for (int k = 0; k < model_.nq; ++k) {
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    if (!L.rigid) continue;
+    const double phidd = coupled_ ? Ginv_.row(k).dot(sig_.qdd) : sig_.qdd[k];
+    sig_.tau_gear[k] -= L.ratio * L.ratio * drives_[static_cast<size_t>(k)].motor.J_M * phidd;
+  }
+}
+
+void RobotSystem::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
+  setpointStage(t);
+  measurementStage(y);
+  controllerStage(y, ydot);
+  powerElectronicsStage();
+  motorElectricsStage(ydot);
+  transmissionStage(y, ydot);
+  frictionStage(y, ydot);
+  jointTorqueStage();
+  multibodyStage(t, y);
+  rotorReactionStage();
+  const int n = model_.nq;
+  Eigen::Map<Eigen::VectorXd> yd(ydot, n_states_);
+  yd.head(n) = y.segment(n, n);
+  yd.segment(n, n) = sig_.qdd;
+}
+
+void RobotSystem::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+  evaluate(t, y, ydot.data());
+}
+
+const RobotSignals& RobotSystem::driveSignals(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  evaluate(t, y, tmp_.data());
+  return sig_;
+}
+
+void RobotSystem::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const {
+  const int n = model_.nq;
+  const RobotSignals& s = driveSignals(t, y);
+  const Eigen::VectorXd& id = multibody::rnea(id_model_, id_data_, s.q_set, s.qd_set, s.qdd_set);
+  Eigen::Index c = 0;
+  for (int k = 0; k < n; ++k) {
+    const auto& d = drives_[static_cast<size_t>(k)];
+    const double f_ss = d.friction ? d.friction->steadyState(s.qd_set[k]) : 0.0;
+    out[c++] = s.q_set[k];
+    out[c++] = y[k];
+    out[c++] = s.q_fb[k];
+    out[c++] = y[n + k];
+    out[c++] = s.qdm[k];
+    out[c++] = s.current[k];
+    out[c++] = s.i_ref[k];
+    out[c++] = s.voltage[k];
+    out[c++] = s.tau_gear[k];
+    out[c++] = s.tau_friction[k];
+    out[c++] = id[k] + f_ss;
+  }
+  multibody::forwardKinematics(id_model_, id_data_, y.head(n));
+  const multibody::Placement& X = id_data_.oMf[static_cast<size_t>(tip_)];
+  // Roll-pitch-yaw (URDF convention R = Rz(yaw) Ry(pitch) Rx(roll)).
+  const double pitch = std::asin(std::clamp(-X.R(2, 0), -1.0, 1.0));
+  const double roll = std::atan2(X.R(2, 1), X.R(2, 2));
+  const double yaw = std::atan2(X.R(1, 0), X.R(0, 0));
+  out.segment(c, 3) = X.p;
+  c += 3;
+  out[c++] = roll;
+  out[c++] = pitch;
+  out[c++] = yaw;
+}
+
+double RobotSystem::mechanicalEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const int n = model_.nq;
+  const auto q = y.head(n);
+  const auto qd = y.segment(n, n);
+  double E = multibody::kineticEnergy(model_, data_, q, qd) + multibody::potentialEnergy(model_, data_, q);
+  if (crba_path_) E += 0.5 * qd.dot(reflected_ * qd);
+  const Eigen::VectorXd phi = Ginv_ * q, phid = Ginv_ * qd;
+  for (int k = 0; k < n; ++k) {
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    if (L.rigid) continue;
+    const double qdm = y[L.motor + 1];
+    E += 0.5 * drives_[static_cast<size_t>(k)].motor.J_M * qdm * qdm;
+    E += drives_[static_cast<size_t>(k)].transmission->storedEnergy({y[L.motor], qdm, phi[k], phid[k]},
+                                                                     L.gear >= 0 ? y.data() + L.gear : nullptr);
+  }
+  return E;
+}
+
+}  // namespace jointsim::systems

@@ -1,0 +1,133 @@
+// Robot-with-drives files: the multibody description plus one drive per joint (format in the header).
+#include "jointsim/systems/robot_with_drives.hpp"
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/drive/drive_yaml.hpp"
+#include "jointsim/io/yaml.hpp"
+#include "jointsim/multibody/robot_loader.hpp"
+
+namespace jointsim::systems {
+
+using io::YamlValue;
+
+namespace {
+
+control::JointControllerParams readController(const YamlValue& node) {
+  control::JointControllerParams p;
+  if (!node.defined()) return p;
+  node.expectMap("a controller mapping {type, gains...}");
+  const YamlValue type = node.required("type", "cascade_002, motor_ppi_000 or none");
+  const std::string t = type.asString("a controller type");
+  auto gain = [&](const char* key, const std::string& unit) {
+    const YamlValue g = node.required(key, std::string("gain in ") + unit);
+    const double v = g.asDouble("a gain in " + unit);
+    if (!(v >= 0.0)) g.failExpected("a gain >= 0 " + unit + " (negative gains destabilise the loop)");
+    return v;
+  };
+  if (t == "cascade_002") {
+    node.allowKeys({"type", "P_pos", "P_vel", "I_vel", "P_cur", "I_cur"});
+    p.type = control::ControllerType::Cascade002;
+    p.P_pos = gain("P_pos", "1/s");
+    p.P_vel = gain("P_vel", "A·s/rad");
+    p.I_vel = gain("I_vel", "A/rad");
+    p.P_cur = gain("P_cur", "V/A");
+    p.I_cur = gain("I_cur", "V/(A·s)");
+  } else if (t == "motor_ppi_000") {
+    node.allowKeys({"type", "kp", "ks", "Ts"});
+    p.type = control::ControllerType::MotorPPI000;
+    p.kp = gain("kp", "1/s");
+    p.ks = gain("ks", "N·m·s/rad");
+    const YamlValue ts = node.required("Ts", "PI time constant in s");
+    p.Ts = ts.asDouble("a time constant in s");
+    if (!(p.Ts > 0)) ts.failExpected("a time constant > 0 s");
+  } else if (t == "none") {
+    node.allowKeys({"type"});
+  } else {
+    type.failExpected("cascade_002, motor_ppi_000 or none");
+  }
+  return p;
+}
+
+}  // namespace
+
+RobotSystem loadRobotWithDrives(const std::string& path, const std::vector<Fault>& faults) {
+  const YamlValue root = YamlValue::loadFile(path);
+  root.expectMap("a robot-with-drives mapping {name, multibody, drives, coupling}");
+  root.allowKeys({"name", "multibody", "drives", "coupling"});
+  const YamlValue mb = root.required("multibody", "multibody description file, relative to this file");
+  multibody::Model model;
+  try {
+    model = multibody::loadRobot(mb.asPath());
+  } catch (const InputError& e) {
+    mb.fail(std::string("cannot load the multibody description: ") + e.what());
+  }
+  if (root.has("name")) model.name = root["name"].asString("a robot name");
+  const YamlValue drives = root.required("drives", "one drive per joint");
+  drives.expectSequence("a list of drives");
+  std::vector<DriveSpec> specs;
+  std::vector<std::string> named;
+  for (size_t k = 0; k < drives.size(); ++k) {
+    const YamlValue d = drives.at(k);
+    d.expectMap("a drive mapping {joint, motor, electrics, transmission, friction, controller}");
+    d.allowKeys({"joint", "motor", "electrics", "transmission", "friction", "controller", "sensors"});
+    DriveSpec s;
+    const YamlValue joint = d.required("joint", "name of the joint this drive moves");
+    s.joint = joint.asString("a joint name");
+    try {
+      model.jointIndex(s.joint);
+    } catch (const InputError& e) {
+      joint.fail(e.what());
+    }
+    for (const auto& n : named)
+      if (n == s.joint) joint.fail("joint '" + s.joint + "' has two drives");
+    named.push_back(s.joint);
+    s.motor = drive::motorFromYaml(d.required("motor", "motor parameters"));
+    s.transmission = drive::transmissionFromYaml(d.required("transmission", "the transmission"));
+    if (d.has("friction")) s.friction = drive::frictionFromYaml(d["friction"]);
+    s.controller = readController(d["controller"]);
+    if (const YamlValue sn = d["sensors"]; sn.defined()) {
+      sn.expectMap("a sensors mapping {joint_quantum, motor_quantum, current_quantum, joint_noise, motor_velocity_noise, current_noise}");
+      sn.allowKeys({"joint_quantum", "motor_quantum", "current_quantum", "joint_noise", "motor_velocity_noise", "current_noise",
+                    "joint_bias"});
+      s.sensors.joint_bias = sn["joint_bias"].asDouble(0.0, "a joint-angle bias in rad");
+      auto nonneg = [&](const char* key, const char* unit) {
+        const double v = sn[key].asDouble(0.0, std::string("a value in ") + unit);
+        if (v < 0.0) sn[key].failExpected(std::string("a value >= 0 ") + unit);
+        return v;
+      };
+      s.sensors.joint_quantum = nonneg("joint_quantum", "rad");
+      s.sensors.motor_quantum = nonneg("motor_quantum", "rad");
+      s.sensors.current_quantum = nonneg("current_quantum", "A");
+      s.sensors.joint_noise = nonneg("joint_noise", "rad");
+      s.sensors.motor_velocity_noise = nonneg("motor_velocity_noise", "rad/s");
+      s.sensors.current_noise = nonneg("current_noise", "A");
+    }
+    s.electrics = d.has("electrics") ? d["electrics"].asBool("true or false")
+                                     : s.controller.type == control::ControllerType::Cascade002;
+    specs.push_back(std::move(s));
+  }
+  for (const auto& jn : model.joint_names) {
+    bool found = false;
+    for (const auto& n : named) found = found || n == jn;
+    if (!found) drives.fail("joint '" + jn + "' has no drive (expected one drive per joint of " + model.name + ")");
+  }
+  Eigen::MatrixXd G;
+  if (const YamlValue c = root["coupling"]; c.defined()) {
+    c.expectSequence("an n×n matrix as a list of rows");
+    const auto n = static_cast<size_t>(model.nq);
+    if (c.size() != n) c.failExpected(std::to_string(n) + " rows");
+    G.resize(model.nq, model.nq);
+    for (size_t r = 0; r < n; ++r) {
+      const auto row = c.at(r).asDoubles(n, "a row of " + std::to_string(n) + " numbers");
+      for (size_t col = 0; col < n; ++col) G(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(col)) = row[col];
+    }
+  }
+  applyFaults(specs, faults);  // InputError names the fault
+  try {
+    return RobotSystem(std::move(model), std::move(specs), G);
+  } catch (const InputError& e) {
+    root.relocate(e);
+  }
+}
+
+}  // namespace jointsim::systems

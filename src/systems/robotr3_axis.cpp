@@ -1,0 +1,159 @@
+#include "jointsim/systems/robotr3_axis.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "jointsim/common/error.hpp"
+
+namespace jointsim::systems {
+
+namespace {
+Eigen::VectorXd one(double v) { return Eigen::VectorXd::Constant(1, v); }
+}  // namespace
+
+void RobotR3AxisSetup::validate() const {
+  motor.validate();
+  if (ratio == 0.0 || !std::isfinite(ratio)) throw InputError("ratio: expected a non-zero gear ratio");
+  if (!(c > 0.0) || !(d >= 0.0)) throw InputError("c, d: expected c > 0 N·m/rad and d >= 0 N·m·s/rad");
+  if (!(Rv0 >= 0.0) || !(Rv1 >= 0.0) || !(peak >= 1.0)) throw InputError("friction: expected Rv0, Rv1 >= 0 and peak >= 1");
+  if (!(kp >= 0.0) || !(ks >= 0.0) || !(Ts > 0.0)) throw InputError("controller: expected kp, ks >= 0 and Ts > 0");
+  if (!(load_inertia > 0.0)) throw InputError("load_inertia: expected a value > 0 kg·m²");
+  if (!(stop_time > 0.0) || !(log_interval > 0.0)) throw InputError("stop_time, log_interval: expected values > 0 s");
+  if (std::abs(sa0) > peak * Rv0) throw InputError("sa0: the initial friction torque must lie within ±peak·Rv0");
+}
+
+RobotR3Axis::RobotR3Axis(RobotR3AxisSetup setup)
+    : s_((setup.validate(), std::move(setup))),
+      motor_(s_.motor),
+      path_(one(s_.q_begin), one(s_.q_end), one(s_.qd_max), one(s_.qdd_max), s_.start_time) {
+  const std::string& p = s_.prefix;
+  signals_ = {p + ".controller.PI.x[rad/s]",
+              p + ".gear.spring.phi_rel[rad]",
+              p + ".gear.spring.w_rel[rad/s]",
+              p + ".initializeFlange.phi_flange[rad]",
+              p + ".initializeFlange.w_flange[rad/s]",
+              p + ".motor.C.v[V]",
+              p + ".motor.La.i[A]",
+              p + ".gear.bearingFriction.mode[-]",
+              p + ".gear.bearingFriction.startBackward[-]",
+              p + ".gear.bearingFriction.startForward[-]",
+              p + ".gear.bearingFriction.tau[N·m]",
+              p + ".motor.i_ref[A]",
+              "energy.amplifier_work[J]",
+              "energy.stored[J]",
+              "energy.resistor_loss[J]",
+              "energy.damper_loss[J]",
+              "energy.friction_loss[J]"};
+}
+
+std::string RobotR3Axis::name() const { return "RobotR3 axis '" + s_.name + "'"; }
+
+sim::SimulateOptions RobotR3Axis::simulateOptions() const {
+  sim::SimulateOptions o;
+  o.t_end = endTime();
+  o.output_interval = s_.log_interval;
+  o.solver = s_.solver;
+  if (o.solver.max_step == 0.0) o.solver.max_step = s_.log_interval;  // no step jumps over a logged sample
+  return o;
+}
+
+std::vector<double> RobotR3Axis::timeEvents(double) const { return path_.breakpoints(); }
+
+double RobotR3Axis::endTime() const { return std::min(s_.stop_time, path_.endTime() + s_.swing_time); }
+
+Eigen::VectorXd RobotR3Axis::initialState() const {
+  // ROBOTR3.md §9.1 with the load static torque G = 0 (no gravity on a 1-D load): q = q_begin, q̇ = 0,
+  // ω_rel = 0, φ_rel = −G/(ratio c) = 0, ω_m = 0; the rotor balance k i = τ_f(0) − τ_s with τ_f(0) = sa0
+  // (§9.2); electrical steady state v_C = −(Ra i + k ω_m)/5; PI steady state x = i/ks − e(0).
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(kStates);
+  const auto& m = s_.motor;
+  y[0] = s_.q_begin;
+  const double phi_rel = 0.0, tau_s = s_.c * phi_rel;
+  const double i = (s_.sa0 - tau_s) / m.k;
+  const double e0 = s_.kp * phi_rel;
+  y[2] = phi_rel;
+  y[4] = s_.ks > 0.0 ? i / s_.ks - e0 : 0.0;
+  y[5] = -(m.Ra * i) / m.amp_gain;
+  y[6] = i;
+  return y;
+}
+
+RobotR3Axis::Eval RobotR3Axis::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  Eval ev{};
+  const auto& m = s_.motor;
+  const double q = y[0], qd = y[1], phi_rel = y[2], w_rel = y[3], x = y[4], i = y[6];
+  double qr = 0, qdr = 0, qddr = 0;
+  {
+    Eigen::Matrix<double, 1, 1> a, b, c;
+    path_.evaluate(t, a, b, c);
+    qr = a[0];
+    qdr = b[0];
+    qddr = c[0];
+    (void)qddr;
+  }
+  ev.q_ref = qr;
+  ev.qd_ref = qdr;
+  const double N = s_.ratio;
+  const double phi_m = N * q - phi_rel;
+  ev.wm = N * qd - w_rel;
+  ev.e = s_.kp * (N * qr - phi_m) + N * qdr - ev.wm;
+  ev.i_ref = s_.ks * (x + ev.e);
+  ev.tau_s = s_.c * phi_rel + s_.d * w_rel;
+  // Load: J_L q̈ = −ratio τ_s (the spring pulls the gear input with −τ_s).
+  ev.qdd = -N * ev.tau_s / s_.load_inertia;
+  const double tau_motor = m.k * i;
+  ev.stuck_torque = tau_motor + ev.tau_s;  // the friction that keeps dω_m/dt = 0
+  ev.tau_f = drive::frictionTorque(mode_, s_.Rv0 + s_.Rv1 * std::abs(ev.wm), ev.stuck_torque);
+  ev.wm_dot = mode_ == FrictionMode::Stuck ? 0.0 : (tau_motor - ev.tau_f + ev.tau_s) / m.J;
+  return ev;
+}
+
+void RobotR3Axis::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+  const Eval ev = evaluate(t, y);
+  const auto& m = s_.motor;
+  ydot[0] = y[1];
+  ydot[1] = ev.qdd;
+  ydot[2] = y[3];
+  ydot[3] = s_.ratio * ev.qdd - ev.wm_dot;
+  ydot[4] = ev.e / s_.Ts;
+  ydot[5] = (y[6] - ev.i_ref) / (m.Ri * m.C());
+  ydot[6] = (-m.amp_gain * y[5] - m.Ra * y[6] - m.k * ev.wm) / m.La();
+  ydot[7] = -m.amp_gain * y[5] * y[6];
+  ydot[8] = m.Ra * y[6] * y[6];
+  ydot[9] = s_.d * y[3] * y[3];
+  ydot[10] = ev.tau_f * ev.wm;
+}
+
+double RobotR3Axis::storedEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const double wm = s_.ratio * y[1] - y[3];
+  return 0.5 * s_.load_inertia * y[1] * y[1] + 0.5 * s_.motor.J * wm * wm + 0.5 * s_.c * y[2] * y[2] +
+         0.5 * s_.motor.La() * y[6] * y[6];
+}
+
+void RobotR3Axis::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
+  const Eval ev = evaluate(t, y);
+  const double t0 = s_.Rv0, t0max = s_.peak * s_.Rv0;
+  double g0 = 1, g1 = 1;
+  drive::frictionRoots(mode_, ev.stuck_torque, ev.wm, ev.wm_dot, t0, t0max, g0, g1);
+  g[0] = g0;
+  g[1] = g1;
+}
+
+void RobotR3Axis::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+  for (int iter = 0; iter < 20; ++iter) {
+    const Eval ev = evaluate(t, y);
+    const drive::FrictionEventFlags f = iter == 0 ? drive::frictionEventFlags(fired, 0) : drive::FrictionEventFlags{};
+    const FrictionMode m = drive::nextFrictionMode(mode_, false, ev.stuck_torque, ev.wm, ev.wm_dot, s_.Rv0, s_.peak * s_.Rv0, f);
+    if (m == mode_) break;
+    mode_ = m;
+  }
+}
+
+void RobotR3Axis::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
+  const Eval ev = evaluate(t, y);
+  const int mode = drive::frictionModeNumber(mode_);
+  row << y[4], y[2], y[3], y[0], y[1], y[5], y[6], mode, mode_ == FrictionMode::StartBackward ? 1.0 : 0.0,
+      mode_ == FrictionMode::StartForward ? 1.0 : 0.0, ev.tau_f, ev.i_ref, y[7], storedEnergy(y), y[8], y[9], y[10];
+}
+
+}  // namespace jointsim::systems

@@ -1,0 +1,276 @@
+#include "jointsim/systems/robotr3_full.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/multibody/algorithms.hpp"
+
+namespace jointsim::systems {
+
+RobotR3AxisParams RobotR3AxisParams::fullRobot(int j) {
+  // ROBOTR3.md §2.5.
+  static const int type[6] = {1, 1, 1, 2, 2, 2};
+  static const double ratio[6] = {-105, 210, 60, -99, 79.2, -99};
+  static const double c[6] = {43, 8, 58, 0, 0, 0}, d[6] = {0.005, 0.01, 0.04, 0, 0, 0};
+  static const double Rv0[6] = {0.4, 0.5, 0.7, 21.8, 30.1, 10.9};
+  static const double Rv1[6] = {0.13 / 160, 0.1 / 130, 0.2 / 130, 9.8, 0.03, 3.92};
+  static const double peak[6] = {1, 1, 1, 26.7 / 21.8, 39.6 / 30.1, 16.8 / 10.9};
+  if (j < 1 || j > 6) throw InputError("RobotR3 axis must be 1..6, got " + std::to_string(j));
+  RobotR3AxisParams p;
+  const auto k = static_cast<size_t>(j - 1);
+  p.type = type[k];
+  p.ratio = ratio[k];
+  p.motor = drive::OpAmpMotorParams::robotR3Axis(j);
+  p.c = c[k];
+  p.d = d[k];
+  p.Rv0 = Rv0[k];
+  p.Rv1 = Rv1[k];
+  p.peak = peak[k];
+  return p;
+}
+
+void RobotR3FullSetup::validate() const {
+  const auto n = static_cast<size_t>(arm.nq);
+  if (axes.size() != n) throw InputError("axes: expected one axis per joint (" + std::to_string(n) + ")");
+  for (const auto& a : axes) {
+    a.motor.validate();
+    if (a.type != 1 && a.type != 2) throw InputError("axis type must be 1 or 2");
+    if (a.ratio == 0.0) throw InputError("axis ratio must be non-zero");
+    if (a.type == 1 && !(a.c > 0.0)) throw InputError("type-1 axis needs a spring c > 0");
+    if (!(a.peak >= 1.0) || !(a.Rv0 >= 0.0) || !(a.Ts > 0.0)) throw InputError("axis friction/controller parameters out of range");
+  }
+  for (const Eigen::VectorXd* v : {&q_begin, &q_end, &qd_max, &qdd_max})
+    if (static_cast<size_t>(v->size()) != n) throw InputError("path: expected one value per joint");
+  if (!(stop_time > 0.0) || !(log_interval > 0.0)) throw InputError("stop_time and log_interval must be > 0 s");
+}
+
+RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
+    : s_((setup.validate(), std::move(setup))),
+      n_(s_.arm.nq),
+      path_(s_.q_begin, s_.q_end, s_.qd_max, s_.qdd_max, s_.start_time),
+      data_(s_.arm) {
+  // Type-2 rotors move with the joints: N² J joins the arm's joint-space inertia (§2.4).
+  s_.arm.armature = Eigen::VectorXd::Zero(n_);
+  for (int j = 0; j < n_; ++j) {
+    const auto& a = s_.axes[static_cast<size_t>(j)];
+    if (a.type == 2) s_.arm.armature[j] = a.ratio * a.ratio * a.motor.J;
+  }
+  data_ = multibody::Data(s_.arm);
+  n_states_ = 2 * n_;
+  rel_.assign(static_cast<size_t>(n_), -1);
+  for (int j = 0; j < n_; ++j)
+    if (s_.axes[static_cast<size_t>(j)].type == 1) {
+      rel_[static_cast<size_t>(j)] = n_states_;
+      n_states_ += 2;
+    }
+  ctrl_.assign(static_cast<size_t>(n_), 0);
+  for (int j = 0; j < n_; ++j) {
+    ctrl_[static_cast<size_t>(j)] = n_states_;
+    n_states_ += 3;
+  }
+  modes_.assign(static_cast<size_t>(n_), FrictionMode::Stuck);
+  for (Eigen::VectorXd* v : {&q_ref_, &qd_ref_, &qdd_ref_, &tau_, &qdd_, &wm_, &wm_dot_, &tau_f_, &stuck_, &e_, &iref_})
+    v->setZero(n_);
+  Mbar_.setZero(n_, n_);
+  for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".controller.PI.x[rad/s]");
+  for (int j = 1; j <= n_; ++j)
+    if (s_.axes[static_cast<size_t>(j - 1)].type == 1) signals_.push_back("axis" + std::to_string(j) + ".gear.spring.phi_rel[rad]");
+  for (int j = 1; j <= n_; ++j)
+    if (s_.axes[static_cast<size_t>(j - 1)].type == 1) signals_.push_back("axis" + std::to_string(j) + ".gear.spring.w_rel[rad/s]");
+  for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".motor.C.v[V]");
+  for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".motor.La.i[A]");
+  signals_.emplace_back("mechanics.b2.body.w_a[1][rad/s]");
+  for (int j = 1; j <= n_; ++j) signals_.push_back("mechanics.r" + std::to_string(j) + ".phi[rad]");
+  for (int j = 1; j <= n_; ++j)
+    if (j != 2) signals_.push_back("mechanics.r" + std::to_string(j) + ".w[rad/s]");
+  for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".gear.bearingFriction.mode[-]");
+}
+
+std::string RobotR3Full::name() const { return "RobotR3 '" + s_.name + "'"; }
+
+sim::SimulateOptions RobotR3Full::simulateOptions() const {
+  sim::SimulateOptions o;
+  o.t_end = endTime();
+  o.output_interval = s_.log_interval;
+  o.solver = s_.solver;
+  if (o.solver.max_step == 0.0) o.solver.max_step = s_.log_interval;  // no step jumps over a logged sample
+  return o;
+}
+
+std::vector<double> RobotR3Full::timeEvents(double) const { return path_.breakpoints(); }
+
+double RobotR3Full::endTime() const { return std::min(s_.stop_time, path_.endTime() + s_.swing_time); }
+
+Eigen::VectorXd RobotR3Full::initialState() const {
+  // ROBOTR3.md §9.1 with sa(0) = 0 (§9.2): at rest on the start angles, springs and currents holding
+  // gravity, electrical and PI steady state.
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(n_states_);
+  y.head(n_) = s_.q_begin;
+  const Eigen::VectorXd G = multibody::gravityTorques(s_.arm, data_, s_.q_begin);
+  for (int j = 0; j < n_; ++j) {
+    const auto& a = s_.axes[static_cast<size_t>(j)];
+    double phi_rel = 0.0, i = 0.0;
+    if (a.type == 1) {
+      const double tau_s = -G[j] / a.ratio;  // τ_j = −N τ_s = G
+      phi_rel = tau_s / a.c;
+      i = -tau_s / a.motor.k;                // k i = τ_f(0) − τ_s with τ_f(0) = 0
+      y[rel_[static_cast<size_t>(j)]] = phi_rel;
+    } else {
+      i = G[j] / (a.ratio * a.motor.k);      // N k i = G + τ_f(0)
+    }
+    const int c = ctrl_[static_cast<size_t>(j)];
+    y[c] = i / a.ks - a.kp * phi_rel;        // x = i/ks − e(0)
+    y[c + 1] = -(a.motor.Ra * i) / a.motor.amp_gain;
+    y[c + 2] = i;
+  }
+  return y;
+}
+
+void RobotR3Full::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const auto q = y.head(n_);
+  const auto qd = y.segment(n_, n_);
+  path_.evaluate(t, q_ref_, qd_ref_, qdd_ref_);
+  // Drive torques on the joints, with the friction of sliding type-2 joints.
+  for (int j = 0; j < n_; ++j) {
+    const auto& a = s_.axes[static_cast<size_t>(j)];
+    const int c = ctrl_[static_cast<size_t>(j)];
+    const double i = y[c + 2], N = a.ratio;
+    double phi_m = N * q[j];
+    wm_[j] = N * qd[j];
+    if (a.type == 1) {
+      const int r = rel_[static_cast<size_t>(j)];
+      phi_m -= y[r];
+      wm_[j] -= y[r + 1];
+      const double tau_s = a.c * y[r] + a.d * y[r + 1];
+      tau_[j] = -N * tau_s;
+      stuck_[j] = a.motor.k * i + tau_s;  // motor-side friction that keeps dω_m/dt = 0
+    } else {
+      tau_[j] = N * a.motor.k * i;
+    }
+    e_[j] = a.kp * (N * q_ref_[j] - phi_m) + N * qd_ref_[j] - wm_[j];
+    iref_[j] = a.ks * (y[c] + e_[j]);
+    const double w = a.type == 1 ? wm_[j] : qd[j];
+    tau_f_[j] = drive::frictionTorque(modes_[static_cast<size_t>(j)], a.Rv0 + a.Rv1 * std::abs(w), 0.0);  // stuck: below
+    if (a.type == 2 && modes_[static_cast<size_t>(j)] != FrictionMode::Stuck) tau_[j] -= tau_f_[j];
+  }
+  // Arm: M̄ q̈ = τ − h, with q̈_j = 0 and τ_f,j unknown for stuck type-2 joints.
+  Mbar_ = multibody::crba(s_.arm, data_, q);
+  const Eigen::VectorXd& h = multibody::nonLinearEffects(s_.arm, data_, q, qd);
+  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 12, 1> rhs = tau_ - h;
+  Eigen::Matrix<int, Eigen::Dynamic, 1, 0, 12, 1> freeIdx(n_);
+  int nf = 0;
+  for (int j = 0; j < n_; ++j) {
+    const bool stuck2 = s_.axes[static_cast<size_t>(j)].type == 2 && modes_[static_cast<size_t>(j)] == FrictionMode::Stuck;
+    if (!stuck2) freeIdx[nf++] = j;
+  }
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 12, 12> Mff(nf, nf);
+  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 12, 1> bf(nf);
+  for (int a = 0; a < nf; ++a) {
+    bf[a] = rhs[freeIdx[a]];
+    for (int b = 0; b < nf; ++b) Mff(a, b) = Mbar_(freeIdx[a], freeIdx[b]);
+  }
+  qdd_.setZero();
+  if (nf > 0) {
+    const Eigen::LLT<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 12, 12>> llt(Mff);
+    const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 12, 1> x = llt.solve(bf);
+    for (int a = 0; a < nf; ++a) qdd_[freeIdx[a]] = x[a];
+  }
+  for (int j = 0; j < n_; ++j) {
+    const auto& a = s_.axes[static_cast<size_t>(j)];
+    if (a.type == 2 && modes_[static_cast<size_t>(j)] == FrictionMode::Stuck) {
+      // τ_f = τ_drive − h − (M̄ q̈)_j.
+      stuck_[j] = rhs[j] - Mbar_.row(j).dot(qdd_);
+      tau_f_[j] = stuck_[j];
+    }
+  }
+  // Motor accelerations of type-1 axes.
+  for (int j = 0; j < n_; ++j) {
+    const auto& a = s_.axes[static_cast<size_t>(j)];
+    if (a.type == 2) {
+      wm_dot_[j] = a.ratio * qdd_[j];
+      continue;
+    }
+    if (modes_[static_cast<size_t>(j)] == FrictionMode::Stuck) {
+      tau_f_[j] = stuck_[j];
+      wm_dot_[j] = 0.0;
+    } else {
+      const int r = rel_[static_cast<size_t>(j)];
+      const double tau_s = a.c * y[r] + a.d * y[r + 1];
+      wm_dot_[j] = (a.motor.k * y[ctrl_[static_cast<size_t>(j)] + 2] - tau_f_[j] + tau_s) / a.motor.J;
+    }
+  }
+}
+
+void RobotR3Full::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+  solve(t, y);
+  ydot.head(n_) = y.segment(n_, n_);
+  ydot.segment(n_, n_) = qdd_;
+  for (int j = 0; j < n_; ++j) {
+    const auto& a = s_.axes[static_cast<size_t>(j)];
+    if (a.type == 1) {
+      const int r = rel_[static_cast<size_t>(j)];
+      ydot[r] = y[r + 1];
+      ydot[r + 1] = a.ratio * qdd_[j] - wm_dot_[j];
+    }
+    const int c = ctrl_[static_cast<size_t>(j)];
+    const auto& m = a.motor;
+    ydot[c] = e_[j] / a.Ts;
+    ydot[c + 1] = (y[c + 2] - iref_[j]) / (m.Ri * m.C());
+    ydot[c + 2] = (-m.amp_gain * y[c + 1] - m.Ra * y[c + 2] - m.k * wm_[j]) / m.La();
+  }
+}
+
+void RobotR3Full::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
+  solve(t, y);
+  for (int j = 0; j < n_; ++j) {
+    const auto& a = s_.axes[static_cast<size_t>(j)];
+    const double w = a.type == 1 ? wm_[j] : y[n_ + j];
+    const double acc = a.type == 1 ? wm_dot_[j] : qdd_[j];
+    double g0 = 1, g1 = 1;
+    drive::frictionRoots(modes_[static_cast<size_t>(j)], stuck_[j], w, acc, a.Rv0, a.peak * a.Rv0, g0, g1);
+    g[2 * j] = g0;
+    g[2 * j + 1] = g1;
+  }
+}
+
+void RobotR3Full::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+  for (int iter = 0; iter < 30; ++iter) {
+    solve(t, y);
+    bool changed = false;
+    for (int j = 0; j < n_; ++j) {
+      const auto& a = s_.axes[static_cast<size_t>(j)];
+      const auto k = static_cast<size_t>(j);
+      const drive::FrictionEventFlags f = iter == 0 ? drive::frictionEventFlags(fired, k) : drive::FrictionEventFlags{};
+      const double w = a.type == 1 ? wm_[j] : y[n_ + j];
+      const double acc = a.type == 1 ? wm_dot_[j] : qdd_[j];
+      const FrictionMode m = drive::nextFrictionMode(modes_[k], false, stuck_[j], w, acc, a.Rv0, a.peak * a.Rv0, f);
+      if (m != modes_[k]) {
+        modes_[k] = m;
+        changed = true;
+        break;  // re-solve: the stuck torques of type-2 joints are coupled
+      }
+    }
+    if (!changed) break;
+  }
+}
+
+void RobotR3Full::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
+  Eigen::Index c = 0;
+  for (int j = 0; j < n_; ++j) row[c++] = y[ctrl_[static_cast<size_t>(j)]];
+  for (int j = 0; j < n_; ++j)
+    if (rel_[static_cast<size_t>(j)] >= 0) row[c++] = y[rel_[static_cast<size_t>(j)]];
+  for (int j = 0; j < n_; ++j)
+    if (rel_[static_cast<size_t>(j)] >= 0) row[c++] = y[rel_[static_cast<size_t>(j)] + 1];
+  for (int j = 0; j < n_; ++j) row[c++] = y[ctrl_[static_cast<size_t>(j)] + 1];
+  for (int j = 0; j < n_; ++j) row[c++] = y[ctrl_[static_cast<size_t>(j)] + 2];
+  row[c++] = y[n_ + 1];  // b2's angular velocity about its joint axis = q̇_2 (§8.2)
+  for (int j = 0; j < n_; ++j) row[c++] = y[j];
+  for (int j = 0; j < n_; ++j)
+    if (j != 1) row[c++] = y[n_ + j];
+  for (int j = 0; j < n_; ++j) row[c++] = drive::frictionModeNumber(modes_[static_cast<size_t>(j)]);
+}
+
+}  // namespace jointsim::systems
