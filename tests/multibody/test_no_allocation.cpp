@@ -5,8 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include "jointsim/control/trajectory.hpp"
+#include "jointsim/drive/transmissions.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
+#include "jointsim/systems/robot_system.hpp"
+#include "jointsim/systems/robot_with_drives.hpp"
 #include "test_util.hpp"
 
 namespace {
@@ -54,4 +58,80 @@ TEST(NoAllocation, AlgorithmsDoNotAllocate) {
   g_armed = false;
   EXPECT_TRUE(std::isfinite(e));
   EXPECT_EQ(g_allocations.load(), 0);
+}
+
+// ------------------------------------------------------------------------------ RobotSystem::derivatives
+namespace {
+
+/// Heap allocations of `calls` evaluations of the robot's right-hand side (after one warm-up call).
+long rhsAllocations(const jointsim::systems::RobotSystem& sys, const Eigen::VectorXd& y, int calls = 5) {
+  Eigen::VectorXd yd(sys.stateSize());
+  sys.derivatives(0.0, y, yd);
+  g_allocations = 0;
+  g_armed = true;
+  for (int k = 0; k < calls; ++k) sys.derivatives(0.01 * k, y, yd);
+  g_armed = false;
+  EXPECT_TRUE(yd.allFinite());
+  return g_allocations.load();
+}
+
+std::shared_ptr<const jointsim::control::JointTrajectory> fourier(int n) {
+  jointsim::control::FourierParams p;
+  p.base_frequency = 0.2;
+  p.offset = Eigen::VectorXd::Constant(n, 0.3);
+  p.a = Eigen::MatrixXd::Constant(n, 2, 0.05);
+  p.b = Eigen::MatrixXd::Constant(n, 2, -0.03);
+  p.fade_in = 0.5;
+  p.duration = 5.0;
+  return std::make_shared<jointsim::control::FourierTrajectory>(p);
+}
+
+}  // namespace
+
+TEST(NoAllocation, RobotSystemTwinContinuousAndSampled) {
+  // The UR5 twin (strain-wave gears, LuGre, electrics, cascade controllers) following a trajectory.
+  for (const bool sampled : {false, true}) {
+    jointsim::systems::RobotSystem sys =
+        jointsim::systems::loadRobotWithDrives(jointsim::test::sourcePath("config/robots/ur5_drives.yaml"));
+    if (sampled) sys.setSampledControl(2000.0, 3);
+    sys.setTrajectory(fourier(6));
+    const Eigen::VectorXd y = sys.initialState();
+    sys.start(0.0, y);
+    EXPECT_EQ(rhsAllocations(sys, y), 0) << (sampled ? "sampled" : "continuous");
+  }
+}
+
+TEST(NoAllocation, RobotSystemCoupledRigidWithExternalWrenches) {
+  // Coupled rigid drives (the CRBA + Cholesky path) with an external wrench on the tool: the path that
+  // allocated a zero vector on every call before.
+  using namespace jointsim;
+  const Model model = loadRobot(jointsim::test::sourcePath("config/robots/irb140.yaml"));
+  std::vector<systems::DriveSpec> drives;
+  for (int k = 0; k < model.nq; ++k) {
+    systems::DriveSpec d;
+    d.joint = model.joint_names[static_cast<size_t>(k)];
+    d.motor.J_M = 0.014;
+    d.electrics = false;
+    d.transmission = std::make_shared<drive::RigidGear>(k < 3 ? 100.0 : 1.0);
+    d.controller.type = control::ControllerType::MotorPPI000;
+    d.controller.kp = 0.008;
+    d.controller.ks = 0.01;
+    d.controller.Ts = 0.1;
+    drives.push_back(d);
+  }
+  Eigen::MatrixXd G = Eigen::MatrixXd::Identity(6, 6);
+  G.bottomRightCorner(3, 3) = drive::CouplingMatrix::irb140Wrist();
+  systems::RobotSystem sys(model, drives, G);
+  sys.setTrajectory(fourier(6));
+  const int tip = model.nq - 1;
+  sys.setExternalWrenches([tip](double t, const Model&, const Data&, const Eigen::Ref<const Eigen::VectorXd>&,
+                                const Eigen::Ref<const Eigen::VectorXd>&, Matrix6Xd& fext) {
+    fext(5, tip) = -20.0 - t;  // a downward force on the last body [N]
+  });
+  const Eigen::VectorXd y = sys.initialState();
+  EXPECT_EQ(rhsAllocations(sys, y), 0);
+  // The same robot without the wrench takes ABA-free CRBA too; with identity coupling it takes ABA.
+  systems::RobotSystem plain(model, drives);
+  plain.setTrajectory(fourier(6));
+  EXPECT_EQ(rhsAllocations(plain, plain.initialState()), 0);
 }
