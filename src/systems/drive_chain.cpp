@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/drive/transmissions.hpp"
 
@@ -25,39 +26,43 @@ sim::CvodeOptions DriveChainSetup::defaultSolver() {
 }
 
 void DriveChainSetup::validate() const {
-  if (inertias.empty()) throw InputError("inertias: expected at least one inertia");
+  // Keys as in a drive_chain experiment file (inertias[i], elements[k]).
+  const char* const c = "drive chain";
+  check::that(!inertias.empty(), c, "inertias", "expected at least one inertia");
   const int n = static_cast<int>(inertias.size());
-  for (const auto& in : inertias)
-    if (!(in.J > 0.0)) throw InputError("inertia '" + in.name + "': J must be > 0 kg·m²");
-  for (const auto& e : elements) {
-    const std::string where = "element '" + e.name + "'";
-    if (e.a < -1 || e.a >= n || e.b < -1 || e.b >= n) throw InputError(where + ": node out of range");
+  for (size_t i = 0; i < inertias.size(); ++i) check::positive(c, "inertias[" + std::to_string(i) + "].J", inertias[i].J, "kg·m²");
+  for (size_t k = 0; k < elements.size(); ++k) {
+    const ChainElement& e = elements[k];
+    const std::string key = "elements[" + std::to_string(k) + "]";
+    check::that(e.a >= -1 && e.a < n && e.b >= -1 && e.b < n, c, key, "node out of range");
     if (e.type == ChainElementType::TorqueSource) {
-      if (e.b < 0) throw InputError(where + ": a torque source needs an inertia");
+      check::that(e.b >= 0, c, key + ".on", "a torque source needs an inertia");
       continue;
     }
-    if (e.a == e.b) throw InputError(where + ": both flanges on the same node");
+    check::that(e.a != e.b, c, key, "both flanges on the same node");
     if (e.type == ChainElementType::Gear) {
-      if (e.a < 0 || e.b < 0) throw InputError(where + ": a gear joins two inertias");
-      if (!(e.ratio != 0.0) || !std::isfinite(e.ratio)) throw InputError(where + ": ratio must be non-zero");
+      check::that(e.a >= 0 && e.b >= 0, c, key, "a gear joins two inertias");
+      check::nonZero(c, key + ".ratio", e.ratio, "(-)");
       const auto& ia = inertias[static_cast<size_t>(e.a)];
       const auto& ib = inertias[static_cast<size_t>(e.b)];
-      if (std::abs(ia.phi0 - e.ratio * ib.phi0) > 1e-12 * (1 + std::abs(ia.phi0)) ||
-          std::abs(ia.w0 - e.ratio * ib.w0) > 1e-12 * (1 + std::abs(ia.w0)))
-        throw InputError(where + ": initial angles/speeds violate φ_in = ratio·φ_out");
+      check::that(std::abs(ia.phi0 - e.ratio * ib.phi0) <= 1e-12 * (1 + std::abs(ia.phi0)) &&
+                      std::abs(ia.w0 - e.ratio * ib.w0) <= 1e-12 * (1 + std::abs(ia.w0)),
+                  c, key, "initial angles/speeds violate φ_in = ratio·φ_out");
       continue;
     }
-    if ((e.type == ChainElementType::SpringDamper || e.type == ChainElementType::ElastoBacklash) && !(e.c >= 0.0 && e.d >= 0.0))
-      throw InputError(where + ": c and d must be >= 0");
-    if (e.type == ChainElementType::ElastoBacklash && !(e.backlash >= 0.0)) throw InputError(where + ": backlash must be >= 0");
+    if (e.type == ChainElementType::SpringDamper || e.type == ChainElementType::ElastoBacklash) {
+      check::nonNegative(c, key + ".c", e.c, "N·m/rad");
+      check::nonNegative(c, key + ".d", e.d, "N·m·s/rad");
+    }
+    if (e.type == ChainElementType::ElastoBacklash) check::nonNegative(c, key + ".backlash", e.backlash, "rad");
     if (e.isFriction()) {
-      if (e.table.empty()) throw InputError(where + ": empty friction table");
-      if (!(e.peak >= 1.0)) throw InputError(where + ": peak must be >= 1");
-      if (e.type != ChainElementType::BearingFriction && !(e.fn_max >= 0.0)) throw InputError(where + ": fn_max must be >= 0");
+      check::that(!e.table.empty(), c, key, "empty friction table");
+      check::atLeast(c, key + ".peak", e.peak, 1.0, "(-)");
+      if (e.type != ChainElementType::BearingFriction) check::nonNegative(c, key + ".fn_max", e.fn_max, "N");
     }
   }
-  if (!(duration > 0.0)) throw InputError("duration: expected a time > 0 s");
-  if (!(log_rate > 0.0)) throw InputError("log_rate: expected a rate > 0 Hz");
+  check::positive(c, "duration", duration, "s");
+  check::positive(c, "log_rate", log_rate, "Hz");
 }
 
 DriveChain::DriveChain(DriveChainSetup setup) : s_(std::move(setup)) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::systems {
@@ -19,23 +20,31 @@ sim::CvodeOptions JointRigSetup::defaultSolver() {
 }
 
 void JointRigSetup::validate() const {
-  if (!transmission) throw InputError("transmission: missing");
-  if ((input == RigInput::Voltage || (input == RigInput::VelocityPI && pi.voltage_output)) && !motor)
-    throw InputError("motor: voltage input needs the motor electrics (motor parameters)");
-  if (motor) motor->validate();
-  if (!motor && !(rotor_inertia > 0.0)) throw InputError("rotor_inertia: expected a value > 0 kg·m²");
-  if (clamped && transmission->isRigid())
-    throw InputError("load.clamped: a rigid transmission with a clamped output locks the motor; use a compliant transmission");
-  if (!clamped && !(load_inertia > 0.0)) throw InputError("load.inertia: expected a value > 0 kg·m²");
-  if (!(load_damping >= 0.0)) throw InputError("load.damping: expected a value >= 0 N·m·s/rad");
-  if (friction && friction_side == Side::Output && clamped)
-    throw InputError("friction.side: friction on the output side of a clamped output has no effect; use side: motor");
-  if (input == RigInput::VelocityPI) {
-    if (!(pi.limit > 0.0)) throw InputError("controller.limit: expected a value > 0");
-    if (pi.measure == Side::Output && clamped) throw InputError("controller.measure: the clamped output does not move");
+  // Keys as in a joint_rig experiment file.
+  const char* const c = "joint rig";
+  check::that(transmission != nullptr, c, "transmission", "missing");
+  check::that(!((input == RigInput::Voltage || (input == RigInput::VelocityPI && pi.voltage_output)) && !motor), c, "motor",
+              "voltage input needs the motor electrics (motor parameters)");
+  if (motor) {
+    try {
+      motor->validate();
+    } catch (const InputError& e) {
+      throw InputError::parameter(c, "motor." + e.keyPath(), e.message());
+    }
   }
-  if (!(duration > 0.0)) throw InputError("duration: expected a time > 0 s");
-  if (!(log_rate > 0.0)) throw InputError("log_rate: expected a rate > 0 Hz");
+  if (!motor) check::positive(c, "rotor_inertia", rotor_inertia, "kg·m²");
+  check::that(!(clamped && transmission->isRigid()), c, "load.clamped",
+              "a rigid transmission with a clamped output locks the motor; use a compliant transmission");
+  if (!clamped) check::positive(c, "load.inertia", load_inertia, "kg·m²");
+  check::nonNegative(c, "load.damping", load_damping, "N·m·s/rad");
+  check::that(!(friction && friction_side == Side::Output && clamped), c, "friction.side",
+              "friction on the output side of a clamped output has no effect; use side: motor");
+  if (input == RigInput::VelocityPI) {
+    check::positive(c, "input.controller.limit", pi.limit, "(N·m or V)");
+    check::that(!(pi.measure == Side::Output && clamped), c, "input.controller.measure", "the clamped output does not move");
+  }
+  check::positive(c, "duration", duration, "s");
+  check::positive(c, "log_rate", log_rate, "Hz");
 }
 
 struct JointRig::Eval {

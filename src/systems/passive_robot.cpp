@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 
@@ -18,17 +19,20 @@ sim::CvodeOptions PassiveRobotParams::defaultSolver() {
 }
 
 void PassiveRobotParams::validate(const Model& model) const {
-  auto checkSize = [&](const Eigen::VectorXd& v, const char* what) {
-    if (v.size() != 0 && v.size() != model.nq)
-      throw InputError(std::string(what) + ": expected " + std::to_string(model.nq) + " values (one per joint of '" +
-                       model.name + "'), got " + std::to_string(v.size()));
+  // Keys as in a passive_robot experiment file.
+  const char* const c = "passive robot";
+  auto checkSize = [&](const Eigen::VectorXd& v, const char* key) {
+    check::that(v.size() == 0 || v.size() == model.nq, c, key,
+                "expected " + std::to_string(model.nq) + " values (one per joint of '" + model.name + "'), got " +
+                    std::to_string(v.size()));
   };
   checkSize(q0, "initial_state.q");
   checkSize(qd0, "initial_state.qd");
   checkSize(damping, "joint_damping");
-  if (damping.size() && damping.minCoeff() < 0.0) throw InputError("joint_damping: expected values >= 0 N·m·s/rad");
-  if (!(duration > 0.0) || !std::isfinite(duration)) throw InputError("duration: expected a time > 0 s");
-  if (!(log_rate > 0.0) || !std::isfinite(log_rate)) throw InputError("log_rate: expected a rate > 0 Hz");
+  for (Eigen::Index i = 0; i < damping.size(); ++i)
+    check::nonNegative(c, "joint_damping[" + std::to_string(i) + "]", damping[i], "N·m·s/rad");
+  check::positive(c, "duration", duration, "s");
+  check::positive(c, "log_rate", log_rate, "Hz");
 }
 
 PassiveRobot::PassiveRobot(Model model, PassiveRobotParams params)

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 
 namespace jointsim::systems {
 
@@ -12,14 +14,27 @@ Eigen::VectorXd one(double v) { return Eigen::VectorXd::Constant(1, v); }
 }  // namespace
 
 void RobotR3AxisSetup::validate() const {
-  motor.validate();
-  if (ratio == 0.0 || !std::isfinite(ratio)) throw InputError("ratio: expected a non-zero gear ratio");
-  if (!(c > 0.0) || !(d >= 0.0)) throw InputError("c, d: expected c > 0 N·m/rad and d >= 0 N·m·s/rad");
-  if (!(Rv0 >= 0.0) || !(Rv1 >= 0.0) || !(peak >= 1.0)) throw InputError("friction: expected Rv0, Rv1 >= 0 and peak >= 1");
-  if (!(kp >= 0.0) || !(ks >= 0.0) || !(Ts > 0.0)) throw InputError("controller: expected kp, ks >= 0 and Ts > 0");
-  if (!(load_inertia > 0.0)) throw InputError("load_inertia: expected a value > 0 kg·m²");
-  if (!(stop_time > 0.0) || !(log_interval > 0.0)) throw InputError("stop_time, log_interval: expected values > 0 s");
-  if (std::abs(sa0) > peak * Rv0) throw InputError("sa0: the initial friction torque must lie within ±peak·Rv0");
+  // Keys as in a robotr3_axis experiment file.
+  const char* const a = "RobotR3 axis";
+  try {
+    motor.validate();
+  } catch (const InputError& e) {
+    throw InputError::parameter(a, "motor." + e.keyPath(), e.message());
+  }
+  check::nonZero(a, "gear.ratio", ratio, "(-)");
+  check::positive(a, "gear.c", c, "N·m/rad");
+  check::nonNegative(a, "gear.d", d, "N·m·s/rad");
+  check::nonNegative(a, "gear.Rv0", Rv0, "N·m");
+  check::nonNegative(a, "gear.Rv1", Rv1, "N·m·s/rad");
+  check::atLeast(a, "gear.peak", peak, 1.0, "(-)");
+  check::nonNegative(a, "controller.kp", kp, "1/s");
+  check::nonNegative(a, "controller.ks", ks, "A·s/rad");
+  check::positive(a, "controller.Ts", Ts, "s");
+  check::positive(a, "load.inertia", load_inertia, "kg·m²");
+  check::positive(a, "stop_time", stop_time, "s");
+  check::positive(a, "log_interval", log_interval, "s");
+  check::that(std::abs(sa0) <= peak * Rv0, a, "initial_friction_torque",
+              "expected a torque within ±peak·Rv0 = ±" + formatNumber(peak * Rv0) + " N·m, got " + formatNumber(sa0));
 }
 
 RobotR3Axis::RobotR3Axis(RobotR3AxisSetup setup)

@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 
@@ -33,18 +34,26 @@ RobotR3AxisParams RobotR3AxisParams::fullRobot(int j) {
 }
 
 void RobotR3FullSetup::validate() const {
+  const char* const c = "RobotR3 robot";
   const auto n = static_cast<size_t>(arm.nq);
-  if (axes.size() != n) throw InputError("axes: expected one axis per joint (" + std::to_string(n) + ")");
-  for (const auto& a : axes) {
+  check::that(axes.size() == n, c, "axes", "expected one axis per joint (" + std::to_string(n) + ")");
+  for (size_t k = 0; k < axes.size(); ++k) {
+    const auto& a = axes[k];
+    const std::string key = "axes[" + std::to_string(k) + "]";
     a.motor.validate();
-    if (a.type != 1 && a.type != 2) throw InputError("axis type must be 1 or 2");
-    if (a.ratio == 0.0) throw InputError("axis ratio must be non-zero");
-    if (a.type == 1 && !(a.c > 0.0)) throw InputError("type-1 axis needs a spring c > 0");
-    if (!(a.peak >= 1.0) || !(a.Rv0 >= 0.0) || !(a.Ts > 0.0)) throw InputError("axis friction/controller parameters out of range");
+    check::that(a.type == 1 || a.type == 2, c, key + ".type", "expected axis type 1 or 2");
+    check::nonZero(c, key + ".ratio", a.ratio, "(-)");
+    if (a.type == 1) check::positive(c, key + ".c", a.c, "N·m/rad (type-1 spring)");
+    check::atLeast(c, key + ".peak", a.peak, 1.0, "(-)");
+    check::nonNegative(c, key + ".Rv0", a.Rv0, "N·m");
+    check::positive(c, key + ".Ts", a.Ts, "s");
   }
+  const char* names[] = {"path.q_begin", "path.q_end", "path.qd_max", "path.qdd_max"};
+  int i = 0;
   for (const Eigen::VectorXd* v : {&q_begin, &q_end, &qd_max, &qdd_max})
-    if (static_cast<size_t>(v->size()) != n) throw InputError("path: expected one value per joint");
-  if (!(stop_time > 0.0) || !(log_interval > 0.0)) throw InputError("stop_time and log_interval must be > 0 s");
+    check::that(static_cast<size_t>(v->size()) == n, c, names[i++], "expected one value per joint");
+  check::positive(c, "stop_time", stop_time, "s");
+  check::positive(c, "log_interval", log_interval, "s");
 }
 
 RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
