@@ -1,4 +1,4 @@
-// `jointsim identify clamping DATA.csv [--gear-ratio N] [-o FILE]`: seed 001's Algorithm II preprocessing and a
+// `jointsim identify clamping DATA.csv [--gear-ratio N] [-o FILE]`: Algorithm II preprocessing of [KR300Thesis] and a
 // Ceres fit of the 1-D transmission model (stiffness, backlash, Coulomb friction; motor side). Writes a YAML
 // report (default: DATA with ".csv" replaced by "_clamping.yaml") and prints a short summary.
 #include <chrono>
@@ -35,7 +35,8 @@ void addIdentifyClampingCommand(CLI::App& identify) {
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = identify.add_subcommand(
       "clamping",
-      "Identify stiffness, backlash and friction (motor side) from a clamping log (seed 001 Algorithm II + Ceres)");
+      "Identify stiffness, backlash and friction (motor side) from a clamping log "
+      "([KR300Thesis, Algorithm II] + Ceres)");
   cmd->add_option("data", opt->data, "CSV with columns time[s], motor_angle[rad], motor_torque[N*m]")->required();
   cmd->add_option("--gear-ratio", opt->gear_ratio,
                   "The torque column is arm side (motor torque x N, as KUKA logs): divide it by N (default 1)");

@@ -1,4 +1,4 @@
-// `jointsim identify friction MAP.csv [-o FILE]`: fits the static friction map (seed 004 eq. 4.6 / 4.21) per
+// `jointsim identify friction MAP.csv [-o FILE]`: fits the static friction map ([Hauschild2003, eqs. 4.6, 4.21]) per
 // direction with Ceres (jointsim::identify::fitFrictionMap) and writes a friction YAML block plus the fit
 // statistics. Default output: MAP with ".csv" replaced by "_friction.yaml"; "-o -" writes to stdout.
 #include <chrono>
@@ -43,13 +43,13 @@ void addIdentifyFrictionCommand(CLI::App& identify) {
   auto opt = std::make_shared<FrictionOptions>();
   CLI::App* cmd = identify.add_subcommand(
       "friction", "Fit the static friction map F(v) = (a0 + a1 exp(-(|v|/v_s)^delta)) sgn(v) + a2 v per direction "
-                  "(seed 004 eq. 4.6 / LuGre eq. 4.21); writes a friction YAML block with standard errors");
+                  "([Hauschild2003, eq. 4.6] / LuGre eq. 4.21); writes a friction YAML block with standard errors");
   cmd->add_option("map", opt->map, "CSV with columns velocity[rad/s], friction_torque[N*m]")->required();
   cmd->add_option("-o,--output", opt->output,
                   "Output YAML file (default: MAP without .csv + _friction.yaml; - = stdout)");
   cmd->add_option("--lugre", opt->lugre,
                   "Write a `type: lugre` block with the given dynamic parameters SIGMA0,SIGMA1 [N·m/rad, N·m·s/rad] "
-                  "(a static map cannot determine them; 004 used 259,10)");
+                  "(a static map cannot determine them; [Hauschild2003] used 259,10)");
   cmd->add_option("--delta", opt->delta,
                   "Stribeck form factor delta [-] (default 2 = LuGre; start value with --fit-delta)");
   cmd->add_flag("--fit-delta", opt->fit_delta, "Fit one delta shared by both directions (stribeck output only)");
@@ -58,7 +58,8 @@ void addIdentifyFrictionCommand(CLI::App& identify) {
       ->check(CLI::IsMember({"none", "huber", "cauchy"}));
   cmd->add_option("--loss-scale", opt->loss_scale, "Residual scale of the robust loss [N·m] (default 0.1)");
   cmd->add_option("--k-s", opt->k_s,
-                  "Slope-limiter factor k_s written to a stribeck block [s/rad] (default 300, 004 eq. 4.24)");
+                  "Slope-limiter factor k_s written to a stribeck block [s/rad] "
+                  "(default 300, [Hauschild2003, eq. 4.24])");
   cmd->callback([opt] {
     const auto t0 = std::chrono::steady_clock::now();
     identify::FrictionFitOptions fo;

@@ -55,7 +55,7 @@ double CoulombViscousFriction::evaluate(const FrictionInput& in, const double*, 
 }
 
 double CoulombViscousFriction::steadyState(double v) const {
-  // 004 eq. 4.2, F = F_v v + F_C sgn(v), with sgn(v) ≈ tanh(v / v_reg) (MODEL_REFERENCE §3.9).
+  // [Hauschild2003, eq. 4.2], F = F_v v + F_C sgn(v), with sgn(v) ≈ tanh(v / v_reg) (our choice).
   return p_.f_c * std::tanh(v / p_.v_reg) + p_.f_v * v;
 }
 
@@ -102,14 +102,14 @@ double TableFriction::evaluate(const FrictionInput& in, const double*, double*) 
   const double v = in.v;
   const double stiction = p_.peak * tau0_;
   if (std::abs(v) < p_.v_stick) {
-    // Karnopp band (MODEL_REFERENCE §3.3): stuck while |τ_d| <= peak·τ0 (000 eq. 3.1); the sticking
-    // damping makes J v̇ = −d_stick v so the shaft comes to rest.
+    // Karnopp band ([Hauschild2003, §4.3.1], [Karnopp1985]): stuck while |τ_d| <= peak·τ0
+    // ([Olsson2017, eq. 3.1]); the sticking damping makes J v̇ = −d_stick v so the shaft comes to rest.
     if (std::abs(in.driving_torque) <= stiction)
       return std::clamp(in.driving_torque + d_stick_ * v, -stiction, stiction);
     // Break-away (MSL startForward/startBackward): the friction drops to the table value.
     return sgn(in.driving_torque) * tableTorque(std::abs(v));
   }
-  return sgn(v) * tableTorque(std::abs(v));  // sliding, 000 eq. 3.1: τ = k ω ± m
+  return sgn(v) * tableTorque(std::abs(v));  // sliding, [Olsson2017, eq. 3.1]: τ = k ω ± m
 }
 
 double TableFriction::steadyState(double v) const { return sgn(v) * tableTorque(std::abs(v)); }
@@ -132,7 +132,8 @@ double StribeckFriction::evaluate(const FrictionInput& in, const double*, double
 double StribeckFriction::steadyState(double v) const {
   const StribeckBranch& b = v >= 0.0 ? p_.positive : p_.negative;
   const double a = std::abs(v);
-  // 004 eq. 4.6 with |v| in the exponent, times the slope limiter 1 − e^{−k_S|v|} of 004 eq. 4.24.
+  // [Hauschild2003, eq. 4.6] with |v| in the exponent (our correction), times the slope limiter
+  // 1 − e^{−k_S|v|} of [Hauschild2003, eq. 4.24].
   const double branch = (b.alpha0 + b.alpha1 * std::exp(-std::pow(a / b.v_s, p_.delta))) * sgn(v) + b.alpha2 * v;
   return branch * -std::expm1(-p_.k_s * a);
 }
@@ -150,7 +151,7 @@ DahlFriction::DahlFriction(const DahlParams& params) : p_(params) { p_.validate(
 
 double DahlFriction::evaluate(const FrictionInput& in, const double* z, double* zdot) const {
   const double v = in.v;
-  // 004 eq. 4.7 in the bristle state: dF/dx = σ (1 − F sgn(v)/F_C)^α, F = σ z, ż = v · dF/dx / σ.
+  // [Hauschild2003, eq. 4.7] in the bristle state: dF/dx = σ (1 − F sgn(v)/F_C)^α, F = σ z, ż = v · dF/dx / σ.
   const double u = 1.0 - p_.sigma * z[0] * sgn(v) / p_.f_c;
   const double phi = p_.alpha == 1.0 ? u : sgn(u) * std::pow(std::abs(u), p_.alpha);
   zdot[0] = v * phi;  // α = 1: ż = v − σ|v| z / F_C (eq. 4.9)
@@ -173,20 +174,20 @@ LuGreFriction::LuGreFriction(const LuGreParams& params) : p_(params) { p_.valida
 double LuGreFriction::g(double v) const {
   const StribeckBranch& b = v >= 0.0 ? p_.positive : p_.negative;
   const double r = v / b.v_s;
-  return b.alpha0 + b.alpha1 * std::exp(-r * r);  // 004 eq. 4.17
+  return b.alpha0 + b.alpha1 * std::exp(-r * r);  // [Hauschild2003, eq. 4.17]
 }
 
 double LuGreFriction::evaluate(const FrictionInput& in, const double* z, double* zdot) const {
   const double v = in.v;
   const double alpha2 = v >= 0.0 ? p_.positive.alpha2 : p_.negative.alpha2;
-  const double zd = v - p_.sigma0 * std::abs(v) * z[0] / g(v);  // 004 eq. 4.15
+  const double zd = v - p_.sigma0 * std::abs(v) * z[0] / g(v);  // [Hauschild2003, eq. 4.15]
   zdot[0] = zd;
-  return p_.sigma0 * z[0] + p_.sigma1 * zd + alpha2 * v;  // 004 eq. 4.16
+  return p_.sigma0 * z[0] + p_.sigma1 * zd + alpha2 * v;  // [Hauschild2003, eq. 4.16]
 }
 
 double LuGreFriction::steadyState(double v) const {
   const double alpha2 = v >= 0.0 ? p_.positive.alpha2 : p_.negative.alpha2;
-  return g(v) * sgn(v) + alpha2 * v;  // 004 eq. 4.21
+  return g(v) * sgn(v) + alpha2 * v;  // [Hauschild2003, eq. 4.21]
 }
 
 // ------------------------------------------------------------------------------ UR5 LuGre
@@ -198,23 +199,23 @@ void LuGreUr5Params::validate() const {
   requirePositive(m, "qd_s", qd_s, "rad/s");
   requireNonNegative(m, "k_static", k_static, "(-)");
   requirePositive(m, "viscous_exponent", viscous_exponent, "(-)");
-  // Not given by seed 002: must be supplied (NaN = unset fails these checks).
-  requirePositive(m, "f_c", f_c, "N·m (required: not given by seed 002)");
-  requireNonNegative(m, "f_v", f_v, "N·m·(s/rad)^exponent (required: not given by seed 002)");
-  requireNonNegative(m, "k_q", k_q, "(-) (required: not given by seed 002)");
+  // Not given by [Raviola2023]: must be supplied (NaN = unset fails these checks).
+  requirePositive(m, "f_c", f_c, "N·m (required: not given by [Raviola2023])");
+  requireNonNegative(m, "f_v", f_v, "N·m·(s/rad)^exponent (required: not given by [Raviola2023])");
+  requireNonNegative(m, "k_q", k_q, "(-) (required: not given by [Raviola2023])");
 }
 
 LuGreUr5Friction::LuGreUr5Friction(const LuGreUr5Params& params) : p_(params) { p_.validate(); }
 
 double LuGreUr5Friction::g(double v) const {
   const double a = std::abs(v);
-  // 002 eq. 7 with |q̇|^{2/3} (MODEL_REFERENCE §3.7 [FIX]).
+  // [Raviola2023, §2.4, eq. 7] with |q̇|^{2/3} (our correction: |q̇|^(2/3) so g stays real for q̇ < 0).
   return p_.f_c * (1.0 + p_.k_static * std::exp(-p_.k_q * a / p_.qd_s)) + p_.f_v * std::pow(a, p_.viscous_exponent);
 }
 
 double LuGreUr5Friction::evaluate(const FrictionInput& in, const double* z, double* zdot) const {
   const double v = in.v;
-  const double zd = v - std::abs(v) * z[0] / g(v) * p_.sigma0;  // 002 eq. 7
+  const double zd = v - std::abs(v) * z[0] / g(v) * p_.sigma0;  // [Raviola2023, eq. 7]
   zdot[0] = zd;
   return p_.sigma0 * z[0] + p_.sigma1 * zd;  // T_f = σ0 z + σ1 ż, no separate viscous term
 }

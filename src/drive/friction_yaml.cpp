@@ -111,9 +111,9 @@ std::unique_ptr<Friction> build(const YamlValue& node, const std::string& type) 
   // lugre_ur5
   node.allowKeys({"type", "sigma0", "sigma1", "qd_s", "k_static", "viscous_exponent", "f_c", "f_v", "k_q"});
   LuGreUr5Params p;
-  p.f_c = required(node, "f_c", "Coulomb coefficient f_c in N·m (not given by seed 002)");
-  p.f_v = required(node, "f_v", "viscous coefficient f_v in N·m·(s/rad)^(2/3) (not given by seed 002)");
-  p.k_q = required(node, "k_q", "Stribeck shape factor k_q (-) (not given by seed 002; 1 is a sensible start)");
+  p.f_c = required(node, "f_c", "Coulomb coefficient f_c in N·m (not given by [Raviola2023])");
+  p.f_v = required(node, "f_v", "viscous coefficient f_v in N·m·(s/rad)^(2/3) (not given by [Raviola2023])");
+  p.k_q = required(node, "k_q", "Stribeck shape factor k_q (-) (not given by [Raviola2023]; 1 is a sensible start)");
   p.sigma0 = optional(node, "sigma0", p.sigma0, "bristle stiffness sigma0 in N·m/rad");
   p.sigma1 = optional(node, "sigma1", p.sigma1, "bristle damping sigma1 in N·m·s/rad");
   p.qd_s = optional(node, "qd_s", p.qd_s, "sliding-speed threshold qd_s in rad/s");

@@ -22,7 +22,7 @@ void OpAmpMotorParams::validate() const {
 }
 
 OpAmpMotorParams OpAmpMotorParams::robotR3Axis(int axis) {
-  // ROBOTR3.md §2.5.
+  // Axis parameters of [MSL, RobotR3.FullRobot].
   static const double k[6] = {1.1616, 1.1616, 1.1616, 0.2365, 0.2608, 0.0842};
   static const double w[6] = {4590, 5500, 5500, 6250, 6250, 7400};
   static const double D[6] = {0.6, 0.6, 0.6, 0.55, 0.55, 0.27};

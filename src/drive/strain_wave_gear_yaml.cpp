@@ -73,7 +73,8 @@ StrainWaveGearParams swgParamsFromYaml(const YamlValue& node) {
     else if (size == "B" || size == "b")
       p = StrainWaveGearParams::ur5SizeB();
     else
-      node["size"].fail("expected A (UR5 joints 1-3) or B (UR5 joints 4-6) of 002 Table 3, got '" + size + "'");
+      node["size"].fail("expected A (UR5 joints 1-3) or B (UR5 joints 4-6) of [Raviola2023, Table 3], got '" + size +
+                        "'");
   }
 
   for (const Field& f : kPhysical) {
@@ -123,7 +124,7 @@ StrainWaveGearParams swgParamsFromYaml(const YamlValue& node) {
       p.reaction_form = ReactionForm::PaperLiteral;
     else
       node["reaction_form"].fail("expected energy_consistent (tan(alpha_n), ratio exactly tau) or paper_literal "
-                                 "(sin(alpha_n)cos(alpha_n) as printed in 002), got '" + form + "'");
+                                 "(sin(alpha_n)cos(alpha_n) as printed in [Raviola2023]), got '" + form + "'");
   }
 
   if (node.has("damping")) {

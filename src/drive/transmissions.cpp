@@ -105,7 +105,8 @@ Eigen::MatrixXd CouplingMatrix::reflectedInertia(const Eigen::VectorXd& motor_in
 }
 
 Eigen::Matrix3d CouplingMatrix::irb140Wrist() {
-  // MODEL_REFERENCE §2.6 (000 Listing 4.1, spaces inside numbers of the extraction removed).
+  // [Olsson2017, §2.2, eqs. 2.1–2.2, §3.12, A.13, Listing 4.1]; exact rational G derived from Listing 4.1
+  // (spaces inside numbers of the extraction removed).
   const double a = 6649.0 / 110.0, b = 207675.0 / 3190.0, c = 486720.0 / 7975.0;
   Eigen::Matrix3d G = Eigen::Matrix3d::Zero();
   G(0, 0) = 110.0 / 6649.0;

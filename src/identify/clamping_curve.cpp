@@ -1,4 +1,4 @@
-// Seed 001's Algorithm II preprocessing of clamping curves (MODEL_REFERENCE §7.4). See clamping_curve.hpp.
+// Algorithm II preprocessing of clamping curves ([KR300Thesis, §4.3, Table 6.1]). See clamping_curve.hpp.
 #include "jointsim/identify/clamping_curve.hpp"
 
 #include <algorithm>
@@ -154,7 +154,7 @@ ClampingData readClampingCsv(const std::string& path, double gear_ratio) {
   d.source = path;
   d.time = t.data.col(ti);
   d.angle = t.data.col(ai);
-  // 001's KUKA logs give degrees: honour a [deg] unit.
+  // The KUKA logs of [KR300Thesis] give degrees: honour a [deg] unit.
   const std::string& ah = t.header[static_cast<size_t>(ai)];
   if (ah.find("[deg]") != std::string::npos) d.angle *= 3.14159265358979323846 / 180.0;
   d.torque = t.data.col(qi) / gear_ratio;

@@ -1,4 +1,4 @@
-// Ceres fit of seed 001's 1-D transmission model to a clamping curve (quasi-static response), standard
+// Ceres fit of the 1-D transmission model of [KR300Thesis] to a clamping curve (quasi-static response), standard
 // errors, optional validation simulation with the joint rig. See clamping_fit.hpp.
 #include "jointsim/identify/clamping_fit.hpp"
 
@@ -121,8 +121,8 @@ ClampingFitResult identifyClamping(const ClampingData& data, const ClampingFitOp
   if (!cv.crosses_zero && !o.fixed_backlash)
     throw UnidentifiableError(
         "backlash: the clamping curve never crosses zero torque (the mid-line between the upper and lower curves "
-        "keeps one sign), so the gap is never traversed and the backlash is unobservable (as for seed 001's joint 2); "
-        "give the backlash (--fix-backlash B [rad]) to identify the stiffness and friction");
+        "keeps one sign), so the gap is never traversed and the backlash is unobservable (as for joint 2 of "
+        "[KR300Thesis]); give the backlash (--fix-backlash B [rad]) to identify the stiffness and friction");
 
   // start values: Algorithm II estimates
   double c = cv.stiffness, b = cv.backlash, F = std::max(0.0, cv.friction), phi0 = cv.center, kv = 0.0, d = 0.0;
@@ -257,7 +257,7 @@ std::string clampingReportYaml(const ClampingFitResult& r, const std::string& da
     }
     return out + "\"";
   };
-  y << "# jointsim identify clamping: seed 001 Algorithm II preprocessing + Ceres fit of the 1-D transmission\n"
+  y << "# jointsim identify clamping: [KR300Thesis, Algorithm II] preprocessing + Ceres fit of the 1-D transmission\n"
     << "# model (quasi-static branch response tau = EB_static(phi - center; c, b) + sgn(phi_dot) F). Motor side.\n";
   y << "data: " << quoted(data_path) << "\n";
   y << "side: motor\n";
@@ -272,7 +272,8 @@ std::string clampingReportYaml(const ClampingFitResult& r, const std::string& da
   y << "algorithm_ii:\n";
   y << "  stiffness: {value: " << num(cv.stiffness) << ", unit: \"N*m/rad\"}\n";
   y << "  backlash: {value: " << num(cv.backlash) << ", unit: \"rad\"}   # 2 x fold kink position\n";
-  y << "  fold_flat_length: {value: " << num(cv.fold_flat) << ", unit: \"rad\"}   # half the backlash (001 step 11)\n";
+  y << "  fold_flat_length: {value: " << num(cv.fold_flat)
+    << ", unit: \"rad\"}   # half the backlash ([KR300Thesis, Algorithm II step 11])\n";
   y << "  backlash_interval_upper: {value: " << num(cv.backlash_upper) << ", unit: \"rad\"}\n";
   y << "  backlash_interval_lower: {value: " << num(cv.backlash_lower) << ", unit: \"rad\"}\n";
   y << "  friction: {value: " << num(cv.friction) << ", unit: \"N*m\"}\n";

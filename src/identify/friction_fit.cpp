@@ -448,8 +448,8 @@ FrictionMapData readFrictionMap(const std::string& path) {
 std::string frictionFitYaml(const FrictionFit& fit, const FrictionYamlOptions& o) {
   if (o.lugre) {
     if (fit.delta.value != 2.0)
-      throw InputError("the LuGre model has delta = 2 (004 eq. 4.17); the fit used delta = " + num(fit.delta.value) +
-                       ", write a stribeck block instead");
+      throw InputError("the LuGre model has delta = 2 ([Hauschild2003, eq. 4.17]); the fit used delta = " +
+                       num(fit.delta.value) + ", write a stribeck block instead");
     if (!(o.sigma0 > 0) || !std::isfinite(o.sigma0))
       throw InputError("LuGre sigma0: expected a finite bristle stiffness > 0 N·m/rad, got " + num(o.sigma0));
     if (!(o.sigma1 > 0) || !std::isfinite(o.sigma1))
@@ -459,7 +459,8 @@ std::string frictionFitYaml(const FrictionFit& fit, const FrictionYamlOptions& o
   }
   std::ostringstream y;
   y << "# jointsim identify friction" << (o.source.empty() ? "" : ": " + o.source) << "\n"
-    << "# Static friction map (seed 004 eq. 4.6 / LuGre steady state eq. 4.21), one parameter set per direction:\n"
+    << "# Static friction map ([Hauschild2003, eq. 4.6] / LuGre steady state eq. 4.21), one parameter set per "
+       "direction:\n"
     << "#   F(v) = (alpha0 + alpha1*exp(-(|v|/v_s)^delta))*sgn(v) + alpha2*v\n"
     << "# Units: alpha0, alpha1 [N*m], alpha2 [N*m*s/rad], v_s [rad/s], delta [-].\n"
     << "# `friction` is a friction-model block (e.g. the `model:` of a joint-rig `friction:` entry).\n"
@@ -467,14 +468,15 @@ std::string frictionFitYaml(const FrictionFit& fit, const FrictionYamlOptions& o
   if (o.lugre) {
     y << "  type: lugre\n"
       << "  # sigma0/sigma1 are dynamic parameters: a static map cannot determine them. These values were given\n"
-      << "  # on the command line (default: 004 §4.5.4, Watflex shoulder), not identified.\n"
+      << "  # on the command line (default: [Hauschild2003, §4.5.4], Watflex shoulder), not identified.\n"
       << "  sigma0: " << num(o.sigma0) << "   # bristle stiffness [N*m/rad]\n"
       << "  sigma1: " << num(o.sigma1) << "   # bristle damping [N*m*s/rad]\n";
   } else {
     y << "  type: stribeck\n"
       << "  delta: " << num(fit.delta.value) << "   # form factor [-]" << (fit.delta_fitted ? " (fitted)" : " (fixed)")
       << "\n"
-      << "  k_s: " << num(o.k_s) << "   # slope limiter 1 - exp(-k_s|v|) of 004 eq. 4.24 [s/rad], not fitted: "
+      << "  k_s: " << num(o.k_s)
+      << "   # slope limiter 1 - exp(-k_s|v|) of [Hauschild2003, eq. 4.24] [s/rad], not fitted: "
       << "it lowers the map by 1 % at |v| = 4.6/k_s and more below\n";
   }
   for (const DirectionFit* d : {&fit.positive, &fit.negative})

@@ -122,7 +122,7 @@ inline double jointProject(const Model& model, size_t i, const Vector6d& f) {
   return isRevolute(model, i) ? model.axes[i].dot(f.head<3>()) : model.axes[i].dot(f.tail<3>());
 }
 
-// Base acceleration −g lets gravity enter as a fictitious upward acceleration of the base (RBDA §5.3).
+// Base acceleration −g lets gravity enter as a fictitious upward acceleration of the base ([Featherstone2008, §5.3]).
 inline Vector6d baseAcceleration(const Model& model) {
   Vector6d a0;
   a0.head<3>().setZero();

@@ -34,7 +34,7 @@ Model withOrthogonalCompliance(const Model& model, const std::vector<std::string
       b.addLink(parent, js, model.body_names[k], model.inertias[k]);
       continue;
     }
-    // getOrthVectors (000 A.15).
+    // getOrthVectors ([Olsson2017, A.15]).
     const Eigen::Vector3d n = model.axes[k].normalized();
     Eigen::Vector3d u;
     if (n.x() == 0.0) u = Eigen::Vector3d::UnitX().cross(n);

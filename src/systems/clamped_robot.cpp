@@ -164,7 +164,8 @@ Eigen::VectorXd ClampedRobot::initialState() const {
   for (int k = 0; k < n_; ++k) {
     const int m = motorState(k);
     y[m] = phi_m0_[k];
-    // PI initial output 0 (000 A.12 InitialOutput): x(0) = −u(0), u(0) = r_c q̇_ref(0) (motor at rest, on its reference).
+    // PI initial output 0 ([Olsson2017, A.12] InitialOutput): x(0) = −u(0), u(0) = r_c q̇_ref(0) (motor at rest,
+    // on its reference).
     double q, qd, qdd;
     paths_[static_cast<size_t>(k)].evaluate(0.0, q, qd, qdd);
     const auto& a = s_.axes[static_cast<size_t>(k)];

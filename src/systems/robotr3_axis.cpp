@@ -77,9 +77,10 @@ std::vector<double> RobotR3Axis::timeEvents(double) const { return path_.breakpo
 double RobotR3Axis::endTime() const { return std::min(s_.stop_time, path_.endTime() + s_.swing_time); }
 
 Eigen::VectorXd RobotR3Axis::initialState() const {
-  // ROBOTR3.md §9.1 with the load static torque G = 0 (no gravity on a 1-D load): q = q_begin, q̇ = 0,
-  // ω_rel = 0, φ_rel = −G/(ratio c) = 0, ω_m = 0; the rotor balance k i = τ_f(0) − τ_s with τ_f(0) = sa0
-  // (§9.2); electrical steady state v_C = −(Ra i + k ω_m)/5; PI steady state x = i/ks − e(0).
+  // [MSL, Rotational.Components.InitializeFlange] and the Motor's steady-state initial equations, with the load
+  // static torque G = 0 (no gravity on a 1-D load): q = q_begin, q̇ = 0, ω_rel = 0, φ_rel = −G/(ratio c) = 0,
+  // ω_m = 0; the rotor balance k i = τ_f(0) − τ_s with τ_f(0) = sa0 (undetermined in MSL; docs/validation.md);
+  // electrical steady state v_C = −(Ra i + k ω_m)/5; PI steady state x = i/ks − e(0).
   Eigen::VectorXd y = Eigen::VectorXd::Zero(kStates);
   const auto& m = s_.motor;
   y[0] = s_.q_begin;

@@ -12,7 +12,7 @@
 namespace jointsim::systems {
 
 RobotR3AxisParams RobotR3AxisParams::fullRobot(int j) {
-  // ROBOTR3.md §2.5.
+  // Axis parameters of [MSL, RobotR3.FullRobot].
   static const int type[6] = {1, 1, 1, 2, 2, 2};
   static const double ratio[6] = {-105, 210, 60, -99, 79.2, -99};
   static const double c[6] = {43, 8, 58, 0, 0, 0}, d[6] = {0.005, 0.01, 0.04, 0, 0, 0};
@@ -61,7 +61,7 @@ RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
       n_(s_.arm.nq),
       path_(s_.q_begin, s_.q_end, s_.qd_max, s_.qdd_max, s_.start_time),
       data_(s_.arm) {
-  // Type-2 rotors move with the joints: N² J joins the arm's joint-space inertia (§2.4).
+  // Type-2 rotors move with the joints: N² J joins the arm's joint-space inertia ([MSL, RobotR3.Utilities.GearType2]).
   s_.arm.armature = Eigen::VectorXd::Zero(n_);
   for (int j = 0; j < n_; ++j) {
     const auto& a = s_.axes[static_cast<size_t>(j)];
@@ -114,8 +114,9 @@ std::vector<double> RobotR3Full::timeEvents(double) const { return path_.breakpo
 double RobotR3Full::endTime() const { return std::min(s_.stop_time, path_.endTime() + s_.swing_time); }
 
 Eigen::VectorXd RobotR3Full::initialState() const {
-  // ROBOTR3.md §9.1 with sa(0) = 0 (§9.2): at rest on the start angles, springs and currents holding
-  // gravity, electrical and PI steady state.
+  // [MSL, Rotational.Components.InitializeFlange] and the Motor's steady-state initial equations, with
+  // sa(0) = 0 (undetermined in MSL; docs/validation.md): at rest on the start angles, springs and currents
+  // holding gravity, electrical and PI steady state.
   Eigen::VectorXd y = Eigen::VectorXd::Zero(n_states_);
   y.head(n_) = s_.q_begin;
   const Eigen::VectorXd G = multibody::gravityTorques(s_.arm, data_, s_.q_begin);
@@ -275,7 +276,7 @@ void RobotR3Full::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, 
     if (rel_[static_cast<size_t>(j)] >= 0) row[c++] = y[rel_[static_cast<size_t>(j)] + 1];
   for (int j = 0; j < n_; ++j) row[c++] = y[ctrl_[static_cast<size_t>(j)] + 1];
   for (int j = 0; j < n_; ++j) row[c++] = y[ctrl_[static_cast<size_t>(j)] + 2];
-  row[c++] = y[n_ + 1];  // b2's angular velocity about its joint axis = q̇_2 (§8.2)
+  row[c++] = y[n_ + 1];  // b2's angular velocity about its joint axis = q̇_2 ([MSL] reference results)
   for (int j = 0; j < n_; ++j) row[c++] = y[j];
   for (int j = 0; j < n_; ++j)
     if (j != 1) row[c++] = y[n_ + j];

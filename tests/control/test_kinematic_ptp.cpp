@@ -1,5 +1,6 @@
-// KinematicPtpTrajectory (MSL KinematicPTP2): the FullRobot and OneAxis profiles of ROBOTR3.md §4.5,
-// derivatives, continuity, limits, degenerate and zero-distance axes, start time offset, YAML.
+// KinematicPtpTrajectory ([MSL, Blocks.Sources.KinematicPTP2]): the FullRobot and OneAxis profiles (derived
+// timings, docs/validation.md), derivatives, continuity, limits, degenerate and zero-distance axes, start time
+// offset, YAML.
 #include <cmath>
 #include <random>
 
@@ -29,14 +30,14 @@ Eigen::VectorXd vec(std::initializer_list<double> v) {
   return out;
 }
 
-/// ROBOTR3.md §1.1: FullRobot reference motion.
+/// [MSL, RobotR3.FullRobot]: FullRobot reference motion.
 KinematicPtpTrajectory fullRobot(double start_time = 0.0) {
   return KinematicPtpTrajectory(vec({-60 * kDeg, 20 * kDeg, 90 * kDeg, 0, -110 * kDeg, 0}),
                                 vec({60 * kDeg, -70 * kDeg, -35 * kDeg, 45 * kDeg, 110 * kDeg, 45 * kDeg}),
                                 vec({3, 1.5, 5, 3.1, 3.1, 4.1}), vec({15, 15, 15, 60, 60, 60}), start_time);
 }
 
-/// ROBOTR3.md §6: OneAxis, 0° → 120°, 3 rad/s, 10 rad/s².
+/// [MSL, RobotR3.OneAxis]: OneAxis, 0° → 120°, 3 rad/s, 10 rad/s².
 KinematicPtpTrajectory oneAxis() { return KinematicPtpTrajectory(vec({0}), vec({120 * kDeg}), vec({3}), vec({10})); }
 
 /// A triangular (no constant-velocity phase) 3-axis move with a start offset and one zero-distance axis.
@@ -84,7 +85,7 @@ void expectLimitsRespected(const KinematicPtpTrajectory& traj) {
 
 }  // namespace
 
-// ------------------------------------------------------------------------------------------ ROBOTR3.md §4.5
+// ------------------------------------------------------------------------- derived timings (docs/validation.md)
 
 TEST(KinematicPtp, FullRobotTimingMatchesRobotR3Section45) {
   const auto p = fullRobot();
@@ -177,7 +178,7 @@ TEST(KinematicPtp, OneAxisTimingMatchesRobotR3Section45) {
 // ------------------------------------------------------------------------------------------ semantics
 
 TEST(KinematicPtp, PathFollowsTheMslBranchFormulas) {
-  // Independent evaluation of the ROBOTR3.md §4.1 tables at random times (τ-based, trapezoidal).
+  // Independent evaluation of the [MSL, Blocks.Sources.KinematicPTP2] equations at random times (τ-based, trapezoidal).
   const auto p = fullRobot(0.3);
   const double A = p.pathAcceleration(), V = p.pathSpeed(), Ta2 = p.Ta2(), Tv = p.Tv(), Te = p.Te();
   const double s1 = A * Ta2 * Ta2 / 2, s2 = s1 + V * (Tv - Ta2);

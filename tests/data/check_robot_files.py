@@ -4,8 +4,9 @@
 Run from anywhere:  python3 tests/data/check_robot_files.py
 Needs: numpy, pyyaml (pip install numpy pyyaml). Not part of the build. Exit code 0 = all checks passed.
 
-(a) config/robots/ur5.yaml: TCP by eq. 8 of MODEL_REFERENCE §1.2 (DH + Hayati beta, theta = q + offset) at
-    q = 0 and q = (0, -pi/2, 0, -pi/2, 0, 0) against the §1.2 test vectors (tolerance 1e-6 m).
+(a) config/robots/ur5.yaml: TCP by [Raviola2023, §2.6, eq. 8] (DH + Hayati beta, theta = q + offset) at
+    q = 0 and q = (0, -pi/2, 0, -pi/2, 0, 0) against our FK test vectors for [Raviola2023, Table 4]
+    (tolerance 1e-6 m).
     config/robots/ur5.urdf: parsed, inertias positive definite, tool0 pose against the nominal UR5 DH model
     (base_link = UR base frame rotated by pi about z) at several q.
 (b) tests/data/planar2.urdf, planar2_tree.yaml, planar2_dh.yaml: tip position, joint-space inertia matrix M(q)
@@ -125,10 +126,10 @@ def mass_matrix_and_gravity(kin, gravity):
 
 
 # ----------------------------------------------------------------------------------------------------------
-# DH-Hayati (jointsim YAML, convention dh_hayati), MODEL_REFERENCE §1.2 eq. 8
+# DH-Hayati (jointsim YAML, convention dh_hayati), [Raviola2023, §2.6, eqs. 8–9]
 # ----------------------------------------------------------------------------------------------------------
 def A_eq8(a, alpha, beta, d, theta):
-    """The 4x4 matrix of eq. 8, written out as printed in MODEL_REFERENCE §1.2."""
+    """The 4x4 matrix of eq. 8, written out as printed in [Raviola2023, §2.6]."""
     ct, st = math.cos(theta), math.sin(theta)
     ca, sa = math.cos(alpha), math.sin(alpha)
     cb, sb = math.cos(beta), math.sin(beta)
@@ -330,7 +331,7 @@ def part_a():
         M, g = mass_matrix_and_gravity(ur5.fk(np.array(q, float)), ur5.gravity)
         print(f"  ur5.yaml q = {fmt(q)}\n    diag M = {fmt(np.diag(M))}\n    g = {fmt(g)}")
 
-    # URDF: standard ROS-Industrial UR5; compare with the nominal UR5 DH model (MODEL_REFERENCE §1.2)
+    # URDF: standard ROS-Industrial UR5; compare with the nominal UR5 DH model ([URDH])
     urdf = TreeModel.from_urdf(os.path.join(ROOT, "config/robots/ur5.urdf"))
     check(all(inertia_ok(m, I) for m, _, I in urdf.links.values()), "ur5.urdf: inertias PD for every link with mass > 0")
     check([j["name"] for j in urdf.moving] == ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",

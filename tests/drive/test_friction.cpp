@@ -1,5 +1,5 @@
 // Tests of the friction models (include/jointsim/drive/friction_models.hpp) against closed forms of
-// MODEL_REFERENCE §3 (seed 004 eqs. 4.2, 4.6, 4.9, 4.21; seed 002 eq. 7; seed 000 eq. 3.1) and against
+// [Hauschild2003, eqs. 4.2, 4.6, 4.9, 4.21], [Raviola2023, eq. 7] and [Olsson2017, eq. 3.1] and against
 // simulations of an inertia J q̈ = τ − τ_f integrated with CVODE, and of the YAML front end.
 
 #include "jointsim/drive/friction_models.hpp"
@@ -40,7 +40,7 @@ using jointsim::sim::CvodeOptions;
 
 double sgn(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0); }
 
-// 004 Table 4.3, shoulder actuator (δ = 2), typed in again here so that the tests do not depend on the
+// [Hauschild2003, Table 4.3], shoulder actuator (δ = 2), typed in again here so that the tests do not depend on the
 // library's defaults: {α0 [N·m], α1 [N·m], α2 [N·m·s/rad], v_S [rad/s]}.
 struct Table43 {
   double a0, a1, a2, vs;
@@ -48,7 +48,7 @@ struct Table43 {
 constexpr Table43 kPos{7.9707, 1.4476, 4.9349, 0.0363};
 constexpr Table43 kNeg{7.7538, 0.8626, 4.3267, 0.0221};
 
-// 004 eq. 4.21 / eq. 4.6 with δ = 2, written out independently of the library.
+// [Hauschild2003, eq. 4.21] / eq. 4.6 with δ = 2, written out independently of the library.
 double eq421(double v) {
   const Table43& p = v >= 0.0 ? kPos : kNeg;
   return (p.a0 + p.a1 * std::exp(-(v / p.vs) * (v / p.vs))) * sgn(v) + p.a2 * v;
@@ -56,7 +56,7 @@ double eq421(double v) {
 
 LuGreParams shoulderLuGre() {
   LuGreParams p;
-  p.sigma0 = 259.0;  // 004 §4.5.6
+  p.sigma0 = 259.0;  // [Hauschild2003, §4.5.6]
   p.sigma1 = 10.0;
   p.positive = {kPos.a0, kPos.a1, kPos.a2, kPos.vs};
   p.negative = {kNeg.a0, kNeg.a1, kNeg.a2, kNeg.vs};
@@ -136,7 +136,7 @@ CvodeOptions tightOptions(double atol) {
   return ::testing::AssertionFailure() << "'" << needle << "' not found in: " << haystack;
 }
 
-// ============================================================================ LuGre (004 §4.4–4.5)
+// ============================================================================ LuGre ([Hauschild2003, §4.4–4.5])
 
 TEST(FrictionLuGre, ConstantVelocityConvergesToStaticMapEq421) {
   // At constant v, z relaxes to g(v)/σ0 sgn(v) with rate σ0|v|/g(v); after 30 time constants the
@@ -181,9 +181,9 @@ TEST(FrictionLuGre, PreslidingStiffnessIsSigma0) {
 
 TEST(FrictionLuGre, PreslidingOscillationHasBristleStiffnessAndDamping) {
   // Small free motion about rest: σ0|v|z/g is second order, so ż ≈ q̇, z ≈ q and
-  // J q̈ = −σ0 q − (σ1 + α2) q̇ (MODEL_REFERENCE §3.9 item 2): a damped oscillator with ω_n = √(σ0/J),
-  // ζ = (σ1 + α2)/(2√(σ0 J)). α2 switches with the direction of v (Table 4.3); over each cycle the
-  // motion spends equal time in both, so the mean α2 is used. From q = 0, q̇ = v0:
+  // J q̈ = −σ0 q − (σ1 + α2) q̇ (our linearised bristle mode, derived from [Hauschild2003, eqs. 4.15–4.16]):
+  // a damped oscillator with ω_n = √(σ0/J), ζ = (σ1 + α2)/(2√(σ0 J)). α2 switches with the direction of v
+  // (Table 4.3); over each cycle the motion spends equal time in both, so the mean α2 is used. From q = 0, q̇ = v0:
   // q(t) = (v0/ω_d) e^{−ζω_n t} sin(ω_d t).
   const LuGreFriction f(shoulderLuGre());
   const double J = 3.41, v0 = 1e-4;
@@ -258,11 +258,11 @@ TEST(FrictionLuGre, FreeDecelerationIsDissipative) {
   EXPECT_LT(std::abs(sim.v()), 1e-3);
 }
 
-// ============================================================================ UR5 LuGre (002 eq. 7)
+// ============================================================================ UR5 LuGre ([Raviola2023, eq. 7])
 
 LuGreUr5Params ur5Params() {
-  LuGreUr5Params p;  // σ0, σ1, q̇_s, K_static, exponent: 002's values (defaults)
-  p.f_c = 10.0;      // not given by 002: test values
+  LuGreUr5Params p;  // σ0, σ1, q̇_s, K_static, exponent: the values of [Raviola2023] (defaults)
+  p.f_c = 10.0;      // not given by [Raviola2023]: test values
   p.f_v = 5.0;
   p.k_q = 1.0;
   return p;
@@ -273,7 +273,7 @@ TEST(FrictionLuGreUr5, ConstantVelocityConvergesToStaticMap) {
   EXPECT_EQ(f.params().sigma0, 5e6);
   EXPECT_EQ(f.params().sigma1, 100.0);
   for (double v : {0.001, 0.05, 0.5, 3.0, -0.001, -0.05, -0.5, -3.0}) {
-    // 002 eq. 7 written out: g = f_c (1 + K_static e^{−k_q |q̇| / q̇_s}) + f_v |q̇|^{2/3}.
+    // [Raviola2023, eq. 7] written out: g = f_c (1 + K_static e^{−k_q |q̇| / q̇_s}) + f_v |q̇|^{2/3}.
     const double g = 10.0 * (1.0 + 0.3 * std::exp(-std::abs(v) / 0.5)) + 5.0 * std::cbrt(v * v);
     const double t_end = 30.0 * g / (5e6 * std::abs(v));
     const auto z = integrateStateAtVelocity(f, v, t_end, 1e-18);
@@ -286,7 +286,7 @@ TEST(FrictionLuGreUr5, ConstantVelocityConvergesToStaticMap) {
 }
 
 TEST(FrictionLuGreUr5, UnsetCoefficientsAreRejected) {
-  LuGreUr5Params p;  // f_c, f_v, k_q not given by 002 → NaN
+  LuGreUr5Params p;  // f_c, f_v, k_q not given by [Raviola2023] → NaN
   try {
     LuGreUr5Friction f(p);
     FAIL() << "expected InputError";
@@ -299,7 +299,7 @@ TEST(FrictionLuGreUr5, UnsetCoefficientsAreRejected) {
   EXPECT_THROW(LuGreUr5Friction{p}, InputError);
 }
 
-// ============================================================================ Stribeck (004 eq. 4.6)
+// ============================================================================ Stribeck ([Hauschild2003, eq. 4.6])
 
 TEST(FrictionStribeck, MatchesEq46WithTable43PerDirection) {
   const StribeckFriction f(StribeckParams{});  // defaults: Table 4.3, δ = 2, k_S = 300 s/rad
@@ -313,7 +313,7 @@ TEST(FrictionStribeck, MatchesEq46WithTable43PerDirection) {
   EXPECT_NEAR(f.steadyState(0.07), 7.9707 + 1.4476 * std::exp(-std::pow(0.07 / 0.0363, 2)) + 4.9349 * 0.07, 1e-7);
   EXPECT_NEAR(f.steadyState(-0.07), -(7.7538 + 0.8626 * std::exp(-std::pow(0.07 / 0.0221, 2)) + 4.3267 * 0.07), 1e-7);
   EXPECT_GT(std::abs(f.steadyState(0.07) + f.steadyState(-0.07)), 0.2);
-  // Near 0: 004 eq. 4.24 slope limiter, continuous through zero with slope k_S (α0 + α1).
+  // Near 0: slope limiter of [Hauschild2003, eq. 4.24], continuous through zero with slope k_S (α0 + α1).
   const double v = 1e-3;
   EXPECT_NEAR(f.steadyState(v), eq421(v) * (1.0 - std::exp(-0.3)), 1e-12);
   EXPECT_NEAR(f.steadyState(-v), eq421(-v) * (1.0 - std::exp(-0.3)), 1e-12);
@@ -331,7 +331,7 @@ TEST(FrictionStribeck, FormFactorDeltaEntersTheExponent) {
   EXPECT_THROW(StribeckFriction{p}, InputError);
 }
 
-// ============================================================================ Dahl (004 eqs. 4.7–4.9)
+// ============================================================================ Dahl ([Hauschild2003, eqs. 4.7–4.9])
 
 TEST(FrictionDahl, SteadyStateIsCoulombLevelAtAnySpeed) {
   const DahlFriction f(DahlParams{259.0, 7.9707, 1.0});
@@ -401,10 +401,10 @@ TEST(FrictionDahl, HysteresisLoopDissipatesTheClosedFormEnergy) {
   }
 }
 
-// ============================================================================ Coulomb + viscous (004 eq. 4.2)
+// ======================================================================== Coulomb + viscous ([Hauschild2003, eq. 4.2])
 
 TEST(FrictionCoulombViscous, MatchesCoulombPlusViscousAwayFromZero) {
-  const CoulombViscousFriction f(CoulombViscousParams{1.91, 0.2, 1e-3});  // F_C of 001 Table 6.1
+  const CoulombViscousFriction f(CoulombViscousParams{1.91, 0.2, 1e-3});  // F_C of [KR300Thesis, Table 6.1]
   for (double v : {0.02, 0.1, 1.0, 10.0, -0.02, -0.1, -1.0, -10.0}) {
     const double ref = 1.91 * sgn(v) + 0.2 * v;
     EXPECT_NEAR(f.evaluate({v, 5.0}, nullptr, nullptr), ref, 1e-12 * std::abs(ref)) << "v = " << v;
@@ -430,10 +430,10 @@ TEST(FrictionCoulombViscous, InertiaCoastsDownAsClosedForm) {
   EXPECT_LT(std::abs(sim.v()), 1e-3);
 }
 
-// ============================================================================ table friction (000 eq. 3.1)
+// ============================================================================ table friction ([Olsson2017, eq. 3.1])
 
 TableFrictionParams joint1Table() {
-  TableFrictionParams p;  // 000 Table 4.1 joint 1: m = 0.1 N·m, k = 0.3 N·m·s/rad, peak 2
+  TableFrictionParams p;  // [Olsson2017, Table 4.1] joint 1: m = 0.1 N·m, k = 0.3 N·m·s/rad, peak 2
   p.tau_pos = {{{0.0, 0.1}}, {{1.0, 0.4}}};
   p.peak = 2.0;
   return p;
@@ -505,7 +505,7 @@ TEST(FrictionTable, InterpolatesAndExtrapolatesLikeBearingFriction) {
   EXPECT_DOUBLE_EQ(f.steadyState(1.5), 3.5);
   EXPECT_DOUBLE_EQ(f.steadyState(3.0), 5.0);  // last slope
   EXPECT_DOUBLE_EQ(f.steadyState(-1.5), -3.5);
-  // 000 §3.8 example tau_pos = [1, 3; 2, 5]: τ = 2ω + 1 for ω >= 0, so m = 1 by extrapolation.
+  // [Olsson2017, §3.8] example tau_pos = [1, 3; 2, 5]: τ = 2ω + 1 for ω >= 0, so m = 1 by extrapolation.
   p.tau_pos = {{{1.0, 3.0}}, {{2.0, 5.0}}};
   p.peak = 1.5;
   const TableFriction g(p);
@@ -551,7 +551,7 @@ TEST(FrictionYaml, EveryTypeParses) {
   EXPECT_EQ(table->type(), "table");
   EXPECT_NEAR(table->steadyState(0.5), 0.25, 1e-12);
   EXPECT_NEAR(dynamic_cast<const TableFriction&>(*table).stictionTorque(), 0.2, 1e-15);
-  auto flat = parse("friction: {type: table, tau_pos: [0, 1.91]}\n");  // 001: constant 1.91 N·m
+  auto flat = parse("friction: {type: table, tau_pos: [0, 1.91]}\n");  // [KR300Thesis]: constant 1.91 N·m
   EXPECT_NEAR(flat->steadyState(-3.0), -1.91, 1e-15);
 
   auto stribeck = parse(

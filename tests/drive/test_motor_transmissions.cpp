@@ -199,7 +199,7 @@ TEST(ElasticGear, TwoMassFrequencyMatchesClosedForm) {
 
 TEST(CouplingMatrix, Irb140WristInverseAndPower) {
   const CouplingMatrix G(CouplingMatrix::irb140Wrist());
-  // MODEL_REFERENCE §2.6: G⁻¹ with G⁻¹₂₁ = −71/22 and G⁻¹₃₁ = −64/22 exactly.
+  // Exact rational G derived from [Olsson2017, Listing 4.1]: G⁻¹ with G⁻¹₂₁ = −71/22 and G⁻¹₃₁ = −64/22 exactly.
   const Eigen::Vector3d motors = G.motorAngles(Eigen::Vector3d(1, 0, 0));
   EXPECT_NEAR(motors[0], 60.4454545455, 1e-9);
   EXPECT_NEAR(motors[1], -71.0 / 22.0, 1e-9);

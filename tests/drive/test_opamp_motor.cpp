@@ -1,4 +1,4 @@
-// RobotR3 motor with op-amp current controller (ROBOTR3.md §2.2, §9.1): the derived constants table,
+// RobotR3 motor with op-amp current controller ([MSL, RobotR3.Utilities.Motor]): the derived constants table,
 // the closed-loop second-order current response (CVODE vs closed form), the steady-state initial
 // equations, a motor accelerating a pure inertia, the armature power balance and parameter validation.
 #include <algorithm>
@@ -50,7 +50,8 @@ struct SecondOrderStep {
 }  // namespace
 
 TEST(OpAmpMotorParams, PresetsMatchAxisTable) {
-  // ROBOTR3.md §2.5: k, w, D, J per axis; w_max, i_max = 315, 9 (unused); Ri, Ra, gain = 10, 250, 5.
+  // Axis parameters of [MSL, RobotR3.FullRobot]: k, w, D, J per axis; w_max, i_max = 315, 9 (unused);
+  // Ri, Ra, gain = 10, 250, 5.
   const double k[6] = {1.1616, 1.1616, 1.1616, 0.2365, 0.2608, 0.0842};
   const double w[6] = {4590, 5500, 5500, 6250, 6250, 7400};
   const double D[6] = {0.6, 0.6, 0.6, 0.55, 0.55, 0.27};
@@ -69,7 +70,7 @@ TEST(OpAmpMotorParams, PresetsMatchAxisTable) {
     EXPECT_DOUBLE_EQ(p.w_max, 315.0);
     EXPECT_DOUBLE_EQ(p.i_max, 9.0);
   }
-  // OneAxis (§6): the axis-2 motor.
+  // OneAxis ([MSL, RobotR3.OneAxis]): the axis-2 motor.
   const auto one = OpAmpMotorParams::oneAxis();
   EXPECT_DOUBLE_EQ(one.k, 1.1616);
   EXPECT_DOUBLE_EQ(one.w, 5500.0);
@@ -86,7 +87,7 @@ TEST(OpAmpMotorParams, PresetsMatchAxisTable) {
 }
 
 TEST(OpAmpMotorParams, DerivedConstantsTable) {
-  // ROBOTR3.md §2.2 "Per-axis electrical constants": C, La, 1/(Ri C), 5/(Ri C).
+  // Per-axis electrical constants derived from [MSL, RobotR3.Utilities.Motor]: C, La, 1/(Ri C), 5/(Ri C).
   struct Row {
     int axis;
     double C, La, invRiC, fiveRiC;
@@ -120,7 +121,7 @@ TEST(OpAmpMotor, DerivativesAreTheNodeEquations) {
   const double i_ref = 1.7, omega = -23.0, v_C = 12.5, i = -0.4;
   Eigen::Vector2d x(v_C, i), xd;
   m.derivatives(i_ref, omega, x, xd);
-  // Node voltages (§2.2): v(N_d) = i − i_ref, capacitor current v(N_d)/Ri, v(N_o) = −5 v_C.
+  // Node voltages ([MSL, RobotR3.Utilities.Motor]): v(N_d) = i − i_ref, capacitor current v(N_d)/Ri, v(N_o) = −5 v_C.
   const double vNd = i - i_ref;
   EXPECT_NEAR(xd[OpAmpMotor::kVC], vNd / p.Ri / p.C(), 1e-12 * std::abs(xd[0]));
   EXPECT_NEAR(m.armatureVoltage(v_C), -5.0 * v_C, 1e-15);
@@ -190,8 +191,9 @@ TEST(OpAmpMotor, ConstantSpeedBackEmfIsRejected) {
 }
 
 TEST(OpAmpMotor, SteadyStateInitialEquations) {
-  // §9.1: dv_C/dt = 0 ⇒ i = i_ref; di/dt = 0 ⇒ v_C = −(Ra i + k ω_m)/5 (= −50 i at rest).
-  // FullRobot t = 0 rows (sa(0) = 0) of §9.2: i(0) → v_C(0).
+  // The Motor's steady-state initial equations ([MSL, RobotR3.Utilities.Motor]): dv_C/dt = 0 ⇒ i = i_ref;
+  // di/dt = 0 ⇒ v_C = −(Ra i + k ω_m)/5 (= −50 i at rest).
+  // FullRobot t = 0 rows (sa(0) = 0; docs/validation.md): i(0) → v_C(0).
   struct Row {
     int axis;
     double i0, vC0;

@@ -1,4 +1,4 @@
-// Strain wave gear (harmonic drive) of the UR5 (002 eqs. 2–6, Table 3; MODEL_REFERENCE §4): closed
+// Strain wave gear (harmonic drive) of the UR5 ([Raviola2023, §2.3, eqs. 2–6, Table 3, Fig. 3]): closed
 // forms, static equilibrium (eq. 6), simulated statics and dynamics against the linearised model,
 // passivity of the two reaction forms, YAML parameters.
 //
@@ -42,7 +42,7 @@ using Ref = Eigen::Ref<Eigen::VectorXd>;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 const double kPi = std::acos(-1.0);
 constexpr int kN = 4 + StrainWaveGear::kStateSize;
-// UR5 rotor inertias (002 Table 2) and link-only joint inertias (MODEL_REFERENCE §4.7).
+// UR5 rotor inertias ([Raviola2023, Table 2]) and link-only joint inertias (our derived values).
 constexpr double kJmA = 1.877e-4, kJmB = 2.076e-5, kJlBase = 1.279, kJlWrist1 = 0.0152;
 
 StrainWaveGearParams paramsWith(StrainWaveGearParams p, ReactionForm form,
@@ -254,7 +254,7 @@ TEST(StrainWaveGearParams, PresetsAreTable3AndValidate) {
     EXPECT_EQ(p.damping_mode, DampingMode::Coefficient);
     EXPECT_NO_THROW(p.validate());
   }
-  // m_FS = J_FS / r_g² (MODEL_REFERENCE §4.2).
+  // m_FS = J_FS / r_g² (derived from [Raviola2023, Table 3]).
   EXPECT_NEAR(a.J_FS / (a.r_g * a.r_g), 0.28209, 1e-5);
   EXPECT_NEAR(b.J_FS / (b.r_g * b.r_g), 0.13130, 1e-5);
 }
@@ -306,7 +306,7 @@ TEST(StrainWaveGear, InterfaceBasics) {
 }
 
 TEST(StrainWaveGear, ClosedFormAngleRatiosAndStiffness) {
-  // MODEL_REFERENCE §4.1 and §4.6 numbers.
+  // Numbers of [Raviola2023, §2.3, eqs. 2–3] and derived from [Raviola2023, eq. 5].
   const StrainWaveGear ec(StrainWaveGearParams::ur5SizeA());
   const StrainWaveGear pl(paramsWith(StrainWaveGearParams::ur5SizeA(), ReactionForm::PaperLiteral));
   EXPECT_NEAR(ec.alphaN(), 0.0171473, 1e-7);
@@ -361,14 +361,14 @@ TEST(StrainWaveGear, Eq6SolveMatchesClosedFormsUnloadedAndLoaded) {
       const auto p = paramsWith(base, form);
       const StrainWaveGear g(p);
       const double tn = std::tan(g.alphaN()), tt = std::tan(p.alpha_t);
-      // Unloaded: q_M = τ q_0 (MODEL_REFERENCE §4.5).
+      // Unloaded: q_M = τ q_0 ([Raviola2023, eq. 6]).
       const double q0 = 0.37, qM = 101.0 * q0;
       const Eigen::Matrix<double, 6, 1> z = g.staticEquilibrium(qM, q0);
       Eigen::Matrix<double, 6, 1> expect;
       expect << qM, p.r_g * tn * qM, p.r_g * tn * qM, 0.0, p.r_g * q0, q0;
       for (int i = 0; i < 6; ++i) EXPECT_NEAR(z[i], expect[i], 1e-13 * std::max(1.0, std::abs(expect[i]))) << i;
       EXPECT_NEAR(z[3], 0.0, 1e-15);
-      // Loaded: the chain of §4.6 with T = K_out (q_M/τ − q_0).
+      // Loaded: the series chain derived from [Raviola2023, eq. 5] with T = K_out (q_M/τ − q_0).
       const double qM2 = qM + 0.08;
       const double T = g.staticOutputStiffness() * (qM2 / p.tau - q0);
       const double T_in = T / g.staticTorqueRatio(), F_b = T * tt / p.r_g;
@@ -488,7 +488,7 @@ StiffnessResult rampStiffness(const StrainWaveGearParams& p) {
 }  // namespace
 
 TEST(StrainWaveGearSim, SlowOutputTorqueRampShowsStaticStiffness) {
-  // MODEL_REFERENCE §4.6 table: 1.4462e5 N·m/rad (A), 2.6141e4 N·m/rad (B), within 0.5 %; also against the
+  // Derived from [Raviola2023, eq. 5]: 1.4462e5 N·m/rad (A), 2.6141e4 N·m/rad (B), within 0.5 %; also against the
   // closed form to 1e-4 and the static torque ratio τ (EnergyConsistent) at the end of the ramp.
   const StiffnessResult a = rampStiffness(StrainWaveGearParams::ur5SizeA());
   const StiffnessResult b = rampStiffness(StrainWaveGearParams::ur5SizeB());
@@ -559,7 +559,7 @@ TEST(StrainWaveGearSim, FreeOutputFollowsConstantInputSpeedOverRatio) {
 // ============================================================================ dynamics
 
 TEST(StrainWaveGear, LinearisedModesReproduceModelReferenceTable) {
-  // MODEL_REFERENCE §4.7: base joint (A) with J_M and the link-only inertia, wrist 1 (B).
+  // Derived modes: base joint (A) with J_M and the link-only inertia, wrist 1 (B).
   const StrainWaveGear a(StrainWaveGearParams::ur5SizeA()), b(StrainWaveGearParams::ur5SizeB());
   const Vec fa = a.linearisedModes(kJmA, kJlBase), fb = b.linearisedModes(kJmB, kJlWrist1);
   ASSERT_EQ(fa.size(), 6);
@@ -571,7 +571,7 @@ TEST(StrainWaveGear, LinearisedModesReproduceModelReferenceTable) {
     EXPECT_NEAR(fa[i + 1], ref_a[i], 0.01 * ref_a[i]) << "size A mode " << i + 1;
     EXPECT_NEAR(fb[i + 1], ref_b[i], 0.01 * ref_b[i]) << "size B mode " << i + 1;
   }
-  // Joint-mode check formula of §4.7: f ≈ (1/2π)√((K_out/τ²)(1/(J_M + J_WG) + τ²/J_L)).
+  // Joint-mode check formula (our derivation): f ≈ (1/2π)√((K_out/τ²)(1/(J_M + J_WG) + τ²/J_L)).
   const double K = a.staticOutputStiffness();
   const double approx = std::sqrt(K / (101.0 * 101.0) * (1.0 / (kJmA + 2.6e-5) + 101.0 * 101.0 / kJlBase)) / (2 * kPi);
   EXPECT_NEAR(fa[1], approx, 0.01 * approx);
@@ -641,7 +641,7 @@ TEST(StrainWaveGearSim, InternalModeFrequenciesMatchLinearModel) {
       sig.push_back(v);
     }
     // Modal damping ratios from the damped state matrix: a mode damped with ζ > 0.05 (the WG-shaft mode
-    // of size B, ζ ≈ 0.25 with c_WG = 0.1 N·m·s/rad, MODEL_REFERENCE §4.7) has no sharp peak; skip it.
+    // of size B, ζ ≈ 0.25 with c_WG = 0.1 N·m·s/rad, our derived modes) has no sharp peak; skip it.
     Eigen::EigenSolver<Eigen::MatrixXd> es(rig.stateMatrix().bottomRightCorner(8, 8), false);
     int checked = 0;
     for (int i = 0; i < 4; ++i) {

@@ -1,4 +1,4 @@
-// Seed 000's clamping experiment on the whole IRB140: the orthogonal-compliance model edit, the
+// The clamping experiment of [Olsson2017] on the whole IRB140: the orthogonal-compliance model edit, the
 // ClampingPathPlanning reference, and the clamping curves against stiffnesses derived independently
 // (clamp and bending springs mapped to joint space with the frame Jacobian), backlash and friction.
 #include <algorithm>
@@ -29,7 +29,7 @@ multibody::Model irb140() { return multibody::loadRobot(test::sourcePath("config
 
 // The IRB140 with all axes holding except `loaded`, which swings (3 segments of 3 s). Every axis:
 // c = 10 N·m/rad (wrist 1), light damping, no backlash, stiff bending springs. The other motors are
-// braked (50 N·m of stiction, like 000's breaksOn), so their springs hold the structure as in the
+// braked (50 N·m of stiction, like `breaksOn` in [Olsson2017]), so their springs hold the structure as in the
 // derivation below; the loaded axis has a constant Coulomb friction F.
 ClampingSetup setup(const std::string& loaded, double c_loaded, double b_loaded, double F_loaded, double clamp_k,
                     double d_loaded = 0.02) {
@@ -221,7 +221,8 @@ TEST(OrthogonalCompliance, ExtendedModelAtZeroBendingEqualsTheRigidArm) {
 }
 
 TEST(ClampingPath, Seed000TimingsAndTruncatedSwings) {
-  // MODEL_REFERENCE §7.1: path (π/10, 0.4, 0.8): first segment ends at 1.285 s, full swings 2.071 s.
+  // [Olsson2017, §3.11, Table 3.8, A.14], [MSL, Blocks.Sources.KinematicPTP2] (timings derived):
+  // path (π/10, 0.4, 0.8): first segment ends at 1.285 s, full swings 2.071 s.
   const control::ClampingPath p({M_PI / 10, 0.4, 0.8, 3.0, 5});
   double q, qd, qdd;
   p.evaluate(1.29, q, qd, qdd);
@@ -235,7 +236,8 @@ TEST(ClampingPath, Seed000TimingsAndTruncatedSwings) {
   EXPECT_NEAR(q, M_PI / 10, 1e-15);
   EXPECT_EQ(qd, 0.0);
   // path2 (π/6, 0.4, 0.8): a full swing needs 3.118 s, so at 6 s the reference is cut 0.00557 rad short
-  // of −π/6 moving at 0.0944 rad/s, then jumps to the next segment's start (§8.1 A-17).
+  // of −π/6 moving at 0.0944 rad/s, then jumps to the next segment's start (derived from [Olsson2017, A.14]
+  // and Listing 4.1).
   const control::ClampingPath p2({M_PI / 6, 0.4, 0.8, 3.0, 5});
   p2.evaluate(6.0 - 1e-12, q, qd, qdd);
   EXPECT_NEAR(q + M_PI / 6, 0.00557, 2e-5);
@@ -248,7 +250,7 @@ TEST(ClampingPath, Seed000TimingsAndTruncatedSwings) {
 }
 
 TEST(ClampedRobotCurve, SlopeEqualsDerivedSeriesStiffnessStiffAndSoftClamp) {
-  // Stiff clamp (000's 2e7) and stiff bending springs. The derived slope is 9.58, not 10: the clamp fixes
+  // Stiff clamp (2e7, as in [Olsson2017]) and stiff bending springs. The derived slope is 9.58, not 10: the clamp fixes
   // the flange, but joint 3 and the wrist can rotate to keep it there, so joint 2 also works against
   // the braked drives' springs of those joints (N² c ≈ 1e5 N·m/rad for joint 3).
   const ClampingSetup stiff = setup("joint2", 10.0, 0.0, 0.1, 2e7);
@@ -269,7 +271,7 @@ TEST(ClampedRobotCurve, SlopeEqualsDerivedSeriesStiffnessStiffAndSoftClamp) {
 TEST(ClampedRobotCurve, DoublingTheSpringNearlyDoublesTheSlope) {
   const double s10 = meanSlope(simulate(setup("joint1", 10.0, 0.0, 0.1, 2e7), 0));
   const double s20 = meanSlope(simulate(setup("joint1", 20.0, 0.0, 0.1, 2e7), 0));
-  // 000 §4.4: 9.24 and 17.08 (ratio 1.85). The other compliances in series keep the ratio just below 2.
+  // [Olsson2017, §4.4]: 9.24 and 17.08 (ratio 1.85). The other compliances in series keep the ratio just below 2.
   EXPECT_GT(s20 / s10, 1.9);
   EXPECT_LT(s20 / s10, 2.0);
   std::printf("joint 1 slopes: c = 10: %.4f, c = 20: %.4f N·m/rad (ratio %.4f)\n", s10, s20, s20 / s10);

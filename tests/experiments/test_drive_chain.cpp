@@ -123,7 +123,7 @@ TEST(DriveChainMsl, BacklashSpringDamperMatchesClosedForm) {
     const double exact = M_PI / 2 * std::exp(-5 * t) * (std::cos(wd * t) + 5 / wd * std::sin(wd * t));
     max_err = std::max(max_err, std::abs(r[5] - exact));  // springDamper.phi_rel
   }
-  EXPECT_LT(max_err, 1e-3 * M_PI / 2) << "ROBOTR3.md §7.1 closed form";
+  EXPECT_LT(max_err, 1e-3 * M_PI / 2) << "[MSL, Rotational.Examples.Backlash] closed form";
 }
 
 TEST(DriveChainMsl, FrictionExampleRunsAndEndsWithTheBrakeHolding) {
@@ -149,9 +149,9 @@ TEST(DriveChainMsl, FrictionExampleRunsAndEndsWithTheBrakeHolding) {
 }
 
 TEST(RobotR3OneAxis, RunsToTheTerminationTimeAndClosesItsEnergyBalance) {
-  // MSL OneAxis: terminates at path end + swing = 1.4981317 s (ROBOTR3.md §4.5); the amplifier's work on
-  // the armature equals the stored energy (load, rotor, spring, inductance) plus the resistor, damper and
-  // friction losses (energy integrals carried as ODE states), to 1e-4 relative.
+  // MSL OneAxis: terminates at path end + swing = 1.4981317 s (derived timings, docs/validation.md); the
+  // amplifier's work on the armature equals the stored energy (load, rotor, spring, inductance) plus the
+  // resistor, damper and friction losses (energy integrals carried as ODE states), to 1e-4 relative.
   const auto dir = std::filesystem::temp_directory_path() / "jointsim_one_axis";
   std::filesystem::remove_all(dir);
   experiments::RunOptions o;
@@ -197,8 +197,8 @@ TEST(RobotR3OneAxis, RunsToTheTerminationTimeAndClosesItsEnergyBalance) {
 }
 
 TEST(RobotR3FullRobot, StartsFromTheDocumentedStateAndReachesTheTarget) {
-  // ROBOTR3.md §9.2 (sa(0) = 0): i(0), v_C(0), x(0) per axis; termination at 1.8560450 s (§4.5); the
-  // joints end near the path's end angles.
+  // docs/validation.md (sa(0) = 0): i(0), v_C(0), x(0) per axis; termination at 1.8560450 s (derived timings);
+  // the joints end near the path's end angles.
   const auto dir = std::filesystem::temp_directory_path() / "jointsim_full_robot";
   std::filesystem::remove_all(dir);
   experiments::RunOptions o;

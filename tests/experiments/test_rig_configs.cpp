@@ -1,6 +1,6 @@
 // The shipped joint-rig experiment files, run through the library entry point of `jointsim run`, against
-// what their physics must show: seed 001's clamping curve (slope, backlash, hysteresis = 2 friction),
-// seed 004's friction map (plateau torques = LuGre static map, eq. 4.21), and the UR5 strain-wave-gear
+// what their physics must show: the clamping curve of [KR300Thesis] (slope, backlash, hysteresis = 2 friction),
+// the friction map of [Hauschild2003] (plateau torques = LuGre static map, eq. 4.21), and the UR5 strain-wave-gear
 // joint tracking its velocity reference with output = motor / 101.
 #include <cmath>
 #include <filesystem>
@@ -111,7 +111,7 @@ TEST(RigConfigs, Kr300ClampingCurveShowsTable61Parameters) {
 
 TEST(RigConfigs, LuGreFrictionMapPlateausEqualStaticMap) {
   const Table t = runConfig("config/experiments/lugre_friction_map.yaml");
-  // End of each plateau: torque = (α0 + α1 exp(−(v/v_S)²)) sgn v + α2 v (004 eq. 4.21), per direction.
+  // End of each plateau: torque = (α0 + α1 exp(−(v/v_S)²)) sgn v + α2 v ([Hauschild2003, eq. 4.21]), per direction.
   const double velocities[] = {0.01, 0.02, 0.05, 0.1, 0.2, -0.01, -0.02, -0.05, -0.1, -0.2};
   const double plateau_end[] = {30, 45, 51, 55, 58, 88, 103, 109, 113, 116};
   for (int k = 0; k < 10; ++k) {

@@ -1,4 +1,4 @@
-// Seed 001 Algorithm II pieces (jointsim::identify, clamping_curve.hpp) on hand-made data: an exact
+// [KR300Thesis, Algorithm II] pieces (jointsim::identify, clamping_curve.hpp) on hand-made data: an exact
 // piecewise-linear hysteresis loop (dead-zone spring ± Coulomb friction, angle-driven, with dwell at the
 // turning points), where the fold must give half the backlash and the friction is half the branch distance.
 #include <cmath>

@@ -1,4 +1,4 @@
-// `jointsim identify clamping` round trip: seed 001's Table 6.1 transmission (c = 25.7 N·m/rad,
+// `jointsim identify clamping` round trip: the transmission of [KR300Thesis, Table 6.1] (c = 25.7 N·m/rad,
 // b = 0.0102 rad, friction 1.91 N·m, motor side) simulated in real time on the clamped joint rig (an
 // independent path: CVODE, the Modelica ElastoBacklash law with its damper, the BearingFriction table
 // model with its sticking band), measurement noise added, written as the CSV the CLI reads, identified.
@@ -37,9 +37,9 @@ constexpr double kC = 25.7, kB = 0.0102, kF = 1.91;
 constexpr double kAngleNoise = 5e-5, kTorqueNoise = 0.05;  // rad, N·m
 constexpr double kEncoderZero = 1.234;                      // rad: arbitrary zero of the logged angle
 
-/// Seed 001's clamping rig (config/experiments/kr300_joint1_clamping.yaml) through the C++ API: torque
+/// The clamping rig of [KR300Thesis] (config/experiments/kr300_joint1_clamping.yaml) through the C++ API: torque
 /// triangle amplitude 5 N·m, period 40 s, `offset` [N·m], `duration` [s] (240 s: 12 half-cycles, as many as
-/// 001 used), logged at 50 Hz.
+/// [KR300Thesis] used), logged at 50 Hz.
 identify::ClampingData simulateRig(double offset, unsigned seed, double duration = 240.0) {
   systems::JointRigSetup s;
   s.rotor_inertia = 0.01;
@@ -271,7 +271,7 @@ TEST(ClampingFitCli, TooManyRejectedHalfCyclesExitThree) {
   fs::remove_all(dir);
 }
 
-// The shipped seed-001 config's log, as `jointsim run` writes it, identifies its own Table 6.1 parameters.
+// The shipped [KR300Thesis] config's log, as `jointsim run` writes it, identifies its own Table 6.1 parameters.
 // Its first half-cycle (loading from zero) and last one are partial; they must not hide the gap.
 TEST(ClampingFit, ShippedKr300ConfigLogIdentifiesTable61) {
   const fs::path dir = fs::temp_directory_path() / ("jointsim_clamping_shipped_" + std::to_string(::getpid()));

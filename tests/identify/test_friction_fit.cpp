@@ -1,9 +1,9 @@
 // Identification of the static friction map (`jointsim identify friction`, jointsim::identify::fitFrictionMap):
-// friction maps generated with the library's own LuGre model at 004's Table 4.3 parameters — its steady state
-// (eq. 4.21) and a genuine time simulation of seed 004's velocity-plateau rig — plus seeded Gaussian
-// measurement noise must give back Table 4.3 within 2 %, with standard errors that describe the scatter; the
-// YAML output must be a friction block the model reader accepts; the CLI must map bad input to exit 2 and
-// unidentifiable maps to exit 3.
+// friction maps generated with the library's own LuGre model at the parameters of [Hauschild2003, Table 4.3] —
+// its steady state (eq. 4.21) and a genuine time simulation of the velocity-plateau rig of [Hauschild2003] —
+// plus seeded Gaussian measurement noise must give back Table 4.3 within 2 %, with standard errors that
+// describe the scatter; the YAML output must be a friction block the model reader accepts; the CLI must map bad
+// input to exit 2 and unidentifiable maps to exit 3.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -41,12 +41,12 @@ using identify::ParameterEstimate;
 
 namespace {
 
-// 004 Table 4.3 (Watflex shoulder, δ = 2): {α0 [N·m], α1 [N·m], α2 [N·m·s/rad], v_S [rad/s]}.
+// [Hauschild2003, Table 4.3] (Watflex shoulder, δ = 2): {α0 [N·m], α1 [N·m], α2 [N·m·s/rad], v_S [rad/s]}.
 const drive::StribeckBranch kPositive{7.9707, 1.4476, 4.9349, 0.0363};
 const drive::StribeckBranch kNegative{7.7538, 0.8626, 4.3267, 0.0221};
 
 drive::LuGreFriction table43Model() {
-  drive::LuGreParams p;  // σ0 = 259 N·m/rad, σ1 = 10 N·m·s/rad (004 §4.5.4)
+  drive::LuGreParams p;  // σ0 = 259 N·m/rad, σ1 = 10 N·m·s/rad ([Hauschild2003, §4.5.4])
   p.positive = kPositive;
   p.negative = kNegative;
   return drive::LuGreFriction(p);
@@ -176,7 +176,7 @@ TEST(FrictionFit, NoiseFreeSteadyStateRecoversTable43Exactly) {
 }
 
 TEST(FrictionFit, NoisySteadyStateRecoversTable43WithinTwoPercent) {
-  // 80 speeds per direction from 1 mrad/s to 1 rad/s (half of them below 0.03 rad/s, as 004 measured more
+  // 80 speeds per direction from 1 mrad/s to 1 rad/s (half of them below 0.03 rad/s, as [Hauschild2003] measured more
   // points at low speed), noise 0.01 N·m (0.1 % of the friction level).
   const Map m = steadyStateMap(table43Model(), 80, 1e-3, 1.0, 0.01, 42);
   const FrictionFit fit = identify::fitFrictionMap(m.v, m.tau);
@@ -187,10 +187,10 @@ TEST(FrictionFit, NoisySteadyStateRecoversTable43WithinTwoPercent) {
 }
 
 TEST(FrictionFit, RigTimeSimulationRecoversTable43WithinTwoPercent) {
-  // Seed 004's measurement (§4.5.4, config/experiments/lugre_friction_map.yaml): the shoulder (J = 3.41 kg·m²,
-  // LuGre σ0 = 259, σ1 = 10, Table 4.3) under velocity PI control holds a staircase of speeds, fast to slow in
-  // each direction; each plateau lasts 10 bristle time constants g/(σ0|v|) (>= 3 s), its second half is
-  // averaged (torque command and speed). Then 0.01 N·m of seeded noise is added to the averages.
+  // The measurement of [Hauschild2003, §4.5.4] (config/experiments/lugre_friction_map.yaml): the shoulder
+  // (J = 3.41 kg·m², LuGre σ0 = 259, σ1 = 10, Table 4.3) under velocity PI control holds a staircase of speeds,
+  // fast to slow in each direction; each plateau lasts 10 bristle time constants g/(σ0|v|) (>= 3 s), its second half
+  // is averaged (torque command and speed). Then 0.01 N·m of seeded noise is added to the averages.
   const int n = 40;
   const double lo = 2e-3, hi = 0.6;
   std::vector<double> times, speeds;
@@ -366,7 +366,8 @@ TEST(FrictionFitYaml, FrictionBlockIsReadByTheModelReaderAndMatchesTheMap) {
   const Map m = steadyStateMap(table43Model(), 60, 1e-3, 1.0, 0.01, 9);
   const FrictionFit fit = identify::fitFrictionMap(m.v, m.tau);
 
-  // Stribeck block: the model is the fitted map times 004's slope limiter 1 − e^{−k_S|v|}.
+  // Stribeck block: the model is the fitted map times the slope limiter 1 − e^{−k_S|v|} of
+  // [Hauschild2003, eq. 4.24].
   identify::FrictionYamlOptions yo;
   yo.source = "map.csv";
   const std::string text = identify::frictionFitYaml(fit, yo);

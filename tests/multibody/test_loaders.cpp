@@ -49,7 +49,7 @@ links:
 }  // namespace
 
 TEST(Ur5Yaml, ForwardKinematicsMatchesPublishedTestVectors) {
-  // MODEL_REFERENCE §1.2 FK test vectors (calibrated Table 4 kinematics, eq. 8).
+  // FK test vectors (our computation) of the calibrated kinematics [Raviola2023, §2.6, eqs. 8–9, Table 4].
   const Model model = loadRobot(sourcePath("config/robots/ur5.yaml"));
   ASSERT_EQ(model.nq, 6);
   Eigen::VectorXd q = Eigen::VectorXd::Zero(6);
@@ -59,7 +59,8 @@ TEST(Ur5Yaml, ForwardKinematicsMatchesPublishedTestVectors) {
 }
 
 TEST(Ur5Yaml, MeanDiagonalInertiaMatchesTable5Reconstruction) {
-  // MODEL_REFERENCE §1.3: M_ii(q) plus J_M τ² averaged over q2..q5 ∈ [−π, π) reproduces 002 Table A1
+  // [Raviola2023, Table 5] dynamics (missing entries from [URDH]): M_ii(q) plus J_M τ² averaged over
+  // q2..q5 ∈ [−π, π) reproduces [Raviola2023, App. A, Table A1]
   // (mean 3.193, 4.155, 2.526, 0.2274, 0.2146, 0.2119 kg·m² for this reconstruction with nominal DH).
   // Here with the calibrated kinematics on an 8⁴ grid; tolerance 1 %.
   const Model model = loadRobot(sourcePath("config/robots/ur5.yaml"));
@@ -84,7 +85,7 @@ TEST(Ur5Yaml, MeanDiagonalInertiaMatchesTable5Reconstruction) {
 
 TEST(Ur5Urdf, NominalKinematicsAndMasses) {
   // The standard UR5: at q = 0 the arm is stretched along −x of base_link... positions from the nominal
-  // DH (MODEL_REFERENCE §1.2): reach a2 + a3 = 0.81725 m horizontally, and the total mass 17.0269 kg
+  // DH ([URDH]): reach a2 + a3 = 0.81725 m horizontally, and the total mass 17.0269 kg
   // (ur_description masses 3.7 + 8.393 + 2.275 + 1.219 + 1.219 + 0.1879 + tool 0).
   const Model model = loadRobot(sourcePath("config/robots/ur5.urdf"));
   ASSERT_EQ(model.nq, 6);

@@ -1,5 +1,6 @@
-// Manutec r3 (MSL RobotR3 FullRobot) multibody model config/robots/robotr3.yaml against the check values of
-// /work/shared/ROBOTR3.md §1.4 (moving mass) and §1.5 (joint frames, load CoM, static holding torques).
+// Manutec r3 ([MSL, RobotR3.FullRobot]) multibody model config/robots/robotr3.yaml against the data of
+// [MSL, RobotR3.Utilities.MechanicalStructure] (moving mass) and our computed check values (joint frames, load
+// CoM, static holding torques; docs/validation.md).
 #include <cmath>
 #include <random>
 #include <string>
@@ -19,7 +20,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 Model loadR3() { return loadRobot(sourcePath("config/robots/robotr3.yaml")); }
 
-// FullRobot start angles (§1.1).
+// FullRobot start angles ([MSL, RobotR3.FullRobot]).
 Eigen::VectorXd startAngles() {
   Eigen::VectorXd q(6);
   q << -60, 20, 90, 0, -110, 0;
@@ -30,7 +31,7 @@ struct JointCheck {
   Eigen::Vector3d origin0, axis0, originStart, axisStart;
 };
 
-// §1.5 table: joint origin/axis in world coordinates at q = 0 and at q = q_start.
+// Our computed check values: joint origin/axis in world coordinates at q = 0 and at q = q_start.
 std::vector<JointCheck> jointChecks() {
   using V = Eigen::Vector3d;
   return {
@@ -60,7 +61,8 @@ TEST(RobotR3Model, StructureGravityAndMass) {
   EXPECT_EQ(model.base_name, "b0");
   EXPECT_EQ(model.tip_frame, "load");
   EXPECT_TRUE(MatricesNear(model.gravity, Eigen::Vector3d(0, -9.81, 0), 0.0));
-  // Moving mass b1..load (§1.4 [D]): 1 + 56.5 + 26.4 + 28.7 + 5.2 + 0.5 + 15 = 133.3 kg.
+  // Moving mass b1..load (derived from [MSL, RobotR3.Utilities.MechanicalStructure]):
+  // 1 + 56.5 + 26.4 + 28.7 + 5.2 + 0.5 + 15 = 133.3 kg.
   double m = 0.0;
   for (double mi : model.mass) m += mi;
   EXPECT_NEAR(m, 133.3, 1e-12);
@@ -69,7 +71,7 @@ TEST(RobotR3Model, StructureGravityAndMass) {
   EXPECT_TRUE(MatricesNear(model.inertias[5].com,
                            (0.5 * Eigen::Vector3d(0.05, 0.05, 0.05) + 15.0 * Eigen::Vector3d(0.1, 0.25, 0.1)) / 15.5,
                            1e-14));
-  // b2's tensor entry I21 = -0.46 is used as it is (§1.4).
+  // b2's tensor entry I21 = -0.46 is used as it is ([MSL, RobotR3.Utilities.MechanicalStructure]).
   EXPECT_DOUBLE_EQ(model.inertias[1].inertia(1, 0), -0.46);
   EXPECT_DOUBLE_EQ(model.inertias[1].inertia(0, 1), -0.46);
 }
@@ -111,7 +113,8 @@ TEST(RobotR3Model, JointFramesAtStartPosture) {
 }
 
 TEST(RobotR3Model, GravityHoldingTorquesAtStartPosture) {
-  // §1.5 / §9.2: G_j = dV/dq_j, the torque the drive must deliver to hold the arm (tau_j = G_j).
+  // Our computed check values (docs/validation.md): G_j = dV/dq_j, the torque the drive must deliver to hold
+  // the arm (tau_j = G_j).
   // jointsim's gravityTorques is the holding torque g(q) = dV/dq: same sign convention.
   const Model model = loadR3();
   Data data(model);

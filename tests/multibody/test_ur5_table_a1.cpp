@@ -1,15 +1,14 @@
 // UR5 "robot equivalent inertia": the diagonal of the joint-space inertia matrix, M_ii(q), scanned over
-// configurations, against seed 002 Table A1 (Raviola et al., Robotics 2023, 12(3), 71, App. A;
-// MODEL_REFERENCE §6.1). Acceptance criterion of the UR5 digital-twin issue: the shipped model
-// config/robots/ur5.yaml (002 Table 4 kinematics + Table 5 dynamics as reconstructed in MODEL_REFERENCE
-// §1.3) reproduces each of the 18 max/mean/min entries within 6 %.
+// configurations, against [Raviola2023, App. A, Table A1]. Acceptance criterion of the UR5 digital-twin
+// issue: the shipped model config/robots/ur5.yaml ([Raviola2023, Table 4] kinematics + [Raviola2023, Table 5]
+// dynamics, missing entries from [URDH]) reproduces each of the 18 max/mean/min entries within 6 %.
 //
-// What M_ii contains. Table A1 includes the rotor inertia reflected through the gear, J_M τ² (MODEL_REFERENCE
-// §1.3 and §8.3 C-14: M_66 = 0.212 ≈ J_M τ² = 0.2118). ur5.yaml has armature 0 (the drive models carry the
-// rotor), so the test adds J_M τ² itself, from 002 Table 2 (J_M = 1.877e-4 kg·m² for joints 1–3,
-// 2.076e-5 kg·m² for joints 4–6; MODEL_REFERENCE §5.1) and τ = 101 (002 eq. 2, Z_CS = 202, Z_FS = 200).
+// What M_ii contains. Table A1 includes the rotor inertia reflected through the gear, J_M τ² (our reading:
+// M_66 = 0.212 ≈ J_M τ² = 0.2118). ur5.yaml has armature 0 (the drive models carry the rotor), so the test
+// adds J_M τ² itself, from [Raviola2023, §2.2, Table 2] (J_M = 1.877e-4 kg·m² for joints 1–3,
+// 2.076e-5 kg·m² for joints 4–6) and τ = 101 ([Raviola2023, eq. 2], Z_CS = 202, Z_FS = 200).
 //
-// How the scan is done. 002 App. A: "Figure A2 shows how the robot equivalent inertia acting on the base
+// How the scan is done. [Raviola2023, App. A]: "Figure A2 shows how the robot equivalent inertia acting on the base
 // (M11), shoulder (M22), elbow (M33), and first wrist (M44) joints varies as a function of the position of
 // the two consecutive joints." Caption: "(a) Base inertia as a function of shoulder and elbow angles;
 // (b) shoulder inertia as a function of elbow and wrist 1 angles; (c) elbow inertia as a function of
@@ -18,17 +17,17 @@
 //   - M_55 has one following joint: scanned over q_6 alone (the text: "no sensitive variations are present
 //     for the last two joints");
 //   - M_66 depends on no joint angle: evaluated once (q = 0).
-// The ranges are not stated in 002. We use a uniform 72-point grid (5°) on [−π, π) per scanned joint: M(q)
+// The ranges are not stated in [Raviola2023]. We use a uniform 72-point grid (5°) on [−π, π) per scanned joint: M(q)
 // is 2π-periodic in every revolute angle, so the ±2π joint limits of ur5.yaml (UR controller) give exactly
 // the same set of values; a 360-point grid changes no entry by more than about 1e-4 kg·m².
-// Alternative checked while writing this test: scanning all distal joints q_{i+1}..q_5 (as MODEL_REFERENCE
-// §1.3's validation did) also passes, but raises max M_11 to 5.916 (+5.1 % vs 5.628) where the two-joint
+// Alternative checked while writing this test: scanning all distal joints q_{i+1}..q_5 (as our earlier
+// validation of the reconstruction did) also passes, but raises max M_11 to 5.916 (+5.1 % vs 5.628) where the two-joint
 // scan gives 5.668 (+0.7 %); it is slightly closer only on mean/min M_11 (3.194/2.074 vs 3.202/2.096).
 // The two-joint scan is what Fig. A2 describes; its worst entry is min M_11 at +1.7 %.
 //
 // Pitfall documented by the second test: the standard ROS UR5 URDF (config/robots/ur5.urdf) carries the
 // radius="0.6" wrist-cylinder typo (≈100× too large wrist inertias); its wrist entries miss Table A1 by far
-// more than 6 %, so it must not be used where 002's dynamics matter.
+// more than 6 %, so it must not be used where the dynamics of [Raviola2023] matter.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -50,7 +49,7 @@ constexpr int kJoints = 6;
 constexpr int kGrid = 72;              // points per scanned joint on [−π, π) (5° steps)
 constexpr double kTolerance = 0.06;    // acceptance criterion: 6 % relative per entry
 
-// 002 Table 2 rotor inertias [kg·m²] and 002 eq. 2 gear ratio.
+// [Raviola2023, Table 2] rotor inertias [kg·m²] and [Raviola2023, eq. 2] gear ratio.
 constexpr double kRotorInertiaArm = 1.877e-4;    // base, shoulder, elbow
 constexpr double kRotorInertiaWrist = 2.076e-5;  // wrist 1, 2, 3
 constexpr double kGearRatio = 101.0;
@@ -58,7 +57,7 @@ constexpr double kGearRatio = 101.0;
 const char* const kJointLabels[kJoints] = {"Base", "Shoulder", "Elbow", "Wrist 1", "Wrist 2", "Wrist 3"};
 const char* const kStatLabels[3] = {"max", "mean", "min"};
 
-// 002 Table A1 [kg·m²], rows max / mean / min, columns joints 1–6 (MODEL_REFERENCE §6.1).
+// [Raviola2023, App. A, Table A1] [kg·m²], rows max / mean / min, columns joints 1–6.
 constexpr double kTableA1[3][kJoints] = {
     {5.628, 5.719, 2.649, 0.228, 0.215, 0.212},  // maximum
     {3.194, 4.144, 2.526, 0.227, 0.215, 0.212},  // mean
@@ -117,7 +116,7 @@ void printTable(const std::string& title, const Stats& stats) {
   std::printf("\n%s\n", title.c_str());
   std::printf("M_ii [kg m^2] incl. J_M tau^2; scan: 2 following joints, %d-pt grid on [-pi, pi), others 0\n",
               kGrid);
-  std::printf("  %-9s %-7s %-5s %9s %10s %10s\n", "joint", "scan", "stat", "002 A1", "jointsim", "rel.diff");
+  std::printf("  %-9s %-7s %-5s %9s %10s %10s\n", "joint", "scan", "stat", "Table A1", "jointsim", "rel.diff");
   for (int i = 0; i < kJoints; ++i) {
     for (int s = 0; s < 3; ++s) {
       std::printf("  %-9s %-7s %-5s %9.3f %10.4f %+9.2f%%\n", s == 0 ? kJointLabels[i] : "",
@@ -136,12 +135,12 @@ TEST(Ur5TableA1, ShippedModelReproducesSeed002TableA1) {
   ASSERT_TRUE(model.armature.isZero()) << "ur5.yaml armature: " << model.armature.transpose();
 
   const Stats stats = scanTableA1(model);
-  printTable("Seed 002 Table A1 vs jointsim, config/robots/ur5.yaml", stats);
+  printTable("[Raviola2023, Table A1] vs jointsim, config/robots/ur5.yaml", stats);
   for (int i = 0; i < kJoints; ++i) {
     for (int s = 0; s < 3; ++s) {
       EXPECT_LE(std::abs(relativeDifference(stats, s, i)), kTolerance)
           << kStatLabels[s] << " M_" << i + 1 << i + 1 << " (" << kJointLabels[i] << "): jointsim "
-          << stats[static_cast<size_t>(s)][static_cast<size_t>(i)] << " vs 002 Table A1 " << kTableA1[s][i];
+          << stats[static_cast<size_t>(s)][static_cast<size_t>(i)] << " vs [Raviola2023, Table A1] " << kTableA1[s][i];
     }
   }
 }
@@ -155,12 +154,12 @@ TEST(Ur5TableA1, RosUrdfWristInertiaTypoMissesTableA1) {
   ASSERT_TRUE(model.armature.isZero()) << "ur5.urdf armature: " << model.armature.transpose();
 
   const Stats stats = scanTableA1(model);
-  printTable("Seed 002 Table A1 vs jointsim, config/robots/ur5.urdf (ROS, wrist radius 0.6 typo)", stats);
+  printTable("[Raviola2023, Table A1] vs jointsim, config/robots/ur5.urdf (ROS, wrist radius 0.6 typo)", stats);
   for (int i = 3; i < kJoints; ++i) {
     for (int s = 0; s < 3; ++s) {
       EXPECT_GT(std::abs(relativeDifference(stats, s, i)), kTolerance)
           << kStatLabels[s] << " M_" << i + 1 << i + 1 << " (" << kJointLabels[i] << "): ur5.urdf "
-          << stats[static_cast<size_t>(s)][static_cast<size_t>(i)] << " vs 002 Table A1 " << kTableA1[s][i];
+          << stats[static_cast<size_t>(s)][static_cast<size_t>(i)] << " vs [Raviola2023, Table A1] " << kTableA1[s][i];
     }
   }
 }

@@ -83,7 +83,7 @@ TEST(RobotSystem, RigidGearJointTorqueEqualsRneaOfSimulatedMotion) {
     EXPECT_TRUE(test::MatricesNear(s.tau_gear, tau, 1e-9)) << "t = " << t;
     max_track = std::max(max_track, (s.q_set - y.head(6)).cwiseAbs().maxCoeff());
   }
-  EXPECT_LT(max_track, 1e-3) << "the 002 cascade tracks the reference";
+  EXPECT_LT(max_track, 1e-3) << "the [Raviola2023] cascade tracks the reference";
 }
 
 TEST(RobotSystem, StartsAtRestHoldingGravity) {
@@ -167,8 +167,8 @@ TEST(RobotSystem, TorqueFreeFrictionlessRunConservesEnergy) {
 }
 
 TEST(RobotSystem, Irb140CoupledWristWith000ControllersHoldsAndBalancesTorques) {
-  // Seed 000's IRB140: rigid gears (ratios of Listing 4.1, wrist reduction in G), motor inertia 0.014,
-  // motor-side P/PI controllers (000 A.12, Listing 4.1 gains) commanding torque, wrist coupling matrix.
+  // The IRB140 of [Olsson2017]: rigid gears (ratios of Listing 4.1, wrist reduction in G), motor inertia 0.014,
+  // motor-side P/PI controllers ([Olsson2017, A.12], Listing 4.1 gains) commanding torque, wrist coupling matrix.
   const auto irb = multibody::loadRobot(test::sourcePath("config/robots/irb140.yaml"));
   const double ratio[6] = {104.4, 104.4, 100.74, 1, 1, 1};
   const double kp[6] = {0.008, 0.008, 0.008, 0.008, 0.008, 0.008}, ks[6] = {0.01, 0.01, 0.01, 0.002, 0.005, 0.001},
@@ -224,6 +224,6 @@ TEST(RobotSystem, Irb140CoupledWristWith000ControllersHoldsAndBalancesTorques) {
     // Joint torques from the motors = rigid-body torques + reflected rotor inertia.
     const Eigen::VectorXd rhs = multibody::rnea(irb, data, y.head(6), y.segment(6, 6), s.qdd) + R * s.qdd;
     EXPECT_TRUE(test::MatricesNear(s.tau_joint, rhs, 1e-8)) << "t = " << t;
-    EXPECT_LT((y.head(6) - s.q_set).cwiseAbs().maxCoeff(), 0.05) << "000's low gains still hold the arm";
+    EXPECT_LT((y.head(6) - s.q_set).cwiseAbs().maxCoeff(), 0.05) << "the low gains of [Olsson2017] still hold the arm";
   }
 }

@@ -1,11 +1,13 @@
 #pragma once
 /// \file
-/// Seed 000's `ClampingPathPlanning` (MODEL_REFERENCE §7.1, 000 §3.11, A.14): a chain of MSL KinematicPTP2
-/// segments that swing one axis reference back and forth, 0 → +q_pos → −q_pos → +q_pos → … . Segment k
-/// (0-based) starts at k·segment_time and is active on [k·T, (k+1)·T); a segment that has not finished
-/// by the end of its slot is cut off there (the reference then jumps, as in 000's `path2`, §8 A-17).
+/// `ClampingPathPlanning` of [Olsson2017, §3.11, Table 3.8, A.14] (timings derived): a chain of
+/// [MSL, Blocks.Sources.KinematicPTP2] segments that swing one axis reference back and forth,
+/// 0 → +q_pos → −q_pos → +q_pos → … . Segment k (0-based) starts at k·segment_time and is active on
+/// [k·T, (k+1)·T); a segment that has not finished by the end of its slot is cut off there (the reference then
+/// jumps, as in `path2` of [Olsson2017]; derived from [Olsson2017, A.14] and Listing 4.1).
 /// After the last slot the reference holds the last segment's end point with zero speed.
-/// The default (five 3 s segments) is 000's; the path of one axis is independent of the others.
+/// The default (five 3 s segments) is that of [Olsson2017]; the path of one axis is independent of the
+/// others.
 
 #include <vector>
 
@@ -18,7 +20,7 @@ struct ClampingPathParams {
   double qd_max = 0.2;            ///< speed limit [rad/s], > 0
   double qdd_max = 0.5;           ///< acceleration limit [rad/s²], > 0
   double segment_time = 3.0;      ///< slot length of each segment [s], > 0
-  int segments = 5;               ///< number of segments (000: 5), >= 1
+  int segments = 5;               ///< number of segments ([Olsson2017]: 5), >= 1
   void validate() const;          ///< throws InputError
 };
 

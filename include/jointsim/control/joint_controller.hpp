@@ -1,12 +1,12 @@
 #pragma once
 /// \file
 /// Per-joint drive controllers (continuous-time):
-/// - `Cascade002` — seed 002 §2.1, Table 1 (MODEL_REFERENCE §6.1): position P with motor-speed
+/// - `Cascade002` — [Raviola2023, §2.1, Table 1, App. A]: position P with motor-speed
 ///   feed-forward N q̇_set, motor-velocity PI giving the current reference, current PI giving the voltage
 ///   reference. Output: voltage [V] (saturated by the PWM stage). The current integrator stops while the
 ///   voltage is saturated and the error drives further into saturation (conditional-integration
-///   anti-windup; 002 states none — without it a saturated start winds up and overshoots).
-/// - `MotorPPI000` — seed 000 §2.8/A.12 (MODEL_REFERENCE §6.2): u = N q̇_ref + kp (N q_ref − φ_m) − ω_m,
+///   anti-windup; [Raviola2023] states none — without it a saturated start winds up and overshoots).
+/// - `MotorPPI000` — [Olsson2017, §2.8, §3.10, Table 3.7, A.12]: u = N q̇_ref + kp (N q_ref − φ_m) − ω_m,
 ///   τ_m = ks (u + x), ẋ = u/Ts, x(0) = −u(0). Output: motor torque [N·m] (no current loop).
 /// - `None` — zero motor torque (uncontrolled).
 /// Each controller is a pure function of its inputs and its internal state slice.
@@ -19,13 +19,13 @@ enum class ControllerType { None, Cascade002, MotorPPI000 };
 
 struct JointControllerParams {
   ControllerType type = ControllerType::None;
-  // Cascade002 (002 Table 1)
+  // Cascade002 ([Raviola2023, Table 1])
   double P_pos = 0.0;   ///< position P: joint error [rad] → motor speed [rad/s] [1/s], >= 0
   double P_vel = 0.0;   ///< velocity P [A·s/rad], >= 0
   double I_vel = 0.0;   ///< velocity I [A/rad], >= 0
   double P_cur = 0.0;   ///< current P [V/A], >= 0
   double I_cur = 0.0;   ///< current I [V/(A·s)], >= 0
-  // MotorPPI000 (000 A.12)
+  // MotorPPI000 ([Olsson2017, A.12])
   double kp = 0.0;      ///< position gain [1/s], >= 0
   double ks = 0.0;      ///< speed PI gain [N·m·s/rad], >= 0
   double Ts = 0.01;     ///< PI integrator time constant [s], > 0
@@ -55,7 +55,8 @@ class JointController {
   explicit JointController(const JointControllerParams& p) : p_(p) {}
   const JointControllerParams& params() const { return p_; }
   int stateSize() const;
-  /// Internal state at t0 for the given inputs (000: zero initial output; 002: zero integrals).
+  /// Internal state at t0 for the given inputs ([Olsson2017]: zero initial output; [Raviola2023]: zero
+  /// integrals).
   void initialState(const ControllerInputs& in, double* x) const;
   /// Outputs and state derivatives.
   ControllerOutputs evaluate(const ControllerInputs& in, const double* x, double* xdot) const;

@@ -3,7 +3,7 @@
 /// `KinematicPtpTrajectory` — the Modelica Standard Library path planner
 /// `Modelica.Blocks.Sources.KinematicPTP2` (used by the RobotR3 examples FullRobot and OneAxis through
 /// `PathPlanning6` / `PathPlanning1`), re-implemented with the MSL equations operation for operation so
-/// that the set-points agree with Dymola reference results to rounding (see ROBOTR3.md §4).
+/// that the set-points agree with Dymola reference results to rounding ([MSL, Blocks.Sources.KinematicPTP2]).
 ///
 /// Semantics (time-optimal, synchronised point-to-point move; all axes share one normalised path s(t)):
 ///
@@ -29,18 +29,18 @@
 ///
 /// `moving(i, t)` = (|q_begin_i − q_end_i| > ε) and (t < endTime()), the MSL `moving` output.
 ///
-/// Simulation termination rule (ROBOTR3.md §4.4, MSL `TerminateSimulation(condition = time >=
-/// path.endTime + swingTime)`): the robot experiments FullRobot and OneAxis stop the simulation at the
-/// first instant t with t >= endTime() + swingTime (swingTime = 0.5 s in both), i.e. at
-/// `terminationTime(0.5)` (FullRobot 1.8560450019 s, OneAxis 1.4981317008 s; both before their stop
-/// times 2 s / 1.6 s, so the reference files end there). A simulator driving this trajectory should
-/// integrate up to exactly terminationTime(swing) and end the run there (the Dymola results have their
-/// last row at that instant).
+/// Simulation termination rule ([MSL, RobotR3.Utilities.PathPlanning1/PathPlanning6], MSL
+/// `TerminateSimulation(condition = time >= path.endTime + swingTime)`): the robot experiments FullRobot and
+/// OneAxis stop the simulation at the first instant t with t >= endTime() + swingTime (swingTime = 0.5 s in
+/// both), i.e. at `terminationTime(0.5)` (FullRobot 1.8560450019 s, OneAxis 1.4981317008 s; both before their
+/// stop times 2 s / 1.6 s, so the reference files end there). A simulator driving this trajectory should
+/// integrate up to exactly terminationTime(swing) and end the run there (the Dymola results have their last row
+/// at that instant).
 ///
-/// JointTrajectory mapping: duration() = endTime(); breakpoints() = start_time (if > 0) and the phase
-/// switches start_time + Ta2 (or Ta1), + Tv, + Te; before start_time the trajectory rests at q_begin.
-/// The acceleration-only variant `KinematicPTP` (ROBOTR3.md §4.2) uses the same timing: it equals
-/// this trajectory's qdd with q_begin = 0, q_end = deltaq (minus the degenerate-motion guard).
+/// JointTrajectory mapping: duration() = endTime(); breakpoints() = start_time (if > 0) and the phase switches
+/// start_time + Ta2 (or Ta1), + Tv, + Te; before start_time the trajectory rests at q_begin. The
+/// acceleration-only variant `KinematicPTP` ([MSL, Blocks.Sources.KinematicPTP]) uses the same timing: it
+/// equals this trajectory's qdd with q_begin = 0, q_end = deltaq (minus the degenerate-motion guard).
 /// Units: SI, positions [rad], speeds [rad/s], accelerations [rad/s²], times [s].
 
 #include <string>
@@ -77,7 +77,8 @@ class KinematicPtpTrajectory final : public JointTrajectory {
 
   /// MSL output `endTime` = start_time + Te [s]; 0 for a degenerate motion (see the file comment).
   double endTime() const { return end_time_; }
-  /// The instant at which a robot experiment ends (§4.4): endTime() + swing_time [s].
+  /// The instant at which a robot experiment ends ([MSL, RobotR3.Utilities.PathPlanning1/PathPlanning6]):
+  /// endTime() + swing_time [s].
   double terminationTime(double swing_time) const { return end_time_ + swing_time; }
   /// MSL output moving[i] at time t [s] (0-based axis i).
   bool moving(int i, double t) const;

@@ -1,7 +1,8 @@
 #pragma once
 /// \file
-/// DC motor electrics (seed 002 eq. 1) with an averaged PWM voltage source saturated at the supply
-/// (MODEL_REFERENCE §5.2): L di/dt = V_sup − R i − k_e ω,  T_M = k_t i,  V_sup = clamp(V_ref, ±V_supply).
+/// DC motor electrics ([Raviola2023, §2.2, eq. 1, Table 2]) with an averaged PWM voltage source saturated
+/// at the supply (48 V, [Raviola2023, §2.1]; the averaged clamp model is our assumption):
+/// L di/dt = V_sup − R i − k_e ω,  T_M = k_t i,  V_sup = clamp(V_ref, ±V_supply).
 /// The rotor inertia J_M is a parameter here, but its dynamics belong to the shaft the motor drives.
 
 #include <string>
@@ -12,13 +13,13 @@ struct DcMotorParams {
   double R = 0.30;          ///< armature resistance R [Ω], > 0
   double L = 0.83e-3;       ///< armature inductance L [H], > 0
   double kt = 0.1350;       ///< torque constant k_t [N·m/A], > 0
-  double ke = 0.1350;       ///< back-EMF constant k_e [V·s/rad], > 0 (002 uses k_e = k_t; may differ)
+  double ke = 0.1350;       ///< back-EMF constant k_e [V·s/rad], > 0 ([Raviola2023] uses k_e = k_t; may differ)
   double J_M = 1.877e-4;    ///< rotor inertia J_M [kg·m²], > 0
   double V_supply = 48.0;   ///< supply (network) voltage V_net [V], > 0: |V_sup| ≤ V_supply
 
   /// Throws InputError naming the field, the value and the rule.
   void validate() const;
-  /// UR5 motor of joint `joint` (1..6), seed 002 Table 2.
+  /// UR5 motor of joint `joint` (1..6), [Raviola2023, Table 2].
   static DcMotorParams ur5(int joint);
 };
 

@@ -39,7 +39,7 @@ std::shared_ptr<const Transmission> transmissionFromYaml(const io::YamlValue& no
 ///                    sigma1 [N·m·s/rad], qd_s [rad/s], k_static [-], viscous_exponent [-]
 /// "static set" = either alpha0 [N·m], alpha1 [N·m], alpha2 [N·m·s/rad], v_s [rad/s] (all req, same
 /// for both directions), or the mappings positive: {alpha0, alpha1, alpha2, v_s} and negative: {...}
-/// (both req; per direction, 004 Table 4.3) — not both forms.
+/// (both req; per direction, [Hauschild2003, Table 4.3]) — not both forms.
 ///
 /// Every error is an InputError "FILE:LINE: KEY.PATH: message", pointing at the offending key
 /// (parameter rules of validate() included).
@@ -49,7 +49,7 @@ std::unique_ptr<Friction> frictionFromYaml(const io::YamlValue& node);
 ///
 /// Keys (all optional except as noted; units in brackets, SI except alpha_t_deg):
 ///   type:          strain_wave_gear (optional; if present it must be this value)
-///   size:          A | B — start from StrainWaveGearParams::ur5SizeA() / ur5SizeB() (002 Table 3).
+///   size:          A | B — start from StrainWaveGearParams::ur5SizeA() / ur5SizeB() ([Raviola2023, Table 3]).
 ///                  Without `size` every physical parameter below is required (except the damping
 ///                  values, which default to 0.1, and tau, which defaults to 101).
 ///   r_g [m], K_WG [N·m/rad], K_b [N/m], K_FS [N·m/rad], K_m [N/m], K_CS [N·m/rad],

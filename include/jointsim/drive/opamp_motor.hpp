@@ -1,7 +1,8 @@
 #pragma once
 /// \file
 /// Motor with operational-amplifier current controller of the Modelica RobotR3 axes
-/// (Modelica.Mechanics.MultiBody.Examples.Systems.RobotR3.Components.Motor; ROBOTR3.md §2.2, §9.1).
+/// ([MSL, RobotR3.Utilities.Motor], with its steady-state initial equations; C = 0.004·D/w and
+/// La = 250/(2·D·w) derived from it).
 ///
 /// Circuit (ideal op-amps): a difference amplifier forms i − i_ref, an integrator (Ri, C) integrates it,
 /// a non-inverting power amplifier with gain 1 + Rp1/Rp2 = 5 drives the armature (Ra, La) and the EMF.
@@ -15,7 +16,7 @@
 /// With u = −v_C the controller is a pure integrator du/dt = (i_ref − i)/(Ri·C) driving the armature
 /// with 5·u, and (ignoring back-EMF) i/i_ref = w² / (s² + 2·D·w·s + w²).
 ///
-/// Sign conventions (§0.3): i > 0 produces a positive torque k·i on the rotor; ω_m is the rotor speed
+/// Sign conventions: i > 0 produces a positive torque k·i on the rotor; ω_m is the rotor speed
 /// against ground; the back-EMF k·ω_m opposes a positive current. The rotor inertia J is a parameter,
 /// but the rotor dynamics J·dω_m/dt = k·i − (load torque) belong to the drive train the motor drives.
 
@@ -42,10 +43,12 @@ struct OpAmpMotorParams {
 
   /// Throws InputError naming the field, the value and the rule (every field finite and > 0).
   void validate() const;
-  /// Motor of FullRobot axis `axis` (1..6), ROBOTR3.md §2.5 (k, w, D, J per axis; others default).
+  /// Motor of FullRobot axis `axis` (1..6), axis parameters of [MSL, RobotR3.FullRobot] (k, w, D, J per
+  /// axis; others default).
   /// Throws InputError for an axis outside 1..6.
   static OpAmpMotorParams robotR3Axis(int axis);
-  /// Motor of the OneAxis example (§6): the axis-2 motor, k = 1.1616, w = 5500, D = 0.6, J = 0.0013.
+  /// Motor of the OneAxis example ([MSL, RobotR3.OneAxis]): the axis-2 motor, k = 1.1616, w = 5500, D = 0.6,
+  /// J = 0.0013.
   static OpAmpMotorParams oneAxis();
 };
 
@@ -80,7 +83,7 @@ class OpAmpMotor {
 
   /// Electrical steady state [v_C, i] for armature current i [A] at rotor speed omega_m [rad/s]
   /// (the model's initial equations dv_C/dt = 0 ⇒ i = i_ref, di/dt = 0 ⇒
-  /// v_C = −(Ra·i + k·ω_m)/amp_gain; ROBOTR3.md §9.1). Pass i = i_ref(0).
+  /// v_C = −(Ra·i + k·ω_m)/amp_gain; [MSL, RobotR3.Utilities.Motor]). Pass i = i_ref(0).
   Eigen::Vector2d steadyState(double i, double omega_m) const;
 
  private:

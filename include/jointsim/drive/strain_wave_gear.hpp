@@ -1,13 +1,13 @@
 #pragma once
 /// \file
-/// Lumped strain-wave-gear (harmonic drive) model of the UR5 (seed 002 §2.3, eqs. 2–6, Table 3;
-/// MODEL_REFERENCE §4). Wave generator (WG) on the input (motor) shaft, flexspline (FS) held by the joint
+/// Lumped strain-wave-gear (harmonic drive) model of the UR5 ([Raviola2023, §2.3, eqs. 2–6, Table 3,
+/// Fig. 3]). Wave generator (WG) on the input (motor) shaft, flexspline (FS) held by the joint
 /// case, circular spline (CS) on the output shaft. Four internal degrees of freedom (q_WG, x_FS, y_FS, q_CS)
 /// connected by five linear spring–dampers (motor shaft–WG, WG bearing–FS radial, FS–CS mesh, FS–case
 /// tangential, CS–output flange); rotations of the WG are mapped to radial displacements through the
 /// inclined plane of angle α_n = arctan(1/(τ tan α_t)) (eq. 3), so that q_CS/q_WG = 1/τ with rigid contacts.
 ///
-/// Equations (eq. 5 with the OCR fixes of MODEL_REFERENCE §4.4):
+/// Equations ([Raviola2023, eq. 5] with our corrections of three typos, item 3 below):
 ///
 ///     J_WG q̈_WG        = T_in − F_b r_g ρ          ρ = tan α_n (EnergyConsistent) or sin α_n cos α_n (PaperLiteral)
 ///     (J_FS/r_g²) ẍ_FS = F_b − F_m sin α_t
@@ -23,7 +23,7 @@
 /// grow without bound with the motor angle (x_FS ≈ 0.53 mm per motor radian for size A) while the physical
 /// deflections are 1e-9–1e-5. Integrating them directly makes CVODE's relative tolerance rtol·|x_FS| swamp
 /// the deflections after a few hundred motor revolutions (and costs digits to cancellation in
-/// x_WG − x_FS). Following MODEL_REFERENCE §4.3 the positions are therefore integrated as deflections
+/// x_WG − x_FS). By our choice the positions are therefore integrated as deflections
 /// relative to the shaft each element is attached to; the velocities are absolute (a deflection *rate*
 /// state for the WG would need the input-shaft acceleration, which the two-port interface does not give):
 ///
@@ -40,16 +40,16 @@
 /// 1/(τ tan α_t)):  δ_m = r_g cos α_t (q_in/τ − q_out) − sin α_t (r_g tan α_n φ_WG + Δ_b) − cos α_t (r_g φ_CS + y_FS),
 /// so the large shaft angles only enter through the net transmission twist q_in/τ − q_out.
 ///
-/// Ambiguities resolved (see MODEL_REFERENCE §4.4–4.7):
+/// Ambiguities resolved (our reading of [Raviola2023, §2.3, eq. 5]):
 /// 1. WG reaction factor: the paper's sin α_n cos α_n is not power-consistent with the constraint
 ///    x_WG = r_g tan α_n q_WG (static torque ratio τ/cos²α_n = 101.0297, spurious power F_b ẋ_WG sin²α_n).
 ///    Default ReactionForm::EnergyConsistent uses tan α_n (ratio exactly τ, passive);
-///    ReactionForm::PaperLiteral reproduces 002.
+///    ReactionForm::PaperLiteral reproduces [Raviola2023].
 /// 2. "All the damping factors were set equal to 0.1": default DampingMode::Coefficient reads 0.1 as
 ///    coefficients in N·m·s/rad (c_WG, c_FS, c_CS) and N·s/m (c_b, c_m) (reading (a)); DampingMode::DampingRatio
 ///    reads the c_* fields as damping ratios ζ with c = 2ζ√(k m_eq) (reading (b)), m_eq as documented at
 ///    DampingCoefficients.
-/// 3. OCR fixes of eq. 5: ẍ_FS and ÿ_FS (not x̃_FS / I_FS ẏ_FS), damping term c_FS ẏ_FS / r_g² in F_t.
+/// 3. Typo corrections of eq. 5: ẍ_FS and ÿ_FS (not x̃_FS / I_FS ẏ_FS), damping term c_FS ẏ_FS / r_g² in F_t.
 /// 4. Table 3 prints J_WG in "kgm": kg·m² is used.
 /// 5. The "radial" FS mass and the tangential FS mass are both J_FS/r_g² (as in eq. 5).
 /// 6. Contacts are linear (no loss of contact), as written in eq. 5.
@@ -66,17 +66,17 @@
 
 namespace jointsim::drive {
 
-/// Form of the WG reaction term F_b r_g ρ in the WG equation of eq. 5 (MODEL_REFERENCE §4.6).
+/// Form of the WG reaction term F_b r_g ρ in the WG equation of eq. 5 (derived from [Raviola2023, eq. 5]).
 enum class ReactionForm {
   /// ρ = tan α_n, consistent with x_WG = r_g tan α_n q_WG: static torque ratio exactly τ, stored energy
   /// never increases without input power. Default.
   EnergyConsistent,
-  /// ρ = sin α_n cos α_n as printed in 002 eq. 5: static torque ratio τ/cos²α_n (101.0297 for τ = 101,
+  /// ρ = sin α_n cos α_n as printed in [Raviola2023, eq. 5]: static torque ratio τ/cos²α_n (101.0297 for τ = 101,
   /// α_t = 30°) and a spurious power source F_b ẋ_WG sin²α_n.
   PaperLiteral,
 };
 
-/// Meaning of the damping fields c_WG, c_b, c_m, c_FS, c_CS (MODEL_REFERENCE §4.7).
+/// Meaning of the damping fields c_WG, c_b, c_m, c_FS, c_CS (our two readings of [Raviola2023, §2.3]).
 enum class DampingMode {
   /// Reading (a): the fields are the damping coefficients themselves (N·m·s/rad or N·s/m). Default.
   Coefficient,
@@ -84,7 +84,7 @@ enum class DampingMode {
   DampingRatio,
 };
 
-/// Parameters of the strain wave gear (002 Table 3). Defaults are size A (UR5 joints 1–3).
+/// Parameters of the strain wave gear ([Raviola2023, Table 3]). Defaults are size A (UR5 joints 1–3).
 struct StrainWaveGearParams {
   double r_g = 30.65e-3;                    ///< primitive radius = undeformed FS radius [m], > 0
   double alpha_t = 0.52359877559829887;     ///< tooth pressure angle α_t [rad], in (0, π/2) (30°)
@@ -116,9 +116,9 @@ struct StrainWaveGearParams {
   void validate() const;
   /// Equivalent inclined-plane angle α_n = arctan(1/(τ tan α_t)) [rad] (eq. 3).
   double alphaN() const;
-  /// 002 Table 3, size A (UR5 joints 1–3), damping 0.1 read as coefficients.
+  /// [Raviola2023, Table 3], size A (UR5 joints 1–3), damping 0.1 read as coefficients.
   static StrainWaveGearParams ur5SizeA();
-  /// 002 Table 3, size B (UR5 joints 4–6), damping 0.1 read as coefficients.
+  /// [Raviola2023, Table 3], size B (UR5 joints 4–6), damping 0.1 read as coefficients.
   static StrainWaveGearParams ur5SizeB();
 };
 
@@ -196,7 +196,7 @@ class StrainWaveGear : public Transmission {
   double alphaN() const;
   /// Static torque ratio tau_out/tau_in under load: τ (EnergyConsistent) or τ/cos²α_n (PaperLiteral) [-].
   double staticTorqueRatio() const;
-  /// Static output stiffness with the input shaft held [N·m/rad] (MODEL_REFERENCE §4.6):
+  /// Static output stiffness with the input shaft held [N·m/rad] (derived from [Raviola2023, eq. 5]):
   /// 1/K_out = (ρ/tan α_n)/(τ² K_WG) + tan²α_t/(r_g² K_b) + 1/(r_g² K_m cos²α_t) + 1/K_FS + 1/K_CS,
   /// where ρ/tan α_n = 1 (EnergyConsistent) or cos²α_n (PaperLiteral).
   double staticOutputStiffness() const;
@@ -211,7 +211,7 @@ class StrainWaveGear : public Transmission {
   /// Power dissipated by the five dampers [W], >= 0.
   double dissipatedPower(const ShaftPorts& ports, const double* x) const;
   /// Power injected by the WG reaction form [W]: F_b r_g q̇_WG (tan α_n − ρ), i.e. 0 for EnergyConsistent
-  /// and F_b ẋ_WG sin²α_n for PaperLiteral (MODEL_REFERENCE §4.6).
+  /// and F_b ẋ_WG sin²α_n for PaperLiteral (derived from [Raviola2023, eq. 5]).
   double spuriousPower(const ShaftPorts& ports, const double* x) const;
   /// Undamped small-motion eigenfrequencies [Hz], ascending, of the linear model with DoFs
   /// (q_in, q_WG, x_FS, y_FS, q_CS, q_out), the input shaft of inertia J_in and the output shaft of

@@ -3,9 +3,10 @@
 /// Rigid, elastic and elasto-backlash gears, and the coupling matrix of coupled wrists / multigears.
 /// See transmission.hpp for the port and sign conventions.
 ///
-/// Compliance can be specified on the motor side (seeds 000/001: c, d, b in motor-side units, deflection
-/// δ_m = q_in − N q_out) or on the output side (seeds 003/004: K, D on the link side, δ = q_in/N − q_out).
-/// They are equivalent with c_out = N² c_m, d_out = N² d_m, b_out = b_m / N (MODEL_REFERENCE §2.7).
+/// Compliance can be specified on the motor side ([Olsson2017], [KR300Thesis, §3.2, §7.3]: c, d, b in
+/// motor-side units, deflection δ_m = q_in − N q_out) or on the output side ([EJModel], [Hauschild2003]: K, D
+/// on the link side, δ = q_in/N − q_out). They are equivalent with c_out = N² c_m, d_out = N² d_m,
+/// b_out = b_m / N (our derivation).
 
 #include <Eigen/Core>
 
@@ -16,8 +17,8 @@ namespace jointsim::drive {
 /// Which shaft the compliance parameters refer to.
 enum class ComplianceSide { Motor, Output };
 
-/// Ideal rigid reducer q_in = N q_out, τ_out = N τ_in (000 eqs. 3.2–3.3). Has no evaluate(): the joint rig
-/// merges the two shafts into one degree of freedom.
+/// Ideal rigid reducer q_in = N q_out, τ_out = N τ_in ([Olsson2017, §3.8, eqs. 3.2–3.3, A.9]). Has no
+/// evaluate(): the joint rig merges the two shafts into one degree of freedom.
 class RigidGear : public Transmission {
  public:
   explicit RigidGear(double ratio);
@@ -40,7 +41,8 @@ struct ElasticGearParams {
   void validate() const;
 };
 
-/// Spring–damper gear (Spong elastic joint, seeds 003/004): τ_s = c δ + d δ̇ on the chosen side.
+/// Spring–damper gear (elastic joint of [Spong1987], [EJModel, §2.2–2.3], [Hauschild2003, §5.2.1]):
+/// τ_s = c δ + d δ̇ on the chosen side.
 class ElasticGear : public Transmission {
  public:
   explicit ElasticGear(const ElasticGearParams& params);
@@ -63,10 +65,10 @@ struct ElastoBacklashParams {
   void validate() const;
 };
 
-/// Modelica ElastoBacklash law (MODEL_REFERENCE §2.3) in series with an ideal gear: no torque inside the
-/// gap, c (|δ| − b/2) outside it; the damper never makes the contact torque change sign and is limited
-/// to the spring torque, so the torque is continuous at contact onset. b < 1e-10 rad: plain
-/// spring–damper.
+/// Modelica ElastoBacklash law ([MSL, Rotational.Components.ElastoBacklash]) in series with an ideal gear:
+/// no torque inside the gap, c (|δ| − b/2) outside it; the damper never makes the contact torque change
+/// sign and is limited to the spring torque, so the torque is continuous at contact onset. b < 1e-10 rad:
+/// plain spring–damper.
 class ElastoBacklash : public Transmission {
  public:
   explicit ElastoBacklash(const ElastoBacklashParams& params);
@@ -82,8 +84,9 @@ class ElastoBacklash : public Transmission {
   ElastoBacklashParams p_;
 };
 
-/// Coupling matrix G between n motors and n joints (000 eqs. 2.1–2.2 wrist, 001 multigear):
-/// q_joint = G q_motor, τ_motor = Gᵀ τ_joint. Power is conserved: q̇_jointᵀ τ_joint = q̇_motorᵀ τ_motor.
+/// Coupling matrix G between n motors and n joints (wrist of [Olsson2017, §2.2, eqs. 2.1–2.2], multigear
+/// of [KR300Thesis]): q_joint = G q_motor, τ_motor = Gᵀ τ_joint. Power is conserved:
+/// q̇_jointᵀ τ_joint = q̇_motorᵀ τ_motor.
 class CouplingMatrix {
  public:
   /// Throws InputError if G is not square or not invertible.
@@ -96,7 +99,8 @@ class CouplingMatrix {
   Eigen::VectorXd jointTorques(const Eigen::VectorXd& tau_motor) const;
   /// Motor inertias diag(J_m) reflected to the joints: G⁻ᵀ diag(J_m) G⁻¹ [kg·m²].
   Eigen::MatrixXd reflectedInertia(const Eigen::VectorXd& motor_inertias) const;
-  /// The IRB140 wrist matrix of seed 000 Listing 4.1 (exact rational form, MODEL_REFERENCE §2.6).
+  /// The IRB140 wrist matrix of [Olsson2017, §3.12, A.13, Listing 4.1] (exact rational form derived from
+  /// Listing 4.1).
   static Eigen::Matrix3d irb140Wrist();
 
  private:

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Seed 001's Algorithm II preprocessing of a clamping experiment (MODEL_REFERENCE §7.4): the motor is
+/// Algorithm II preprocessing of a clamping experiment ([KR300Thesis, §4.3, Table 6.1]): the motor is
 /// driven slowly back and forth against a clamped output; the clamping curve is motor torque vs motor
 /// angle. The data are cut into half-cycles (runs of one direction of motion), each half-cycle is cleaned
 /// (turning regions and outliers removed), outlier half-cycles are rejected, the rest are classified as
@@ -9,11 +9,11 @@
 /// friction F that clamping_fit.hpp refines with Ceres.
 ///
 /// All quantities are motor side: angles [rad], torques [N·m], c [N·m/rad]. Defaults of the steps the
-/// source leaves open (⟨?⟩ in §7.4) are documented field by field and in docs/identify_clamping.md.
+/// source leaves open are documented field by field and in docs/identify_clamping.md.
 ///
 /// Errors: InputError for data that are not a clamping experiment (missing columns, NaN, time not
 /// strictly increasing, too few rows, fewer than 2 half-cycles); UnidentifiableError when half-cycles
-/// exist but too many are rejected (seed 001's joint 2) or no linear region is left.
+/// exist but too many are rejected (joint 2 of [KR300Thesis]) or no linear region is left.
 
 #include <string>
 #include <vector>
@@ -40,7 +40,7 @@ struct ClampingData {
 /// missing column, a non-numeric or non-finite cell, an unsorted time, too few rows or gear_ratio ≤ 0.
 ClampingData readClampingCsv(const std::string& path, double gear_ratio = 1.0);
 
-/// Settings of Algorithm II. "Source" marks values given by seed 001; the others are ⟨?⟩ there.
+/// Settings of Algorithm II. "Source" marks values given by [KR300Thesis]; the others are not given there.
 struct ClampingCurveOptions {
   // --- step 1: half-cycle segmentation
   /// Steps |x[k+1] − x[k]| below this factor × the mean |step| are set to 0 [-] (source: 1, the mean).
@@ -91,7 +91,7 @@ struct ClampingCurveOptions {
   double slope_window_fraction = 0.03;
   /// The backlash is observable only if the mid-line (upper + lower)/2 of the curves is below
   /// −zero_margin and above +zero_margin (fraction of max |mid-line|) on at least min_side_fraction of
-  /// the common interval each [-]. Otherwise the curve never crosses zero torque (001's joint 2).
+  /// the common interval each [-]. Otherwise the curve never crosses zero torque (joint 2 of [KR300Thesis]).
   double zero_margin = 0.05;
   double min_side_fraction = 0.1;  ///< see zero_margin [-]
   /// Minimum number of folded-curve points beyond the flat interval (linear region) [-].

@@ -1,8 +1,8 @@
 #pragma once
 /// \file
-/// Ceres fit of seed 001's 1-D transmission model (MODEL_REFERENCE §2.7) to a clamping experiment:
+/// Ceres fit of the 1-D transmission model of [KR300Thesis, §3.2, §7.3] to a clamping experiment:
 ///   J φ̈ = τ_meas − τ_fr(φ̇) − EB_{c,d,b}(φ − φ0, φ̇) − d_small φ̇.
-/// The clamping procedure is quasi-static by design (001 §5); in that limit the model's response on a
+/// The clamping procedure is quasi-static by design ([KR300Thesis, §5]); in that limit the model's response on a
 /// branch of direction s = sgn(φ̇) is exact:
 ///   τ = EB_static(φ − φ0; c, b) + s·F [+ k_v φ̇] [+ d φ̇ in contact],
 /// with EB_static(x) = c (|x| − b/2) sgn(x) outside the gap |x| ≤ b/2 and 0 inside. The fit minimises the
@@ -36,8 +36,8 @@ struct ClampingFitOptions {
   double max_relative_std_error = 0.5;
   // --- validation simulation (simulate_validation)
   bool simulate_validation = false;     ///< simulate the dynamic model driven by the measured torque
-  double rotor_inertia = 0.01;          ///< J [kg·m²] for the validation (001 does not give it), > 0
-  double validation_damping = 0.5;      ///< EB damper d [N·m·s/rad] if not fitted (001: "small"), >= 0
+  double rotor_inertia = 0.01;          ///< J [kg·m²] for the validation ([KR300Thesis] does not give it), > 0
+  double validation_damping = 0.5;      ///< EB damper d [N·m·s/rad] if not fitted ([KR300Thesis]: "small"), >= 0
   /// Throws InputError naming the first invalid field.
   void validate() const;
 };

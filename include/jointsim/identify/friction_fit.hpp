@@ -1,14 +1,14 @@
 #pragma once
 /// \file
-/// Identification of the static friction map (seed 004 §4.5.4, MODEL_REFERENCE §3.2 and §3.6): per direction
-/// of motion, the exponential (Stribeck) model of 004 eq. 4.6, which is also the steady state of the LuGre
+/// Identification of the static friction map ([Hauschild2003, §4.5.4]): per direction of motion, the
+/// exponential (Stribeck) model of [Hauschild2003, eq. 4.6, Table 4.3], which is also the steady state of the LuGre
 /// model (eq. 4.21, δ = 2),
 ///
 ///   F(v) = (α0 + α1·exp(−(|v|/v_S)^δ))·sgn(v) + α2·v,
 ///
 /// is fitted to measured (velocity, friction torque) pairs by nonlinear least squares (Ceres, automatic
-/// differentiation; 004 used a Nelder–Mead simplex). Ceres is an implementation detail: it does not appear in
-/// this header.
+/// differentiation; [Hauschild2003] used a Nelder–Mead simplex). Ceres is an implementation detail: it does not
+/// appear in this header.
 ///
 /// Procedure (docs/identify_friction.md):
 /// 1. Points with v = 0 belong to neither direction and are dropped (counted in FrictionFit::dropped_zero).
@@ -111,9 +111,9 @@ FrictionMapData readFrictionMap(const std::string& path);
 struct FrictionYamlOptions {
   std::string source;            ///< name of the map file, written as fit.source (may be empty)
   bool lugre = false;            ///< write `type: lugre` with sigma0/sigma1 instead of `type: stribeck`
-  double sigma0 = 259.0;         ///< σ0 for `lugre` [N·m/rad] (004 §4.5.4), > 0
-  double sigma1 = 10.0;          ///< σ1 for `lugre` [N·m·s/rad] (004 §4.5.4), > 0
-  double k_s = 300.0;            ///< slope-limiter factor of `stribeck` (004 eq. 4.24) [s/rad], > 0
+  double sigma0 = 259.0;         ///< σ0 for `lugre` [N·m/rad] ([Hauschild2003, §4.5.4]), > 0
+  double sigma1 = 10.0;          ///< σ1 for `lugre` [N·m·s/rad] ([Hauschild2003, §4.5.4]), > 0
+  double k_s = 300.0;            ///< slope-limiter factor of `stribeck` ([Hauschild2003, eq. 4.24]) [s/rad], > 0
   double wall_time_s = -1.0;     ///< identification wall time written as fit.wall_time_s when >= 0 [s]
 };
 

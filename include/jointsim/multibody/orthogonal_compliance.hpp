@@ -11,8 +11,8 @@
 namespace jointsim::multibody {
 
 /// Copy of `model` in which every joint named in `joints` is followed by two revolute joints about
-/// axes u and v orthogonal to its axis n (000 A.15 getOrthVectors: u = e_x × n if n_x = 0, else e_y × n if
-/// n_y = 0, else e_z × n, normalised; v = n × u), named `<joint>_orth_u` and `<joint>_orth_v`, with two
+/// axes u and v orthogonal to its axis n ([Olsson2017, A.15] getOrthVectors: u = e_x × n if n_x = 0, else
+/// e_y × n if n_y = 0, else e_z × n, normalised; v = n × u), named `<joint>_orth_u` and `<joint>_orth_v`, with two
 /// massless links between; the original link, its frames and its children follow the last one. The
 /// orthogonal joints rotate with the joint (for an isotropic bending stiffness this is the same spring).
 /// Throws InputError for an unknown or prismatic joint.

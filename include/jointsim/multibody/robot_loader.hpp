@@ -4,7 +4,7 @@
 ///
 /// YAML format (documented in full in docs/robot_format.md):
 /// - `convention: dh_hayati` — a serial chain given per link by the Hayati-modified Denavit–Hartenberg
-///   parameters of seed 002 eq. 8: ^{i-1}A_i = Transl(z,d) Rot(z,θ) Transl(x,a) Rot(x,α) Rot(y,β),
+///   parameters of [Raviola2023, §2.6, eq. 8]: ^{i-1}A_i = Transl(z,d) Rot(z,θ) Transl(x,a) Rot(x,α) Rot(y,β),
 ///   with θ = q + theta (revolute) or d = d + q (prismatic). Link i's frame (CoM, inertia) is DH frame i.
 /// - `convention: tree` — URDF-like links and joints (origin xyz/rpy, axis), any tree.
 /// Every error is an InputError naming the file, the line, the key path and what was expected.

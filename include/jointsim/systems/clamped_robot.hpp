@@ -1,27 +1,28 @@
 #pragma once
 /// \file
-/// Seed 000's clamping experiment on a whole robot (MODEL_REFERENCE §1.5, §2.2–2.6, §6.2, §7.1–7.2): the
+/// The clamping experiment of [Olsson2017, §3.7–3.12, A.6–A.15, §4.3, Listing 4.1] on a whole robot: the
 /// end effector is held by a 6-D spring–damper clamp at its start pose while the axis controllers drive
 /// the motors back and forth along ClampingPathPlanning references, so each motor winds up its
 /// transmission against the clamped structure. Motor torque against motor angle is the axis's clamping
 /// curve.
 ///
-/// Per axis (000 §3.8, A.7): controller torque → motor inertia J → bearing friction (table with peak,
-/// exact MSL stick–slip logic on the motor shaft) → ElastoBacklash (c, d, b; motor side) → ideal gear r →
-/// gear output angle φ_out. An optional coupling matrix G (the wrist) maps gear output angles to joint
-/// angles, q = G φ_out, and τ_out = Gᵀ τ_joint (000 eqs. 2.1–2.2). Joints with c_orth > 0 get two extra
-/// rotational degrees of freedom orthogonal to their axis (000 §3.7's bending compliance, axes from
-/// getOrthVectors), each restrained by c_orth and d_orth.
+/// Per axis ([Olsson2017, §3.8, Fig. 3.2, A.7–A.9]): controller torque → motor inertia J → bearing friction
+/// (table with peak, exact MSL stick–slip logic on the motor shaft) → ElastoBacklash (c, d, b; motor side) →
+/// ideal gear r → gear output angle φ_out. An optional coupling matrix G (the wrist) maps gear output angles to
+/// joint angles, q = G φ_out, and τ_out = Gᵀ τ_joint ([Olsson2017, eqs. 2.1–2.2]). Joints with c_orth > 0 get
+/// two extra rotational degrees of freedom orthogonal to their axis (the bending compliance of
+/// [Olsson2017, §3.7, Table 3.3, A.6, A.15], axes from getOrthVectors), each restrained by c_orth and d_orth.
 ///
-/// Clamp (000 §3.9, A.11): on the clamp frame, force f = −(c_lin Δp + d_lin v) with Δp the frame
-/// origin's displacement from its start position and v its velocity (world frame), and moment
-/// m = −(c_rot θ + d_rot ω) with θ the rotation vector of R₀ᵀR and ω the angular velocity, both in the
-/// frame's own axes. 000 integrates ω for θ; the two agree to second order in the (µrad) rotation, and
-/// the rotation vector needs no extra states and makes an isotropic c_rot exactly conservative.
+/// Clamp ([Olsson2017, §3.9, Table 3.6, A.11]): on the clamp frame, force f = −(c_lin Δp + d_lin v) with Δp the
+/// frame origin's displacement from its start position and v its velocity (world frame), and moment
+/// m = −(c_rot θ + d_rot ω) with θ the rotation vector of R₀ᵀR and ω the angular velocity, both in the frame's
+/// own axes. [Olsson2017] integrates ω for θ; the two agree to second order in the (µrad) rotation, and the rotation
+/// vector needs no extra states and makes an isotropic c_rot exactly conservative.
 ///
-/// Controller (000 A.12): u = r_c q̇_ref + k_p (φ_ref − φ_m) − ω_m, τ_m = k_s (u + x), ẋ = u / T_s, with
-/// φ_ref = φ_m(0) + r_c q_ref(t): the reference is the axis's ClampingPath scaled by the controller ratio
-/// r_c (the wrist controllers ignore the coupling, as in 000) and offset by the start motor angle.
+/// Controller ([Olsson2017, §2.8, §3.10, Table 3.7, A.12]): u = r_c q̇_ref + k_p (φ_ref − φ_m) − ω_m,
+/// τ_m = k_s (u + x), ẋ = u / T_s, with φ_ref = φ_m(0) + r_c q_ref(t): the reference is the axis's
+/// ClampingPath scaled by the controller ratio r_c (the wrist controllers ignore the coupling, as in
+/// [Olsson2017]) and offset by the start motor angle.
 ///
 /// State vector: [q, q̇] of the arm (joints and orthogonal-compliance angles), then per axis [φ_m, ω_m, x].
 /// Units: SI throughout (rad, rad/s, N·m, N, m, kg·m²).
@@ -47,7 +48,7 @@ using drive::FrictionMode;
 
 struct ClampingAxisParams {
   std::string joint;               ///< joint this axis drives (through G for a coupled wrist)
-  double ratio = 1.0;              ///< gear ratio r = φ_motor / φ_out [-], != 0 (wrist axes in 000: 1)
+  double ratio = 1.0;              ///< gear ratio r = φ_motor / φ_out [-], != 0 (wrist axes in [Olsson2017]: 1)
   double inertia = 0.01;           ///< motor (rotor) inertia J [kg·m²], > 0
   double c = 50.0;                 ///< ElastoBacklash stiffness, motor side [N·m/rad], > 0
   double d = 10.0;                 ///< ElastoBacklash damping, motor side [N·m·s/rad], >= 0
@@ -55,7 +56,7 @@ struct ClampingAxisParams {
   std::vector<std::array<double, 2>> tau_pos{{0.0, 1.0}, {1.0, 1.1}};  ///< friction table rows [rad/s, N·m]
   double peak = 1.0;               ///< stiction factor (breakaway = peak · tau_pos(0)) [-], >= 1
   double c_orth = 0.0;             ///< orthogonal (bending) stiffness [N·m/rad]; 0 = rigid
-  double d_orth = 30.0;            ///< orthogonal damping [N·m·s/rad], >= 0 (000 default 30)
+  double d_orth = 30.0;            ///< orthogonal damping [N·m·s/rad], >= 0 ([Olsson2017] default 30)
   double kp = 10.0;                ///< position gain [1/s]
   double ks = 1.0;                 ///< speed PI gain [N·m·s/rad]
   double Ts = 0.01;                ///< PI time constant [s], > 0
@@ -66,7 +67,7 @@ struct ClampingAxisParams {
 
 struct ClampSpec {
   std::string frame;                                      ///< clamped frame (empty: the model's tip frame)
-  Eigen::Matrix3d c_lin = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N/m] (000 A.11 default)
+  Eigen::Matrix3d c_lin = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N/m] ([Olsson2017, A.11] default)
   Eigen::Matrix3d d_lin = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N·s/m]
   Eigen::Matrix3d c_rot = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N·m/rad]
   Eigen::Matrix3d d_rot = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N·m·s/rad]

@@ -1,12 +1,12 @@
 #pragma once
 /// \file
-/// One-dimensional rotational drive chain (generalises the joint rig): rigid inertias joined by elements
-/// — linear spring–damper, elasto-backlash, clutch between two inertias, brake or bearing friction to
-/// ground — and driven by torque sources. Friction elements follow the Modelica PartialFriction
-/// semantics exactly (ROBOTR3.md §5): modes stuck / start forward / start backward / forward / backward
-/// / free; while stuck the relative acceleration is constrained to zero and the friction torque comes
-/// from the torque balance of the whole chain (all stuck elements solved together); mode switches are
-/// located by CVODE root functions and the integrator is re-initialised at every event.
+/// One-dimensional rotational drive chain (generalises the joint rig): rigid inertias joined by elements —
+/// linear spring–damper, elasto-backlash, clutch between two inertias, brake or bearing friction to ground —
+/// and driven by torque sources. Friction elements follow the Modelica PartialFriction semantics exactly
+/// ([MSL, Rotational.Interfaces.PartialFriction]): modes stuck / start forward / start backward / forward /
+/// backward / free; while stuck the relative acceleration is constrained to zero and the friction torque comes
+/// from the torque balance of the whole chain (all stuck elements solved together); mode switches are located
+/// by CVODE root functions and the integrator is re-initialised at every event.
 ///
 /// Two-flange conventions (MSL): an element joins input node `a` and output node `b` (−1 = ground);
 /// φ_rel = φ_b − φ_a, w_rel = ω_b − ω_a; its torque τ acts with +τ on the input body and −τ on the output

@@ -1,7 +1,8 @@
 #pragma once
 /// \file
 /// Joint test rig: one drive — motor (torque source or DC electrics), transmission, friction — turning a
-/// load inertia or clamped at its output (seed 001's clamping bench, seed 004's friction-map bench).
+/// load inertia or clamped at its output (the clamping bench of [KR300Thesis], the friction-map bench of
+/// [Hauschild2003, §4.5.4]).
 ///
 /// State vector (in this order, absent parts skipped):
 ///   [q_m, qd_m]            motor shaft angle [rad] and velocity [rad/s]
@@ -32,8 +33,8 @@ namespace jointsim::systems {
 enum class RigInput { MotorTorque, Voltage, VelocityPI };
 enum class Side { Motor, Output };
 
-/// Velocity PI loop (seed 004's friction-map measurement): u = kp e + ki ∫e, e = ω_ref − ω_measured,
-/// clamped to ±limit with conditional integration (anti-windup).
+/// Velocity PI loop (the friction-map measurement of [Hauschild2003, §4.5.4]): u = kp e + ki ∫e,
+/// e = ω_ref − ω_measured, clamped to ±limit with conditional integration (anti-windup).
 struct VelocityPi {
   double kp = 1.0;            ///< proportional gain [N·m·s/rad] (torque output) or [V·s/rad] (voltage output)
   double ki = 10.0;           ///< integral gain [N·m/rad] or [V/rad]

@@ -1,9 +1,9 @@
 #pragma once
 /// \file
-/// A Modelica RobotR3 axis driving a 1-D load inertia (the MSL "OneAxis" example, ROBOTR3.md §6):
-/// op-amp current-controlled motor (drive/opamp_motor.hpp), motor-side bearing friction with the exact
-/// MSL stuck/start/sliding logic, motor-side spring–damper, ideal gear, load inertia; the P/PI cascade of
-/// §3 producing the current set-point; a KinematicPTP2 path; termination at end time + swing time.
+/// A Modelica RobotR3 axis driving a 1-D load inertia ([MSL, RobotR3.OneAxis]): op-amp current-controlled motor
+/// (drive/opamp_motor.hpp), motor-side bearing friction with the exact MSL stuck/start/sliding logic,
+/// motor-side spring–damper, ideal gear, load inertia; the P/PI cascade of [MSL, RobotR3.Utilities.Controller]
+/// producing the current set-point; a KinematicPTP2 path; termination at end time + swing time.
 /// States (as the Modelica model): q, q̇ (load), φ_rel = ratio·q − φ_m, ω_rel, PI state x, v_C, i; then
 /// four energy integrals for bookkeeping: W_el = ∫ −5 v_C i dt (work of the power amplifier on the
 /// armature circuit), E_R = ∫ Ra i² dt, E_d = ∫ d ω_rel² dt, E_f = ∫ τ_f ω_m dt [J].
@@ -39,7 +39,7 @@ struct RobotR3AxisSetup {
   double start_time = 0.0;              ///< path start [s]
   double swing_time = 0.5;              ///< run ends at the first t >= path end + swing [s]
   double stop_time = 1.6;               ///< requested stop time [s]
-  double sa0 = 0.0;                     ///< friction torque at t = 0 (undetermined in MSL, §9.2) [N·m]
+  double sa0 = 0.0;                     ///< friction torque at t = 0 (undetermined in MSL; docs/validation.md) [N·m]
   double log_interval = 0.00032;        ///< output interval [s]
   sim::CvodeOptions solver = DriveChainSetup::defaultSolver();
   void validate() const;

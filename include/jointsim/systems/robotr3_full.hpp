@@ -1,11 +1,11 @@
 #pragma once
 /// \file
-/// The Modelica RobotR3 FullRobot (ROBOTR3.md §1–§5, §8.2, §9): the Manutec r3 arm (a multibody model)
-/// driven by six axes — type 1 (op-amp motor, motor-side bearing friction, spring–damper, ideal gear) or
-/// type 2 (op-amp motor, ideal gear with the rotor inertia N² J added to the arm, joint-side bearing
-/// friction) — each with the P/PI cascade, following one synchronised KinematicPTP2 path, ending at the
-/// path end + swing time. Friction follows the exact MSL logic; the stuck torques of stuck type-2 joints
-/// are solved together with the arm dynamics (M̄ q̈ + h = τ with q̈_j = 0 for every stuck joint j).
+/// The Modelica RobotR3 FullRobot ([MSL, RobotR3.FullRobot]; docs/validation.md): the Manutec r3 arm (a
+/// multibody model) driven by six axes — type 1 (op-amp motor, motor-side bearing friction, spring–damper,
+/// ideal gear) or type 2 (op-amp motor, ideal gear with the rotor inertia N² J added to the arm, joint-side
+/// bearing friction) — each with the P/PI cascade, following one synchronised KinematicPTP2 path, ending at the
+/// path end + swing time. Friction follows the exact MSL logic; the stuck torques of stuck type-2 joints are
+/// solved together with the arm dynamics (M̄ q̈ + h = τ with q̈_j = 0 for every stuck joint j).
 /// States (36 for the r3): q, q̇, then φ_rel, ω_rel of each type-1 axis, then x, v_C, i of each axis.
 
 #include <functional>
@@ -28,9 +28,9 @@ struct RobotR3AxisParams {
   drive::OpAmpMotorParams motor;
   double c = 0.0, d = 0.0;          ///< type 1 spring [N·m/rad] and damper [N·m·s/rad], motor side
   double Rv0 = 0.0, Rv1 = 0.0;      ///< friction f(v) = Rv0 + Rv1 v [N·m, N·m·s/rad]
-  double peak = 1.0;                ///< stiction factor (type 1 uses 1, §2.3)
+  double peak = 1.0;                ///< stiction factor (type 1 uses 1, [MSL, RobotR3.Utilities.GearType1])
   double kp = 5.0, ks = 0.5, Ts = 0.05;
-  /// Axis j (1..6) of FullRobot (ROBOTR3.md §2.5).
+  /// Axis j (1..6) of FullRobot (axis parameters of [MSL, RobotR3.FullRobot]).
   static RobotR3AxisParams fullRobot(int j);
 };
 
