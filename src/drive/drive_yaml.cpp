@@ -28,11 +28,7 @@ DcMotorParams motorFromYaml(const YamlValue& node) {
   p.ke = node["ke"].asDouble(kt_given ? p.kt : p.ke, "a back-EMF constant in V·s/rad");
   p.J_M = node["J_M"].asDouble(p.J_M, "a rotor inertia in kg·m²");
   p.V_supply = node["V_supply"].asDouble(p.V_supply, "a supply voltage in V");
-  try {
-    p.validate();
-  } catch (const InputError& e) {
-    node.relocate(e);
-  }
+  node.validate([&] { p.validate(); });
   return p;
 }
 

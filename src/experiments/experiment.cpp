@@ -117,6 +117,7 @@ std::string summaryJson(Experiment& e, const std::string& started, const Summary
   auto& inputs = s["inputs"] = nlohmann::ordered_json::array();
   for (const auto& in : e.inputs()) inputs.push_back({{"path", in.path}, {"hash", in.hash}, {"bytes", in.size}});
   auto& params = s["parameters"] = nlohmann::ordered_json::object();
+  params["config_file"] = e.file();
   e.describe(params, r);
   params["config"] = e.config();
   return s.dump(2) + "\n";

@@ -46,14 +46,7 @@ Figure translate(const experiments::Figure& f, const std::string& var, int time_
   Figure g{f.stem, f.title, f.rows, f.cols, {}};
   for (const experiments::Panel& p : f.panels) {
     Panel q;
-    q.title = p.title;
-    q.xlabel = p.xlabel;
-    q.ylabel = p.ylabel;
-    q.y2label = p.y2label;
-    q.time_axis = p.time_axis;
-    q.auto_y2 = p.auto_y2;
-    q.key = p.key;
-    q.y2_step = p.y2_step;
+    static_cast<experiments::PanelLayout&>(q) = p;
     if (p.y_step > 0) q.settings += "set ytics " + num(p.y_step) + "\n";
     if (std::isfinite(p.y_min) && std::isfinite(p.y_max)) q.settings += "set yrange [" + num(p.y_min) + ":" + num(p.y_max) + "]\n";
     for (const experiments::Series& s : p.series) {

@@ -22,13 +22,8 @@ struct Series {
   bool y2 = false;        ///< on the right axis
 };
 
-struct Panel {
-  std::string title, xlabel, ylabel, y2label;
+struct Panel : experiments::PanelLayout {
   std::vector<Series> series;
-  bool time_axis = true;  ///< x is time: no padding at the ends
-  bool auto_y2 = false;   ///< series much smaller than the largest go to a right axis of the same unit
-  Key key = Key::automatic;
-  double y2_step = 0;     ///< right-axis tic step (0: about five tics over the left axis' span)
   std::string settings;   ///< extra gnuplot commands for this panel (built here, never from input text)
 };
 

@@ -621,4 +621,13 @@ bool CvodeIntegrator::rootFound() const { return impl_->root_found; }
 
 const std::vector<int>& CvodeIntegrator::rootDirections() const { return impl_->root_dirs; }
 
+CvodeOptions stiffDriveSolver(double rtol, double atol) {
+  CvodeOptions o;
+  o.method = Method::BDF;
+  o.max_order = 2;
+  o.rtol = rtol;
+  o.atol = atol;
+  return o;
+}
+
 }  // namespace jointsim::sim

@@ -24,6 +24,24 @@ void SimulateOptions::validate() const {
   if (max_events_per_output < 1) throw InputError("simulate: max_events_per_output: expected at least 1");
 }
 
+SimulateOptions SimulateOptions::atRate(double t_end, double rate, const CvodeOptions& solver) {
+  SimulateOptions o;
+  o.t_end = t_end;
+  o.output_rate = rate;
+  o.solver = solver;
+  if (o.solver.max_step == 0.0 && rate > 0.0) o.solver.max_step = 1.0 / rate;
+  return o;
+}
+
+SimulateOptions SimulateOptions::everyInterval(double t_end, double interval, const CvodeOptions& solver) {
+  SimulateOptions o;
+  o.t_end = t_end;
+  o.output_interval = interval;
+  o.solver = solver;
+  if (o.solver.max_step == 0.0) o.solver.max_step = interval;
+  return o;
+}
+
 int signalIndex(const Plant& plant, const std::string& name) {
   const auto& names = plant.signalNames();
   for (size_t i = 0; i < names.size(); ++i)

@@ -53,14 +53,7 @@ void ClampingAxisParams::validate() const {
   }
 }
 
-sim::CvodeOptions ClampingSetup::defaultSolver() {
-  sim::CvodeOptions o;
-  o.method = sim::Method::BDF;
-  o.max_order = 2;
-  o.rtol = 1e-6;
-  o.atol = 1e-9;
-  return o;
-}
+sim::CvodeOptions ClampingSetup::defaultSolver() { return sim::stiffDriveSolver(1e-6, 1e-9); }
 
 void ClampingSetup::validate() const {
   if (static_cast<int>(axes.size()) != arm.nq)
@@ -297,12 +290,7 @@ void ClampedRobot::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>
 std::string ClampedRobot::name() const { return "clamping '" + s_.name + "'"; }
 
 sim::SimulateOptions ClampedRobot::simulateOptions() const {
-  sim::SimulateOptions o;
-  o.t_end = s_.duration;
-  o.output_interval = s_.log_interval;
-  o.solver = s_.solver;
-  if (o.solver.max_step == 0.0) o.solver.max_step = s_.log_interval;  // no step jumps over a logged sample
-  return o;
+  return sim::SimulateOptions::everyInterval(s_.duration, s_.log_interval, s_.solver);
 }
 
 std::vector<double> ClampedRobot::timeEvents(double) const {

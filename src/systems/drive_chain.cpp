@@ -16,14 +16,7 @@ bool ChainElement::isFriction() const {
   return type == ChainElementType::Clutch || type == ChainElementType::Brake || type == ChainElementType::BearingFriction;
 }
 
-sim::CvodeOptions DriveChainSetup::defaultSolver() {
-  sim::CvodeOptions o;
-  o.method = sim::Method::BDF;
-  o.max_order = 2;
-  o.rtol = 1e-6;
-  o.atol = 1e-8;
-  return o;
-}
+sim::CvodeOptions DriveChainSetup::defaultSolver() { return sim::stiffDriveSolver(1e-6, 1e-8); }
 
 void DriveChainSetup::validate() const {
   // Keys as in a drive_chain experiment file (inertias[i], elements[k]).
@@ -254,12 +247,7 @@ void DriveChain::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eig
 std::string DriveChain::name() const { return "drive chain '" + s_.name + "'"; }
 
 sim::SimulateOptions DriveChain::simulateOptions() const {
-  sim::SimulateOptions o;
-  o.t_end = s_.duration;
-  o.output_rate = s_.log_rate;
-  o.solver = s_.solver;
-  if (o.solver.max_step == 0.0) o.solver.max_step = 1.0 / s_.log_rate;
-  return o;
+  return sim::SimulateOptions::atRate(s_.duration, s_.log_rate, s_.solver);
 }
 
 std::vector<double> DriveChain::timeEvents(double t_end) const {

@@ -8,16 +8,7 @@
 
 namespace jointsim::systems {
 
-sim::CvodeOptions JointRigSetup::defaultSolver() {
-  sim::CvodeOptions o;
-  o.method = sim::Method::BDF;
-  o.rtol = 1e-8;
-  o.atol = 1e-10;
-  // BDF orders 3–5 are not A-stable: lightly damped kHz drive modes (strain-wave gear, stiff springs)
-  // then force steps of a few µs. BDF2 is A-stable and damps unresolved modes (docs/design.md).
-  o.max_order = 2;
-  return o;
-}
+sim::CvodeOptions JointRigSetup::defaultSolver() { return sim::stiffDriveSolver(1e-8, 1e-10); }
 
 void JointRigSetup::validate() const {
   // Keys as in a joint_rig experiment file.
@@ -101,12 +92,7 @@ std::string JointRig::name() const { return "joint rig '" + s_.name + "'"; }
 std::vector<double> JointRig::timeEvents(double t_end) const { return s_.profile.breakpoints(t_end); }
 
 sim::SimulateOptions JointRig::simulateOptions() const {
-  sim::SimulateOptions o;
-  o.t_end = s_.duration;
-  o.output_rate = s_.log_rate;
-  o.solver = s_.solver;
-  if (o.solver.max_step == 0.0) o.solver.max_step = 1.0 / s_.log_rate;
-  return o;
+  return sim::SimulateOptions::atRate(s_.duration, s_.log_rate, s_.solver);
 }
 
 Eigen::VectorXd JointRig::initialState() const {

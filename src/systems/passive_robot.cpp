@@ -56,10 +56,8 @@ PassiveRobot::PassiveRobot(Model model, PassiveRobotParams params)
 std::string PassiveRobot::name() const { return "multibody (" + model_.name + ")"; }
 
 sim::SimulateOptions PassiveRobot::simulateOptions() const {
-  sim::SimulateOptions o;
-  o.t_end = p_.duration;
-  o.output_rate = p_.log_rate;
-  o.solver = p_.solver;
+  sim::SimulateOptions o = sim::SimulateOptions::atRate(p_.duration, p_.log_rate, p_.solver);
+  o.solver.max_step = p_.solver.max_step;  // smooth dynamics: no step limit unless asked for
   o.stop_at_end = false;
   return o;
 }

@@ -64,12 +64,7 @@ RobotR3Axis::RobotR3Axis(RobotR3AxisSetup setup)
 std::string RobotR3Axis::name() const { return "RobotR3 axis '" + s_.name + "'"; }
 
 sim::SimulateOptions RobotR3Axis::simulateOptions() const {
-  sim::SimulateOptions o;
-  o.t_end = endTime();
-  o.output_interval = s_.log_interval;
-  o.solver = s_.solver;
-  if (o.solver.max_step == 0.0) o.solver.max_step = s_.log_interval;  // no step jumps over a logged sample
-  return o;
+  return sim::SimulateOptions::everyInterval(endTime(), s_.log_interval, s_.solver);
 }
 
 std::vector<double> RobotR3Axis::timeEvents(double) const { return path_.breakpoints(); }

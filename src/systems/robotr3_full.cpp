@@ -101,12 +101,7 @@ RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
 std::string RobotR3Full::name() const { return "RobotR3 '" + s_.name + "'"; }
 
 sim::SimulateOptions RobotR3Full::simulateOptions() const {
-  sim::SimulateOptions o;
-  o.t_end = endTime();
-  o.output_interval = s_.log_interval;
-  o.solver = s_.solver;
-  if (o.solver.max_step == 0.0) o.solver.max_step = s_.log_interval;  // no step jumps over a logged sample
-  return o;
+  return sim::SimulateOptions::everyInterval(endTime(), s_.log_interval, s_.solver);
 }
 
 std::vector<double> RobotR3Full::timeEvents(double) const { return path_.breakpoints(); }

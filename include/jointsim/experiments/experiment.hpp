@@ -17,6 +17,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -43,8 +44,8 @@ class Experiment {
   virtual sim::Plant& plant() = 0;
   /// End time, output grid and solver settings of the run.
   virtual sim::SimulateOptions simulateOptions() const = 0;
-  /// Resolved parameters, written as "parameters" in summary.json, after the run (`result` holds its
-  /// statistics, e.g. the number of events).
+  /// Resolved parameters, written as "parameters" in summary.json after "config_file" and before "config" (the
+  /// document), after the run (`result` holds its statistics, e.g. the number of events).
   virtual void describe(nlohmann::ordered_json& parameters, const sim::SimulationResult& result) const = 0;
   /// Sees every output row during the run (e.g. to collect a maximum or extra tables).
   virtual void observe(const Eigen::VectorXd& /*row*/) {}
@@ -66,6 +67,19 @@ class Experiment {
   std::string name_, type_, file_;
   std::shared_ptr<nlohmann::ordered_json> config_;
   std::vector<io::InputFile> inputs_;
+};
+
+/// An Experiment around one plant of type P that knows its own run settings (P::simulateOptions()).
+template <class P>
+class PlantExperiment : public Experiment {
+ public:
+  template <class... Args>
+  explicit PlantExperiment(Args&&... args) : plant_(std::forward<Args>(args)...) {}
+  sim::Plant& plant() override { return plant_; }
+  sim::SimulateOptions simulateOptions() const override { return plant_.simulateOptions(); }
+
+ protected:
+  P plant_;
 };
 
 struct RunOptions {

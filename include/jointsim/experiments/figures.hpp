@@ -66,13 +66,17 @@ struct Series {
 
 enum class Key { automatic, top_left, top_right, bottom_right, outside, none };
 
-struct Panel {
+/// Titles, axes and legend of a panel (shared with the renderer's own panel type).
+struct PanelLayout {
   std::string title, xlabel, ylabel, y2label;
-  std::vector<Series> series;
   bool time_axis = true;  ///< x is time: no padding at the ends
   bool auto_y2 = false;   ///< series much smaller than the largest go to a right axis of the same unit
   Key key = Key::automatic;
   double y2_step = 0;     ///< right-axis tic step (0: about five tics over the left axis' span)
+};
+
+struct Panel : PanelLayout {
+  std::vector<Series> series;
   double y_step = 0;      ///< left-axis tic step (0: automatic)
   double y_min = std::numeric_limits<double>::quiet_NaN();  ///< fixed left-axis range when both are set
   double y_max = std::numeric_limits<double>::quiet_NaN();

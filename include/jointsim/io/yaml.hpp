@@ -71,6 +71,16 @@ class YamlValue {
   /// "positive.alpha0" or "tau_pos[2]" is looked up here (failing that, its last components), so the message
   /// names the file, the line and the full key path. An error that already names a file is re-thrown as is.
   [[noreturn]] void relocate(const InputError& error) const;
+  /// Runs `check` (e.g. the validate() of a struct read from this value) and re-throws an InputError it throws
+  /// at its key below this value (relocate).
+  template <class Check>
+  void validate(Check&& check) const {
+    try {
+      check();
+    } catch (const InputError& e) {
+      relocate(e);
+    }
+  }
 
   struct Impl;  ///< the yaml-cpp node and its location (src/io/yaml_node.hpp)
   explicit YamlValue(std::shared_ptr<const Impl> impl);

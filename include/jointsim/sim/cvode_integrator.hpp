@@ -80,6 +80,11 @@ struct CvodeOptions {
   std::string component;
 };
 
+/// BDF capped at order 2 with the given tolerances: the default for drive trains. BDF orders 3–5 are not
+/// A-stable: lightly damped kHz drive modes (strain-wave gear, stiff springs, LuGre bristles) then force steps
+/// of a few µs; BDF2 is A-stable and damps modes it does not resolve (docs/design.md).
+CvodeOptions stiffDriveSolver(double rtol, double atol);
+
 /// Solver counters. Counts are cumulative over the integrator's lifetime, including every restart
 /// by initialize(); last_order, last_step and current_time refer to the current segment (since the
 /// last initialize()).

@@ -38,6 +38,13 @@ struct SimulateOptions {
   long max_events_per_output = 100000;
   /// Throws InputError for a bad end time, grid or event budget.
   void validate() const;
+
+  /// Outputs at `rate` [Hz] up to `t_end` [s] with `solver`, whose max_step defaults (when 0) to one output
+  /// interval: a stuck shaft (sticking friction) makes the state nearly constant, the step grows without bound,
+  /// and a step whose two ends are both "stuck" could jump over a whole slip phase unseen by the error test.
+  static SimulateOptions atRate(double t_end, double rate, const CvodeOptions& solver);
+  /// Outputs every `interval` [s] up to `t_end` [s]; max_step defaults to the interval likewise.
+  static SimulateOptions everyInterval(double t_end, double interval, const CvodeOptions& solver);
 };
 
 struct SimulationResult {

@@ -136,11 +136,7 @@ ClampingExperimentSetup readClampingSetup(const YamlValue& root, const std::stri
     }
     if (!seen.insert(a.joint).second) jn.fail("joint '" + a.joint + "' already has an axis");
     readAxis(n, a);
-    try {
-      a.validate();
-    } catch (const InputError& e) {
-      n.relocate(e);
-    }
+    n.validate([&] { a.validate(); });
     s.axes.push_back(a);
   }
   if (static_cast<int>(s.axes.size()) != s.arm.nq)
@@ -204,44 +200,38 @@ ClampingExperimentSetup readClampingSetup(const YamlValue& root, const std::stri
   s.log_interval = 1.0 / log_rate;
   out.curves = root["curves"].defined() ? root["curves"].asBool() : true;
   s.solver = readSolver(root["solver"], s.solver);
-  try {
-    s.validate();
-  } catch (const InputError& e) {
-    root.relocate(e);
-  }
+  root.validate([&] { s.validate(); });
   return out;
 }
 
 
 namespace {
 
-class ClampingExperiment : public Experiment {
+class ClampingExperiment : public PlantExperiment<systems::ClampedRobot> {
  public:
   explicit ClampingExperiment(ClampingExperimentSetup s)
-      : robot_file_(std::move(s.robot_file)), curves_(s.curves), robot_(std::move(s.setup)) {}
-  sim::Plant& plant() override { return robot_; }
-  sim::SimulateOptions simulateOptions() const override { return robot_.simulateOptions(); }
+      : PlantExperiment(std::move(s.setup)), robot_file_(std::move(s.robot_file)), curves_(s.curves) {}
   void observe(const Eigen::VectorXd& row) override {
     if (!curves_) return;
     // Time, then motor angle and torque of every axis.
     curve_rows_.push_back(row[0]);
-    for (int k = 0; k < robot_.axisCount(); ++k) {
-      curve_rows_.push_back(row[1 + robot_.motorAngleSignal(k)]);
-      curve_rows_.push_back(row[1 + robot_.motorTorqueSignal(k)]);
+    for (int k = 0; k < plant_.axisCount(); ++k) {
+      curve_rows_.push_back(row[1 + plant_.motorAngleSignal(k)]);
+      curve_rows_.push_back(row[1 + plant_.motorTorqueSignal(k)]);
     }
   }
   std::vector<ExtraTable> extraTables() const override {
     // One identify-ready clamping curve per axis: time[s], motor_angle[rad], motor_torque[N·m].
     std::vector<ExtraTable> out;
     if (!curves_) return out;
-    const int n = robot_.axisCount();
+    const int n = plant_.axisCount();
     const auto stride = static_cast<Eigen::Index>(1 + 2 * n);
     const Eigen::Index rows = static_cast<Eigen::Index>(curve_rows_.size()) / stride;
     const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> all(
         curve_rows_.data(), rows, stride);
     for (int k = 0; k < n; ++k) {
       ExtraTable t;
-      t.suffix = robot_.setup().axes[static_cast<size_t>(k)].joint + "_curve";
+      t.suffix = plant_.setup().axes[static_cast<size_t>(k)].joint + "_curve";
       t.table.columns = {"time[s]", "motor_angle[rad]", "motor_torque[N·m]"};
       t.table.values.resize(rows, 3);
       t.table.values.col(0) = all.col(0);
@@ -252,12 +242,11 @@ class ClampingExperiment : public Experiment {
     return out;
   }
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult& r) const override {
-    const auto& s = robot_.setup();
-    w["config_file"] = file();
+    const auto& s = plant_.setup();
     w["robot_file"] = robot_file_;
     w["robot"] = s.arm.name;
-    w["state_size"] = robot_.stateSize();
-    w["dof_with_orthogonal_compliance"] = robot_.model().nq;
+    w["state_size"] = plant_.stateSize();
+    w["dof_with_orthogonal_compliance"] = plant_.model().nq;
     w["events"] = r.events;
     w["duration"] = s.duration;
     w["log_interval"] = s.log_interval;
@@ -267,7 +256,6 @@ class ClampingExperiment : public Experiment {
  private:
   std::string robot_file_;
   bool curves_ = true;
-  systems::ClampedRobot robot_;
   std::vector<double> curve_rows_;
 };
 

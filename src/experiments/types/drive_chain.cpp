@@ -105,32 +105,23 @@ systems::DriveChainSetup readDriveChainSetup(const YamlValue& root, const std::s
   }
   readDurationAndLogRate(root, s.duration, s.log_rate);
   s.solver = readSolver(root["solver"], s.solver);
-  try {
-    s.validate();
-  } catch (const InputError& e) {
-    root.relocate(e);
-  }
+  root.validate([&] { s.validate(); });
   return s;
 }
 
 namespace {
 
-class DriveChainExperiment : public Experiment {
+class DriveChainExperiment : public PlantExperiment<systems::DriveChain> {
  public:
-  explicit DriveChainExperiment(systems::DriveChainSetup s) : chain_(std::move(s)) {}
-  sim::Plant& plant() override { return chain_; }
-  sim::SimulateOptions simulateOptions() const override { return chain_.simulateOptions(); }
+  using PlantExperiment::PlantExperiment;
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult& r) const override {
-    const auto& s = chain_.setup();
-    w["config_file"] = file();
+    const auto& s = plant_.setup();
     w["events"] = r.events;
     w["duration"] = s.duration;
     w["log_rate"] = s.log_rate;
     solverJson(w["solver"], s.solver);
   }
 
- private:
-  systems::DriveChain chain_;
 };
 
 std::vector<Figure> driveChainFigures(const RunData& run) {

@@ -82,24 +82,17 @@ systems::JointRigSetup readJointRigSetup(const YamlValue& root, const std::strin
   }
   readDurationAndLogRate(root, s.duration, s.log_rate);
   s.solver = readSolver(root["solver"], s.solver);
-  try {
-    s.validate();
-  } catch (const InputError& e) {
-    root.relocate(e);
-  }
+  root.validate([&] { s.validate(); });
   return s;
 }
 
 namespace {
 
-class JointRigExperiment : public Experiment {
+class JointRigExperiment : public PlantExperiment<systems::JointRig> {
  public:
-  explicit JointRigExperiment(systems::JointRigSetup s) : rig_(std::move(s)) {}
-  sim::Plant& plant() override { return rig_; }
-  sim::SimulateOptions simulateOptions() const override { return rig_.simulateOptions(); }
+  using PlantExperiment::PlantExperiment;
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult&) const override {
-    const systems::JointRigSetup& s = rig_.setup();
-    w["config_file"] = file();
+    const systems::JointRigSetup& s = plant_.setup();
     if (s.motor) {
       w["motor"] = {{"R", s.motor->R},   {"L", s.motor->L},     {"kt", s.motor->kt},
                     {"ke", s.motor->ke}, {"J_M", s.motor->J_M}, {"V_supply", s.motor->V_supply}};
@@ -124,14 +117,12 @@ class JointRigExperiment : public Experiment {
       in["output"] = s.pi.voltage_output ? "voltage" : "torque";
       in["measure"] = s.pi.measure == Side::Motor ? "motor" : "output";
     }
-    w["state_size"] = rig_.stateSize();
+    w["state_size"] = plant_.stateSize();
     w["duration"] = s.duration;
     w["log_rate"] = s.log_rate;
     solverJson(w["solver"], s.solver);
   }
 
- private:
-  systems::JointRig rig_;
 };
 
 /// Mean friction torque and velocity over the settled end (last 30 %) of each constant, non-zero plateau of

@@ -18,16 +18,13 @@ Eigen::VectorXd readVector(const YamlValue& v, const std::string& what) {
   return Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
 }
 
-class PassiveRobotExperiment : public Experiment {
+class PassiveRobotExperiment : public PlantExperiment<systems::PassiveRobot> {
  public:
   explicit PassiveRobotExperiment(PassiveRobotSetup s)
-      : robot_file_(std::move(s.robot_file)), plant_(std::move(s.model), std::move(s.params)) {}
-  sim::Plant& plant() override { return plant_; }
-  sim::SimulateOptions simulateOptions() const override { return plant_.simulateOptions(); }
+      : PlantExperiment(std::move(s.model), std::move(s.params)), robot_file_(std::move(s.robot_file)) {}
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult&) const override {
     const auto& model = plant_.model();
     const auto& p = plant_.params();
-    w["config_file"] = file();
     w["robot_file"] = robot_file_;
     w["robot"] = model.name;
     w["joints"] = model.joint_names;
@@ -42,7 +39,6 @@ class PassiveRobotExperiment : public Experiment {
 
  private:
   std::string robot_file_;
-  systems::PassiveRobot plant_;
 };
 
 std::vector<Figure> passiveRobotFigures(const RunData& run) {
@@ -117,11 +113,7 @@ PassiveRobotSetup readPassiveRobotSetup(const YamlValue& root, const std::string
     root["joint_damping"].failExpected(std::to_string(model.nq) + " damping coefficients >= 0 N·m·s/rad");
   readDurationAndLogRate(root, p.duration, p.log_rate);
   p.solver = readSolver(root["solver"], p.solver);
-  try {
-    p.validate(model);
-  } catch (const InputError& e) {
-    root.relocate(e);
-  }
+  root.validate([&] { p.validate(model); });
   return s;
 }
 

@@ -71,30 +71,20 @@ systems::RobotR3AxisSetup readRobotR3AxisSetup(const YamlValue& root, const std:
   s.log_interval = num(root, "log_interval", s.log_interval, "an output interval in s");
   s.sa0 = num(root, "initial_friction_torque", s.sa0, "a torque in N·m");
   s.solver = readSolver(root["solver"], s.solver);
-  try {
-    s.validate();
-  } catch (const InputError& e) {
-    root.relocate(e);
-  }
+  root.validate([&] { s.validate(); });
   return s;
 }
 
 namespace {
 
-class RobotR3AxisExperiment : public Experiment {
+class RobotR3AxisExperiment : public PlantExperiment<systems::RobotR3Axis> {
  public:
-  explicit RobotR3AxisExperiment(systems::RobotR3AxisSetup s) : axis_(std::move(s)) {}
-  sim::Plant& plant() override { return axis_; }
-  sim::SimulateOptions simulateOptions() const override { return axis_.simulateOptions(); }
+  using PlantExperiment::PlantExperiment;
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult& r) const override {
-    w["config_file"] = file();
-    w["end_time"] = axis_.endTime();
+    w["end_time"] = plant_.endTime();
     w["events"] = r.events;
-    solverJson(w["solver"], axis_.setup().solver);
+    solverJson(w["solver"], plant_.setup().solver);
   }
-
- private:
-  systems::RobotR3Axis axis_;
 };
 
 std::vector<Figure> robotR3AxisFigures(const RunData& run) {

@@ -46,31 +46,21 @@ systems::RobotR3FullSetup readRobotR3FullSetup(const YamlValue& root, const std:
   s.stop_time = root["stop_time"].asDouble(s.stop_time, "a time in s");
   s.log_interval = root["log_interval"].asDouble(s.log_interval, "an output interval in s");
   s.solver = readSolver(root["solver"], s.solver);
-  try {
-    s.validate();
-  } catch (const InputError& e) {
-    root.relocate(e);
-  }
+  root.validate([&] { s.validate(); });
   return s;
 }
 
 namespace {
 
-class RobotR3FullExperiment : public Experiment {
+class RobotR3FullExperiment : public PlantExperiment<systems::RobotR3Full> {
  public:
-  explicit RobotR3FullExperiment(systems::RobotR3FullSetup s) : robot_(std::move(s)) {}
-  sim::Plant& plant() override { return robot_; }
-  sim::SimulateOptions simulateOptions() const override { return robot_.simulateOptions(); }
+  using PlantExperiment::PlantExperiment;
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult& r) const override {
-    w["config_file"] = file();
-    w["end_time"] = robot_.endTime();
+    w["end_time"] = plant_.endTime();
     w["events"] = r.events;
-    w["state_size"] = robot_.stateSize();
-    solverJson(w["solver"], robot_.setup().solver);
+    w["state_size"] = plant_.stateSize();
+    solverJson(w["solver"], plant_.setup().solver);
   }
-
- private:
-  systems::RobotR3Full robot_;
 };
 
 std::vector<Figure> robotR3FullFigures(const RunData& run) {

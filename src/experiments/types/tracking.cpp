@@ -53,11 +53,7 @@ TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name, 
   if (!(s.duration > 0)) duration_node.failExpected("a time > 0 s");
   s.log_rate = root["log_rate"].asDouble(500.0, "a rate in Hz");
   if (!(s.log_rate > 0)) root["log_rate"].failExpected("a rate > 0 Hz");
-  s.solver.method = sim::Method::BDF;
-  s.solver.max_order = 2;  // A-stable: lightly damped kHz gear modes (docs/design.md)
-  s.solver.rtol = 1e-6;
-  s.solver.atol = 1e-9;
-  s.solver = readSolver(root["solver"], s.solver);
+  s.solver = readSolver(root["solver"], sim::stiffDriveSolver(1e-6, 1e-9));
   if (s.solver.max_step == 0.0) s.solver.max_step = 1.0 / s.log_rate;
 
   sys.setTrajectory(s.trajectory);
@@ -80,11 +76,7 @@ class TrackingExperiment : public Experiment {
   explicit TrackingExperiment(TrackingSetup s) : s_(std::move(s)), max_err_(Eigen::VectorXd::Zero(s_.robot->dof())) {}
   sim::Plant& plant() override { return *s_.robot; }
   sim::SimulateOptions simulateOptions() const override {
-    sim::SimulateOptions o;
-    o.t_end = s_.duration;
-    o.output_rate = s_.log_rate;
-    o.solver = s_.solver;
-    return o;
+    return sim::SimulateOptions::atRate(s_.duration, s_.log_rate, s_.solver);
   }
   void observe(const Eigen::VectorXd& row) override {
     // Per joint the row holds [q_set, q, ...] at columns 1 + 11 k (after the time).
@@ -93,7 +85,6 @@ class TrackingExperiment : public Experiment {
   }
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult&) const override {
     const systems::RobotSystem& sys = *s_.robot;
-    w["config_file"] = file();
     w["robot_file"] = s_.robot_file;
     w["robot"] = sys.model().name;
     w["joints"] = sys.model().joint_names;
