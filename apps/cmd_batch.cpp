@@ -18,7 +18,8 @@ void addBatchCommand(CLI::App& app) {
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
-      "batch", "Run a sweep (grid, explicit runs, fault scenarios) in parallel; writes DIR/<run>/ and DIR/manifest.csv");
+      "batch",
+      "Run a sweep (grid, explicit runs, fault scenarios) in parallel; writes DIR/<run>/ and DIR/manifest.csv");
   cmd->add_option("sweep", opt->sweep, "Sweep description (.yaml), see docs/batch.md")->required();
   cmd->add_option("-j,--jobs", opt->jobs, "Runs executed at the same time (default 1)");
   cmd->add_option("--shard", opt->shard, "Run only every N-th run starting at I (I/N, 0 <= I < N), for job arrays");
@@ -46,7 +47,8 @@ void addBatchCommand(CLI::App& app) {
         opt->collect ? experiments::collectBatch(sweep, o) : experiments::runBatch(sweep, o);
     std::printf("%s: %zu runs%s: %d ok, %d failed or in error, %d skipped (already ok)%s\n  manifest: %s\n",
                 sweep.name.c_str(), r.records.size(),
-                o.shard_count > 1 ? (" (shard " + opt->shard + " of " + std::to_string(sweep.runs.size()) + ")").c_str() : "",
+                o.shard_count > 1 ? (" (shard " + opt->shard + " of " + std::to_string(sweep.runs.size()) + ")").c_str()
+                                  : "",
                 r.ok - r.skipped, r.failed, r.skipped, opt->collect ? " (collected)" : "", r.manifest_path.c_str());
     if (!opt->collect) std::printf("  wall time %.3g s with %d job(s)\n", r.wall_time_s, o.jobs);
     if (r.failed > 0) throw Error(std::to_string(r.failed) + " run(s) failed; see the manifest and <run>/run.log");

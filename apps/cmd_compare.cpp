@@ -20,11 +20,9 @@ void addCompareCommand(CLI::App& app) {
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
-      "compare",
-      "Compare two CSV logs on time: exit 0 when every column is within tolerance, 1 when one is not, 2 for "
-      "unreadable or incompatible files");
-  cmd->add_option("a", opt->a, "Reference log (CSV; time = the column named time, else the first column)")
-      ->required();
+      "compare", "Compare two CSV logs on time: exit 0 when every column is within tolerance, 1 when one is not, 2 for "
+                 "unreadable or incompatible files");
+  cmd->add_option("a", opt->a, "Reference log (CSV; time = the column named time, else the first column)")->required();
   cmd->add_option("b", opt->b, "Log to check (CSV), interpolated linearly onto A's times where needed")->required();
   cmd->add_option("--rtol", opt->compare.rtol,
                   "Relative tolerance, times the column's peak magnitude (default 1e-6): |a-b| <= atol + rtol*peak");

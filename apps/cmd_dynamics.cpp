@@ -46,8 +46,7 @@ struct DynamicsOptions {
 void addDynamicsCommand(CLI::App& app) {
   auto opt = std::make_shared<DynamicsOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "dynamics",
-      "Print RNEA torques, M(q), g(q), forward dynamics (with --tau) and a frame pose as one JSON object");
+      "dynamics", "Print RNEA torques, M(q), g(q), forward dynamics (with --tau) and a frame pose as one JSON object");
   cmd->add_option("--robot", opt->robot, "Robot description (.urdf, .yaml)")->required();
   cmd->add_option("--q", opt->q, "Joint positions q1,...,qn [rad or m], base to tip")->required();
   cmd->add_option("--qd", opt->qd, "Joint velocities [rad/s or m/s] (default zeros)");
@@ -63,7 +62,8 @@ void addDynamicsCommand(CLI::App& app) {
     if (!opt->gravity.empty()) model.gravity = parseList(opt->gravity, "--gravity", 3, "gx,gy,gz in m/s²");
     const Eigen::VectorXd q = parseList(opt->q, "--q", n, per_joint);
     const Eigen::VectorXd qd = opt->qd.empty() ? Eigen::VectorXd::Zero(n) : parseList(opt->qd, "--qd", n, per_joint);
-    const Eigen::VectorXd qdd = opt->qdd.empty() ? Eigen::VectorXd::Zero(n) : parseList(opt->qdd, "--qdd", n, per_joint);
+    const Eigen::VectorXd qdd =
+        opt->qdd.empty() ? Eigen::VectorXd::Zero(n) : parseList(opt->qdd, "--qdd", n, per_joint);
     const int frame = model.frameIndex(opt->frame.empty() ? model.tip_frame : opt->frame);
     Data data(model);
 

@@ -33,10 +33,9 @@ void addIdentifyClampingCommand(CLI::App& identify) {
     double rotor_inertia = 0.01, damping = 0.5;
   };
   auto opt = std::make_shared<Options>();
-  CLI::App* cmd = identify.add_subcommand(
-      "clamping",
-      "Identify stiffness, backlash and friction (motor side) from a clamping log "
-      "([KR300Thesis, Algorithm II] + Ceres)");
+  CLI::App* cmd =
+      identify.add_subcommand("clamping", "Identify stiffness, backlash and friction (motor side) from a clamping log "
+                                          "([KR300Thesis, Algorithm II] + Ceres)");
   cmd->add_option("data", opt->data, "CSV with columns time[s], motor_angle[rad], motor_torque[N*m]")->required();
   cmd->add_option("--gear-ratio", opt->gear_ratio,
                   "The torque column is arm side (motor torque x N, as KUKA logs): divide it by N (default 1)");

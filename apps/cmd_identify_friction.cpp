@@ -66,8 +66,9 @@ void addIdentifyFrictionCommand(CLI::App& identify) {
     fo.delta = opt->delta;
     fo.fit_delta = opt->fit_delta;
     fo.min_points = opt->min_points;
-    fo.loss = opt->loss == "huber" ? identify::FitLoss::Huber
-                                   : opt->loss == "cauchy" ? identify::FitLoss::Cauchy : identify::FitLoss::None;
+    fo.loss = opt->loss == "huber"    ? identify::FitLoss::Huber
+              : opt->loss == "cauchy" ? identify::FitLoss::Cauchy
+                                      : identify::FitLoss::None;
     fo.loss_scale = opt->loss_scale;
     identify::FrictionYamlOptions yo;
     yo.source = opt->map;

@@ -11,8 +11,9 @@
 int main(int argc, char** argv) {
   CLI::App app{"jointsim — high-fidelity robot joint and multibody simulator"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("jointsim ") + jointsim::version() +
-                                           (*jointsim::gitCommit() ? std::string(" (") + jointsim::gitCommit() + ")" : std::string()));
+  app.set_version_flag("--version",
+                       std::string("jointsim ") + jointsim::version() +
+                           (*jointsim::gitCommit() ? std::string(" (") + jointsim::gitCommit() + ")" : std::string()));
   jointsim::cli::addDynamicsCommand(app);
   jointsim::cli::addRunCommand(app);
   jointsim::cli::addIdentifyCommand(app);

@@ -4,10 +4,10 @@
 
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/strain_wave_gear.hpp"
-#include "jointsim/systems/joint_rig.hpp"
-#include "jointsim/systems/passive_robot.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
+#include "jointsim/systems/joint_rig.hpp"
+#include "jointsim/systems/passive_robot.hpp"
 
 using namespace jointsim;
 
@@ -22,9 +22,8 @@ static void UR5_Fall_1s_Adams(benchmark::State& state) {
   systems::PassiveRobot plant(model, p);
   long steps = 0;
   for (auto _ : state) {
-    const auto r = sim::simulate(plant, plant.simulateOptions(), [](const Eigen::VectorXd& row) {
-      benchmark::DoNotOptimize(row.data());
-    });
+    const auto r = sim::simulate(plant, plant.simulateOptions(),
+                                 [](const Eigen::VectorXd& row) { benchmark::DoNotOptimize(row.data()); });
     steps = r.stats.steps;
   }
   state.counters["real_time_factor"] =
@@ -57,7 +56,8 @@ static void UR5_SwgJointRig_10s(benchmark::State& state) {
   systems::JointRig rig(s);
   long steps = 0;
   for (auto _ : state) {
-    const auto r = sim::simulate(rig, rig.simulateOptions(), [](const Eigen::VectorXd& row) { benchmark::DoNotOptimize(row.data()); });
+    const auto r = sim::simulate(rig, rig.simulateOptions(),
+                                 [](const Eigen::VectorXd& row) { benchmark::DoNotOptimize(row.data()); });
     steps = r.stats.steps;
   }
   state.counters["real_time_factor"] =
@@ -76,7 +76,8 @@ static void ExperimentFile(benchmark::State& state, const std::string& name) {
   double rtf = 0;
   long steps = 0;
   for (auto _ : state) {
-    const auto r = experiments::runExperimentFile(std::string(JOINTSIM_SOURCE_DIR) + "/config/experiments/" + name + ".yaml", o);
+    const auto r =
+        experiments::runExperimentFile(std::string(JOINTSIM_SOURCE_DIR) + "/config/experiments/" + name + ".yaml", o);
     rtf = r.real_time_factor;
     steps = r.stats.steps;
   }

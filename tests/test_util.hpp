@@ -32,8 +32,8 @@ std::vector<Eigen::VectorXd> simulateRows(P& plant) {
 /// |a − b| ≤ tol·max(1, |b|) entrywise; on failure names the worst entry, both values and the difference.
 inline ::testing::AssertionResult MatricesNear(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double tol) {
   if (a.rows() != b.rows() || a.cols() != b.cols()) {
-    return ::testing::AssertionFailure() << "size mismatch: " << a.rows() << "x" << a.cols() << " vs "
-                                         << b.rows() << "x" << b.cols();
+    return ::testing::AssertionFailure() << "size mismatch: " << a.rows() << "x" << a.cols() << " vs " << b.rows()
+                                         << "x" << b.cols();
   }
   double worst = -1.0;
   Eigen::Index wr = 0, wc = 0;

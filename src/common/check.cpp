@@ -7,7 +7,9 @@
 
 namespace jointsim::check {
 namespace {
-std::string withUnit(const std::string& rule, const std::string& unit) { return unit.empty() ? rule : rule + " " + unit; }
+std::string withUnit(const std::string& rule, const std::string& unit) {
+  return unit.empty() ? rule : rule + " " + unit;
+}
 }  // namespace
 
 void fail(const std::string& component, const std::string& key, const std::string& rule, double value) {
@@ -30,7 +32,8 @@ void finite(const std::string& component, const std::string& key, double value, 
   if (!std::isfinite(value)) fail(component, key, withUnit("a finite value", unit), value);
 }
 
-void atLeast(const std::string& component, const std::string& key, double value, double minimum, const std::string& unit) {
+void atLeast(const std::string& component, const std::string& key, double value, double minimum,
+             const std::string& unit) {
   if (!(value >= minimum) || !std::isfinite(value))
     fail(component, key, withUnit("a finite value >= " + formatNumber(minimum), unit), value);
 }

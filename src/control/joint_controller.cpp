@@ -51,7 +51,8 @@ ControllerOutputs JointController::evaluate(const ControllerInputs& in, const do
       const double e_cur = out.i_ref - in.i_fb;
       out.u = p_.P_cur * e_cur + p_.I_cur * x[1];
       xdot[0] = e_vel;
-      const bool saturated = in.v_limit > 0.0 && ((out.u > in.v_limit && e_cur > 0) || (out.u < -in.v_limit && e_cur < 0));
+      const bool saturated =
+          in.v_limit > 0.0 && ((out.u > in.v_limit && e_cur > 0) || (out.u < -in.v_limit && e_cur < 0));
       xdot[1] = saturated ? 0.0 : e_cur;
       break;
     }

@@ -14,8 +14,8 @@ namespace {
 Eigen::VectorXd broadcast(const Eigen::VectorXd& v, Eigen::Index n, const char* name) {
   if (v.size() == n) return v;
   if (v.size() == 1) return Eigen::VectorXd::Constant(n, v[0]);
-  throw InputError(std::string("kinematic_ptp: ") + name + " has " + std::to_string(v.size()) +
-                   " entries, expected " + std::to_string(n) + " (or 1)");
+  throw InputError(std::string("kinematic_ptp: ") + name + " has " + std::to_string(v.size()) + " entries, expected " +
+                   std::to_string(n) + " (or 1)");
 }
 
 }  // namespace
@@ -38,8 +38,7 @@ KinematicPtpTrajectory::KinematicPtpTrajectory(const Eigen::VectorXd& q_begin, c
     if (!(qdd_max_[i] > 0.0 && std::isfinite(qdd_max_[i])))
       throw InputError("kinematic_ptp: qdd_max of axis " + std::to_string(i + 1) + " must be > 0 rad/s^2");
   }
-  if (!(start_time >= 0.0 && std::isfinite(start_time)))
-    throw InputError("kinematic_ptp: start_time must be >= 0 s");
+  if (!(start_time >= 0.0 && std::isfinite(start_time))) throw InputError("kinematic_ptp: start_time must be >= 0 s");
 
   dq_ = qe_ - qb_;  // p_deltaq = p_q_end - p_q_begin
   // aux1[i] = p_deltaq[i]/p_qd_max[i]; aux2[i] = p_deltaq[i]/p_qdd_max[i]; max(abs(.))
@@ -126,7 +125,8 @@ void KinematicPtpTrajectory::evaluate(double t, Eigen::Ref<Eigen::VectorXd> q, E
 
 bool KinematicPtpTrajectory::moving(int i, double t) const {
   const auto k = static_cast<Eigen::Index>(i);
-  if (k < 0 || k >= qb_.size()) throw InputError("kinematic_ptp: moving(): axis " + std::to_string(i) + " out of range");
+  if (k < 0 || k >= qb_.size())
+    throw InputError("kinematic_ptp: moving(): axis " + std::to_string(i) + " out of range");
   return std::abs(qb_[k] - qe_[k]) > kEps && t < end_time_;
 }
 
@@ -142,8 +142,8 @@ std::vector<double> KinematicPtpTrajectory::breakpoints() const {
 std::string KinematicPtpTrajectory::describe() const {
   std::ostringstream os;
   os << "kinematic_ptp(" << dof() << " joints, "
-     << (degenerate_ ? "no motion" : (no_w_phase_ ? "triangular" : "trapezoidal")) << ", start " << t0_
-     << " s, end " << end_time_ << " s)";
+     << (degenerate_ ? "no motion" : (no_w_phase_ ? "triangular" : "trapezoidal")) << ", start " << t0_ << " s, end "
+     << end_time_ << " s)";
   return os.str();
 }
 

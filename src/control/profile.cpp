@@ -98,7 +98,8 @@ Profile Profile::csv(const std::string& path, const std::string& column) {
   int col = 1;
   if (!column.empty()) {
     col = table.find(column);
-    if (col < 0) throw InputError(path + ":1: no column named '" + column + "' (columns: " + join(table.header, ", ") + ")");
+    if (col < 0)
+      throw InputError(path + ":1: no column named '" + column + "' (columns: " + join(table.header, ", ") + ")");
   }
   std::vector<double> t, v;
   for (Eigen::Index r = 0; r < table.rows(); ++r) {
@@ -139,7 +140,8 @@ double Profile::value(double t) const {
         return values_[static_cast<size_t>(it - times_.begin()) - 1];
       }
       return interpolateLinear(
-          times_.size(), [this](size_t i) { return times_[i]; }, [this](size_t i) { return values_[i]; }, t, Ends::Hold);
+          times_.size(), [this](size_t i) { return times_[i]; }, [this](size_t i) { return values_[i]; }, t,
+          Ends::Hold);
     }
   }
   return 0.0;

@@ -62,13 +62,12 @@ void checkLimits(const JointTrajectory& trajectory, const std::vector<std::strin
     for (int i = 0; i < n; ++i) {
       const auto& L = limits[static_cast<size_t>(i)];
       if (!(q[i] >= L.lower - kTol && q[i] <= L.upper + kTol))
-        throw InputError("trajectory leaves the limits of joint " + joint_names[static_cast<size_t>(i)] +
-                         " at t = " + num(t) + " s: q = " + num(q[i]) + " rad outside [" + num(L.lower) + ", " +
-                         num(L.upper) + "]");
+        throw InputError("trajectory leaves the limits of joint " + joint_names[static_cast<size_t>(i)] + " at t = " +
+                         num(t) + " s: q = " + num(q[i]) + " rad outside [" + num(L.lower) + ", " + num(L.upper) + "]");
       if (std::isfinite(L.velocity) && !(std::abs(qd[i]) <= L.velocity + kTol))
         throw InputError("trajectory exceeds the velocity limit of joint " + joint_names[static_cast<size_t>(i)] +
-                         " at t = " + num(t) + " s: |qd| = " + num(std::abs(qd[i])) + " rad/s > " +
-                         num(L.velocity) + " rad/s");
+                         " at t = " + num(t) + " s: |qd| = " + num(std::abs(qd[i])) + " rad/s > " + num(L.velocity) +
+                         " rad/s");
     }
   }
 }
@@ -100,8 +99,7 @@ PointToPointTrajectory::PointToPointTrajectory(Eigen::VectorXd start, std::vecto
     g.delta = g.to - g.from;
     const double D = g.delta.cwiseAbs().maxCoeff();
     if (s.duration > 0.0) {
-      if (s.velocity != 0.0)
-        throw InputError(where + "give either velocity (with acceleration) or duration, not both");
+      if (s.velocity != 0.0) throw InputError(where + "give either velocity (with acceleration) or duration, not both");
       const double T = s.duration;
       if (s.acceleration > 0.0 && D > 0.0) {
         const double disc = T * T - 4.0 * D / s.acceleration;
@@ -337,8 +335,7 @@ void SampledTrajectory::evaluate(double t, Eigen::Ref<Eigen::VectorXd> q, Eigen:
 
 std::string SampledTrajectory::describe() const {
   std::ostringstream os;
-  os << "csv(" << source_ << ", " << dof() << " joints, " << t_.size() << " samples, duration " << t_.back()
-     << " s)";
+  os << "csv(" << source_ << ", " << dof() << " joints, " << t_.size() << " samples, duration " << t_.back() << " s)";
   return os.str();
 }
 
@@ -348,8 +345,8 @@ SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, c
   if (!(gap_factor == 0.0 || (gap_factor > 1.0 && std::isfinite(gap_factor))))
     throw InputError(path + ": gap_factor must be > 1 (or 0 to disable the gap check), got " + num(gap_factor));
   if (!columns.empty() && columns.size() != static_cast<size_t>(dof))
-    throw InputError(path + ": " + std::to_string(columns.size()) + " column names given for " +
-                     std::to_string(dof) + " joints");
+    throw InputError(path + ": " + std::to_string(columns.size()) + " column names given for " + std::to_string(dof) +
+                     " joints");
   const io::CsvTable table = io::readCsv(path);
   auto rowError = [&](Eigen::Index r, const std::string& msg) {
     return InputError(path + ":" + std::to_string(table.lines[static_cast<size_t>(r)]) + ": " + msg);
@@ -365,7 +362,8 @@ SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, c
   } else {
     for (const std::string& name : columns) {
       const auto it = std::find(header.begin(), header.end(), name);
-      if (it == header.end()) throw InputError(path + ":1: no column named '" + name + "' (columns: " + join(header, ", ") + ")");
+      if (it == header.end())
+        throw InputError(path + ":1: no column named '" + name + "' (columns: " + join(header, ", ") + ")");
       if (it == header.begin()) throw InputError(path + ":1: column '" + name + "' is the time column");
       cols.push_back(static_cast<size_t>(it - header.begin()));
     }
@@ -382,8 +380,7 @@ SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, c
     rows.push_back(r);
     for (size_t c : cols) values.push_back(table.data(r, static_cast<Eigen::Index>(c)));
   }
-  if (times.size() < 2)
-    throw InputError(path + ": expected at least 2 data rows, got " + std::to_string(times.size()));
+  if (times.size() < 2) throw InputError(path + ": expected at least 2 data rows, got " + std::to_string(times.size()));
 
   if (gap_factor > 0.0) {
     std::vector<double> dt(times.size() - 1);
@@ -394,13 +391,14 @@ SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, c
     const double median = (m % 2 == 1) ? sorted[m / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
     for (size_t k = 0; k < dt.size(); ++k)
       if (dt[k] > gap_factor * median)
-        throw rowError(rows[k + 1], "time step " + num(dt[k]) + " s is more than " + num(gap_factor) +
-                                        "x the median " + num(median) + " s (a gap)");
+        throw rowError(rows[k + 1], "time step " + num(dt[k]) + " s is more than " + num(gap_factor) + "x the median " +
+                                        num(median) + " s (a gap)");
   }
 
   Eigen::MatrixXd y(dof, static_cast<Eigen::Index>(times.size()));
   for (size_t k = 0; k < times.size(); ++k)
-    for (int i = 0; i < dof; ++i) y(i, static_cast<Eigen::Index>(k)) = values[k * static_cast<size_t>(dof) + static_cast<size_t>(i)];
+    for (int i = 0; i < dof; ++i)
+      y(i, static_cast<Eigen::Index>(k)) = values[k * static_cast<size_t>(dof) + static_cast<size_t>(i)];
   return SampledTrajectory(std::move(times), std::move(y), path);
 }
 

@@ -39,7 +39,8 @@ double nonNegative(const YamlValue& node, double fallback, const std::string& wh
 
 std::unique_ptr<JointTrajectory> readPointToPoint(const YamlValue& node, int dof) {
   node.allowKeys({"type", "start", "segments"});
-  const Eigen::VectorXd start = positions(node.required("start", "start joint positions in rad"), dof, "joint positions in rad");
+  const Eigen::VectorXd start =
+      positions(node.required("start", "start joint positions in rad"), dof, "joint positions in rad");
   const YamlValue segs = node.required("segments", "a list of moves {target, velocity, acceleration, dwell}");
   segs.expectSequence("a list of moves {target, velocity, acceleration, dwell}");
   if (segs.size() == 0) segs.failExpected("at least one move");
@@ -53,8 +54,7 @@ std::unique_ptr<JointTrajectory> readPointToPoint(const YamlValue& node, int dof
     g.target = positions(s.required("target", "joint positions in rad"), dof, "joint positions in rad");
     g.dwell = nonNegative(s["dwell"], 0.0, "a dwell time in s");
     if (s.has("duration")) {
-      if (s.has("velocity"))
-        s["velocity"].fail("give either velocity (with acceleration) or duration, not both");
+      if (s.has("velocity")) s["velocity"].fail("give either velocity (with acceleration) or duration, not both");
       g.duration = positive(s["duration"], "a move time in s");
       if (s.has("acceleration")) {
         g.acceleration = positive(s["acceleration"], "a joint acceleration in rad/s^2");
@@ -65,9 +65,10 @@ std::unique_ptr<JointTrajectory> readPointToPoint(const YamlValue& node, int dof
                                  " rad/s^2)");
       }
     } else {
-      g.velocity = positive(s.required("velocity", "max joint speed in rad/s, or give duration"), "a joint speed in rad/s");
-      g.acceleration = positive(s.required("acceleration", "max joint acceleration in rad/s^2"),
-                                "a joint acceleration in rad/s^2");
+      g.velocity =
+          positive(s.required("velocity", "max joint speed in rad/s, or give duration"), "a joint speed in rad/s");
+      g.acceleration =
+          positive(s.required("acceleration", "max joint acceleration in rad/s^2"), "a joint acceleration in rad/s^2");
     }
     from = g.target;
     out.push_back(std::move(g));
@@ -87,8 +88,8 @@ Eigen::MatrixXd coefficients(const YamlValue& node, int dof, long& harmonics) {
       if (row.size() == 0) row.failExpected("at least one coefficient in rad/s");
       harmonics = static_cast<long>(row.size());
     }
-    const auto v = row.asDoubles(static_cast<size_t>(harmonics),
-                                 "a list of " + std::to_string(harmonics) + " coefficients in rad/s (one per harmonic)");
+    const auto v = row.asDoubles(static_cast<size_t>(harmonics), "a list of " + std::to_string(harmonics) +
+                                                                     " coefficients in rad/s (one per harmonic)");
     if (m.size() == 0) m.resize(dof, harmonics);
     for (long k = 0; k < harmonics; ++k) m(static_cast<Eigen::Index>(i), k) = v[static_cast<size_t>(k)];
   }
@@ -110,8 +111,7 @@ std::unique_ptr<JointTrajectory> readFourier(const YamlValue& node, int dof) {
   p.fade_in = nonNegative(node["fade_in"], 1.0, "a fade-in time in s");
   if (node.has("duration")) {
     p.duration = positive(node["duration"], "a duration in s");
-    if (p.duration < p.fade_in)
-      node["duration"].failExpected("a duration >= fade_in (" + num(p.fade_in) + " s)");
+    if (p.duration < p.fade_in) node["duration"].failExpected("a duration >= fade_in (" + num(p.fade_in) + " s)");
   }
   return std::make_unique<FourierTrajectory>(std::move(p));
 }
@@ -148,11 +148,14 @@ std::unique_ptr<JointTrajectory> readCsv(const YamlValue& node, int dof, const s
 // default 0.
 std::unique_ptr<JointTrajectory> readKinematicPtp(const YamlValue& node, int dof) {
   node.allowKeys({"type", "q_begin", "q_end", "qd_max", "qdd_max", "start_time"});
-  const Eigen::VectorXd qb = positions(node.required("q_begin", "start joint positions in rad"), dof, "joint positions in rad");
-  const Eigen::VectorXd qe = positions(node.required("q_end", "end joint positions in rad"), dof, "joint positions in rad");
+  const Eigen::VectorXd qb =
+      positions(node.required("q_begin", "start joint positions in rad"), dof, "joint positions in rad");
+  const Eigen::VectorXd qe =
+      positions(node.required("q_end", "end joint positions in rad"), dof, "joint positions in rad");
   const YamlValue vn = node.required("qd_max", "max joint speeds in rad/s");
   const Eigen::VectorXd v = positions(vn, dof, "max joint speeds in rad/s");
-  if (!(v.array() > 0.0).all()) vn.failExpected("a list of " + std::to_string(dof) + " max joint speeds in rad/s, each > 0");
+  if (!(v.array() > 0.0).all())
+    vn.failExpected("a list of " + std::to_string(dof) + " max joint speeds in rad/s, each > 0");
   const YamlValue an = node.required("qdd_max", "max joint accelerations in rad/s^2");
   const Eigen::VectorXd a = positions(an, dof, "max joint accelerations in rad/s^2");
   if (!(a.array() > 0.0).all())

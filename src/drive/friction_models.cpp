@@ -125,9 +125,7 @@ void StribeckParams::validate() const {
 
 StribeckFriction::StribeckFriction(const StribeckParams& params) : p_(params) { p_.validate(); }
 
-double StribeckFriction::evaluate(const FrictionInput& in, const double*, double*) const {
-  return steadyState(in.v);
-}
+double StribeckFriction::evaluate(const FrictionInput& in, const double*, double*) const { return steadyState(in.v); }
 
 double StribeckFriction::steadyState(double v) const {
   const StribeckBranch& b = v >= 0.0 ? p_.positive : p_.negative;

@@ -39,8 +39,8 @@ void readStaticSet(const YamlValue& node, StribeckBranch& positive, StribeckBran
                        "per direction (positive: {...}, negative: {...}), not both");
     const std::string what = "mapping {alpha0 [N·m], alpha1 [N·m], alpha2 [N·m·s/rad], v_s [rad/s]}";
     for (const char* side : {"positive", "negative"}) {
-      const YamlValue n = node.required(side, "static parameters for v " + std::string(side[0] == 'p' ? ">= 0" : "< 0") +
-                                                  ", a " + what);
+      const YamlValue n = node.required(side, "static parameters for v " +
+                                                  std::string(side[0] == 'p' ? ">= 0" : "< 0") + ", a " + what);
       n.expectMap("a " + what);
       n.allowKeys({"alpha0", "alpha1", "alpha2", "v_s"});
       (side[0] == 'p' ? positive : negative) = readBranch(n);
@@ -52,7 +52,6 @@ void readStaticSet(const YamlValue& node, StribeckBranch& positive, StribeckBran
     positive = negative = readBranch(node);
   }
 }
-
 
 std::unique_ptr<Friction> build(const YamlValue& node, const std::string& type) {
   if (type == "coulomb_viscous") {
@@ -134,7 +133,8 @@ std::unique_ptr<Friction> frictionFromYaml(const io::YamlValue& node) {
   for (const auto& t : kTypes) known = known || t == type;
   if (!known) {
     std::string msg = "unknown friction type '" + type + "'";
-    if (const std::string near = io::closestMatch(type, kTypes); !near.empty()) msg += " (did you mean '" + near + "'?)";
+    if (const std::string near = io::closestMatch(type, kTypes); !near.empty())
+      msg += " (did you mean '" + near + "'?)";
     type_node.fail(msg + "; expected one of " + list);
   }
   try {

@@ -39,7 +39,8 @@ FrictionMode nextFrictionMode(FrictionMode m, bool free, double S, double w, dou
                               const FrictionEventFlags& fired) {
   if (free) return FrictionMode::Free;
   switch (m) {
-    case FrictionMode::Free: return w > 0 ? FrictionMode::Forward : (w < 0 ? FrictionMode::Backward : FrictionMode::Stuck);
+    case FrictionMode::Free:
+      return w > 0 ? FrictionMode::Forward : (w < 0 ? FrictionMode::Backward : FrictionMode::Stuck);
     case FrictionMode::Stuck:
       if (S > t0max || fired.up) return w > 0 ? FrictionMode::Forward : FrictionMode::StartForward;
       if (S < -t0max || fired.down) return w < 0 ? FrictionMode::Backward : FrictionMode::StartBackward;
@@ -65,12 +66,21 @@ constexpr double kStartSpeed = 1e-10;  // [rad/s], see frictionRoots
 void frictionRoots(FrictionMode m, double S, double w, double a, double t0, double t0max, double& g0, double& g1) {
   g0 = g1 = 1.0;
   switch (m) {
-    case FrictionMode::Stuck: g0 = S - t0max; g1 = S + t0max; break;
+    case FrictionMode::Stuck:
+      g0 = S - t0max;
+      g1 = S + t0max;
+      break;
     // Start phases end when w has become strictly positive (negative). They usually begin at w = 0
     // exactly, and CVODE does not report a root function that leaves zero at a restart, so the speed
     // root is offset by kStartSpeed (1e-10 rad/s): the switch happens when |w| reaches it.
-    case FrictionMode::StartForward: g0 = w - kStartSpeed; g1 = a + t0max - t0; break;
-    case FrictionMode::StartBackward: g0 = w + kStartSpeed; g1 = a - t0max + t0; break;
+    case FrictionMode::StartForward:
+      g0 = w - kStartSpeed;
+      g1 = a + t0max - t0;
+      break;
+    case FrictionMode::StartBackward:
+      g0 = w + kStartSpeed;
+      g1 = a - t0max + t0;
+      break;
     case FrictionMode::Forward:
     case FrictionMode::Backward: g0 = w; break;
     case FrictionMode::Free: break;

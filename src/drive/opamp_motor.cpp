@@ -27,8 +27,7 @@ OpAmpMotorParams OpAmpMotorParams::robotR3Axis(int axis) {
   static const double w[6] = {4590, 5500, 5500, 6250, 6250, 7400};
   static const double D[6] = {0.6, 0.6, 0.6, 0.55, 0.55, 0.27};
   static const double J[6] = {0.0013, 0.0013, 0.0013, 1.6e-4, 1.8e-4, 4.3e-5};
-  if (axis < 1 || axis > 6)
-    throw InputError("RobotR3 motor: axis must be 1..6, got " + std::to_string(axis));
+  if (axis < 1 || axis > 6) throw InputError("RobotR3 motor: axis must be 1..6, got " + std::to_string(axis));
   OpAmpMotorParams p;
   p.k = k[axis - 1];
   p.w = w[axis - 1];
@@ -48,8 +47,8 @@ OpAmpMotor::OpAmpMotor(const OpAmpMotorParams& params) : p_(params) {
 void OpAmpMotor::derivatives(double i_ref, double omega_m, const Eigen::Ref<const Eigen::VectorXd>& x,
                              Eigen::Ref<Eigen::VectorXd> xdot) const {
   if (x.size() != kNumStates || xdot.size() != kNumStates)
-    throw InputError("OpAmpMotor::derivatives: x and xdot must have size 2, got " + std::to_string(x.size()) +
-                     " and " + std::to_string(xdot.size()));
+    throw InputError("OpAmpMotor::derivatives: x and xdot must have size 2, got " + std::to_string(x.size()) + " and " +
+                     std::to_string(xdot.size()));
   const double v_C = x[kVC];
   const double i = x[kI];
   const double dv = (i - i_ref) * inv_RiC_;

@@ -19,7 +19,9 @@ const double kPi = 3.14159265358979323846;
 
 const char* const kComponent = "strain_wave_gear";
 void requirePositive(const char* field, double v, const char* unit) { check::positive(kComponent, field, v, unit); }
-void requireNonNegative(const char* field, double v, const char* unit) { check::nonNegative(kComponent, field, v, unit); }
+void requireNonNegative(const char* field, double v, const char* unit) {
+  check::nonNegative(kComponent, field, v, unit);
+}
 
 }  // namespace
 
@@ -139,11 +141,10 @@ PortTorques StrainWaveGear::evaluate(const ShaftPorts& ports, const double* x, d
 
 double StrainWaveGear::storedEnergy(const ShaftPorts& ports, const double* x) const {
   const double dm = meshDeflection(ports, x);
-  const double kinetic = p_.J_WG * x[kVelWG] * x[kVelWG] +
-                         m_FS_ * (x[kVelFSx] * x[kVelFSx] + x[kVelFSy] * x[kVelFSy]) +
+  const double kinetic = p_.J_WG * x[kVelWG] * x[kVelWG] + m_FS_ * (x[kVelFSx] * x[kVelFSx] + x[kVelFSy] * x[kVelFSy]) +
                          p_.J_CS * x[kVelCS] * x[kVelCS];
-  const double potential = p_.K_WG * x[kTwistWG] * x[kTwistWG] + p_.K_b * x[kBearing] * x[kBearing] +
-                           p_.K_m * dm * dm + kFSt_ * x[kFSy] * x[kFSy] + p_.K_CS * x[kTwistCS] * x[kTwistCS];
+  const double potential = p_.K_WG * x[kTwistWG] * x[kTwistWG] + p_.K_b * x[kBearing] * x[kBearing] + p_.K_m * dm * dm +
+                           kFSt_ * x[kFSy] * x[kFSy] + p_.K_CS * x[kTwistCS] * x[kTwistCS];
   return 0.5 * (kinetic + potential);
 }
 
@@ -161,7 +162,7 @@ double StrainWaveGear::spuriousPower(const ShaftPorts& ports, const double* x) c
 }
 
 std::vector<std::string> StrainWaveGear::stateNames() const {
-  return {"phi_WG[rad]", "qd_WG[rad/s]", "delta_b[m]", "xd_FS[m/s]",
+  return {"phi_WG[rad]", "qd_WG[rad/s]", "delta_b[m]",  "xd_FS[m/s]",
           "y_FS[m]",     "yd_FS[m/s]",   "phi_CS[rad]", "qd_CS[rad/s]"};
 }
 
@@ -170,11 +171,11 @@ Eigen::Matrix<double, 6, 1> StrainWaveGear::staticEquilibrium(double q_M, double
   const double r = p_.r_g, Kb = p_.K_b, Km = p_.K_m;
   const double sc = st_ * ct_, c2 = ct_ * ct_, s2 = st_ * st_;
   Eigen::Matrix<double, 6, 6> A;
-  A << p_.K_WG, Kb * r * rho_, -Kb * r * rho_, 0, 0, 0,                 //
-      0, Kb, -(Kb + Km * s2), Km * sc, Km * sc, 0,                       //
-      0, 0, -Km * sc, Km * c2 + kFSt_, Km * c2, 0,                       //
-      0, 0, -Km * r * sc, Km * r * c2, Km * r * c2, p_.K_CS,             //
-      rtn_, -1, 0, 0, 0, 0,                                              //
+  A << p_.K_WG, Kb * r * rho_, -Kb * r * rho_, 0, 0, 0,       //
+      0, Kb, -(Kb + Km * s2), Km * sc, Km * sc, 0,            //
+      0, 0, -Km * sc, Km * c2 + kFSt_, Km * c2, 0,            //
+      0, 0, -Km * r * sc, Km * r * c2, Km * r * c2, p_.K_CS,  //
+      rtn_, -1, 0, 0, 0, 0,                                   //
       0, 0, 0, 0, -1, r;
   Eigen::Matrix<double, 6, 1> b;
   b << p_.K_WG * q_M, 0, 0, p_.K_CS * q_0, 0, 0;
@@ -189,12 +190,12 @@ void StrainWaveGear::initialState(double q_in, double q_out, double* x) const {
   const double r = p_.r_g, Kb = p_.K_b, Km = p_.K_m;
   const double s = st_, c = ct_;
   Eigen::Matrix<double, 6, 6> A;
-  A << p_.K_WG, 0, -Kb * r * rho_, 0, 0, 0,                                    // WG
-      0, -Km * s * s, Kb + Km * s * s, Km * s * c, Km * s * c, 0,              // FS radial: F_b − F_m s = 0
-      0, Km * c * s, -Km * c * s, -(Km * c * c + kFSt_), -Km * c * c, 0,       // FS tangential: F_m c − F_t = 0
+  A << p_.K_WG, 0, -Kb * r * rho_, 0, 0, 0,                               // WG
+      0, -Km * s * s, Kb + Km * s * s, Km * s * c, Km * s * c, 0,         // FS radial: F_b − F_m s = 0
+      0, Km * c * s, -Km * c * s, -(Km * c * c + kFSt_), -Km * c * c, 0,  // FS tangential: F_m c − F_t = 0
       0, Km * r * c * s, -Km * r * c * s, -Km * r * c * c, -Km * r * c * c, -p_.K_CS,  // CS: F_m r c − T_CS = 0
-      rtn_, 1, 0, 0, 0, 0,                                                     // e_x = −r_g tanα_n φ_WG
-      0, 0, 0, 0, 1, -r;                                                       // e_y = r_g (ν + φ_CS)
+      rtn_, 1, 0, 0, 0, 0,                                                             // e_x = −r_g tanα_n φ_WG
+      0, 0, 0, 0, 1, -r;                                                               // e_y = r_g (ν + φ_CS)
   Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
   b[5] = r * (q_out - q_in / p_.tau);
   const Eigen::Matrix<double, 6, 1> u = A.colPivHouseholderQr().solve(b);

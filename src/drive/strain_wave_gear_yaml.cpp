@@ -56,9 +56,9 @@ const Field kDamping[] = {
 
 StrainWaveGearParams swgParamsFromYaml(const YamlValue& node) {
   node.expectMap("a strain wave gear mapping, e.g. {size: A}");
-  node.allowKeys({"type", "size", "r_g", "alpha_t", "alpha_t_deg", "tau", "Z_FS", "Z_CS", "K_WG", "K_b", "K_FS",
-                  "K_m", "K_CS", "J_WG", "J_FS", "J_CS", "c_WG", "c_b", "c_m", "c_FS", "c_CS", "reaction_form",
-                  "damping"});
+  node.allowKeys({"type", "size", "r_g",  "alpha_t", "alpha_t_deg", "tau",           "Z_FS",   "Z_CS",
+                  "K_WG", "K_b",  "K_FS", "K_m",     "K_CS",        "J_WG",          "J_FS",   "J_CS",
+                  "c_WG", "c_b",  "c_m",  "c_FS",    "c_CS",        "reaction_form", "damping"});
   if (node.has("type")) {
     const std::string type = node["type"].asString("the transmission type 'strain_wave_gear'");
     if (type != "strain_wave_gear") node["type"].fail("expected 'strain_wave_gear', got '" + type + "'");
@@ -124,7 +124,8 @@ StrainWaveGearParams swgParamsFromYaml(const YamlValue& node) {
       p.reaction_form = ReactionForm::PaperLiteral;
     else
       node["reaction_form"].fail("expected energy_consistent (tan(alpha_n), ratio exactly tau) or paper_literal "
-                                 "(sin(alpha_n)cos(alpha_n) as printed in [Raviola2023]), got '" + form + "'");
+                                 "(sin(alpha_n)cos(alpha_n) as printed in [Raviola2023]), got '" +
+                                 form + "'");
   }
 
   if (node.has("damping")) {
@@ -138,8 +139,8 @@ StrainWaveGearParams swgParamsFromYaml(const YamlValue& node) {
       else if (mode == "damping_ratio")
         p.damping_mode = DampingMode::DampingRatio;
       else
-        d["mode"].fail("expected coefficient (N·m·s/rad or N·s/m) or damping_ratio (zeta per element), got '" +
-                       mode + "'");
+        d["mode"].fail("expected coefficient (N·m·s/rad or N·s/m) or damping_ratio (zeta per element), got '" + mode +
+                       "'");
     }
     if (d.has("value")) {
       const double v = d["value"].asDouble("a damping value (coefficient or damping ratio)");

@@ -11,7 +11,9 @@
 
 namespace jointsim::drive {
 namespace {
-void requirePositive(double v, const std::string& name, const char* unit) { check::positive("transmission", name, v, unit); }
+void requirePositive(double v, const std::string& name, const char* unit) {
+  check::positive("transmission", name, v, unit);
+}
 void requireNonNegative(double v, const std::string& name, const char* unit) {
   check::nonNegative("transmission", name, v, unit);
 }
@@ -92,7 +94,8 @@ CouplingMatrix::CouplingMatrix(const Eigen::MatrixXd& G) : G_(G) {
                      std::to_string(G.cols()));
   if (!G.allFinite()) throw InputError("coupling matrix: entries must be finite");
   const Eigen::FullPivLU<Eigen::MatrixXd> lu(G);
-  if (!lu.isInvertible()) throw InputError("coupling matrix: must be invertible (each motor drives the joints independently)");
+  if (!lu.isInvertible())
+    throw InputError("coupling matrix: must be invertible (each motor drives the joints independently)");
   Ginv_ = lu.inverse();
 }
 

@@ -2,8 +2,8 @@
 
 #include <cerrno>
 #include <chrono>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -88,7 +88,9 @@ SummaryInfo readSummary(const fs::path& p) {
   s.exists = true;
   const nlohmann::json j = nlohmann::json::parse(slurpFile(p), nullptr, false);
   if (!j.is_object()) return s;  // unreadable: status "" (counted as an error)
-  auto text = [&](const char* key) { return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string(); };
+  auto text = [&](const char* key) {
+    return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string();
+  };
   auto number = [&](const char* key) { return j.contains(key) && j[key].is_number() ? j[key].get<double>() : 0.0; };
   s.status = text("status");
   s.version = text("jointsim_version");
@@ -99,7 +101,8 @@ SummaryInfo readSummary(const fs::path& p) {
   s.rtf = number("real_time_factor");
   if (j.contains("inputs") && j["inputs"].is_array())
     for (const auto& in : j["inputs"])
-      if (in.is_object() && in.contains("path") && in.contains("hash") && in["path"].is_string() && in["hash"].is_string())
+      if (in.is_object() && in.contains("path") && in.contains("hash") && in["path"].is_string() &&
+          in["hash"].is_string())
         s.inputs.push_back({in["path"].get<std::string>(), in["hash"].get<std::string>(), 0});
   return s;
 }
@@ -206,7 +209,8 @@ Sweep loadSweep(const std::string& path) {
   head.expectMap("a mapping {name, experiment, set}");
   head.allowKeys({"name", "experiment", "set"});
   s.name = head.required("name", "the sweep name").asString("a name");
-  if (s.name.empty() || sanitize(s.name) != s.name) head["name"].failExpected("a name of letters, digits, '.', '-', '_'");
+  if (s.name.empty() || sanitize(s.name) != s.name)
+    head["name"].failExpected("a name of letters, digits, '.', '-', '_'");
   s.experiment = head.required("experiment", "the base experiment file, relative to this file").asPath();
   if (!fs::exists(s.experiment)) head["experiment"].fail("no such file: " + s.experiment);
   const std::vector<std::string> common = readSet(head["set"]);
@@ -225,7 +229,8 @@ Sweep loadSweep(const std::string& path) {
       n.allowKeys({"name", "set", "faults"});
       BatchRun r;
       r.name = n.required("name", "the run name").asString("a name");
-      if (r.name.empty() || sanitize(r.name) != r.name) n["name"].failExpected("a name of letters, digits, '.', '-', '_'");
+      if (r.name.empty() || sanitize(r.name) != r.name)
+        n["name"].failExpected("a name of letters, digits, '.', '-', '_'");
       r.overrides = readSet(n["set"]);
       if (const YamlValue f = n["faults"]; f.defined()) {
         f.expectSequence("a list of faults {type, joint, value}");
@@ -297,7 +302,8 @@ Sweep loadSweep(const std::string& path) {
 
 std::vector<size_t> shardRuns(size_t n_runs, int index, int count) {
   if (count < 1 || index < 0 || index >= count)
-    throw InputError("--shard: expected I/N with 0 <= I < N, got " + std::to_string(index) + "/" + std::to_string(count));
+    throw InputError("--shard: expected I/N with 0 <= I < N, got " + std::to_string(index) + "/" +
+                     std::to_string(count));
   std::vector<size_t> out;
   for (size_t i = static_cast<size_t>(index); i < n_runs; i += static_cast<size_t>(count)) out.push_back(i);
   return out;
@@ -310,10 +316,11 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
   io::createDirectories(dir);
   const std::vector<size_t> mine = shardRuns(sweep.runs.size(), options.shard_index, options.shard_count);
   BatchResult res;
-  res.manifest_path = (fs::path(dir) / (options.shard_count > 1 ? "manifest.shard-" + std::to_string(options.shard_index) +
-                                                                      "-of-" + std::to_string(options.shard_count) + ".csv"
-                                                                : std::string("manifest.csv")))
-                          .string();
+  res.manifest_path =
+      (fs::path(dir) / (options.shard_count > 1 ? "manifest.shard-" + std::to_string(options.shard_index) + "-of-" +
+                                                      std::to_string(options.shard_count) + ".csv"
+                                                : std::string("manifest.csv")))
+          .string();
   std::vector<size_t> queue;
   for (size_t k = 0; k < mine.size(); ++k) {
     const BatchRun& run = sweep.runs[mine[k]];
@@ -408,8 +415,10 @@ BatchResult collectBatch(const Sweep& sweep, const BatchOptions& options) {
   res.manifest_path = (fs::path(dir) / "manifest.csv").string();
   for (const auto& run : sweep.runs) {
     BatchRecord r = recordFromFolder(run, dir);
-    if (r.status == "ok") ++res.ok;
-    else if (r.status != "pending") ++res.failed;
+    if (r.status == "ok")
+      ++res.ok;
+    else if (r.status != "pending")
+      ++res.failed;
     res.records.push_back(r);
   }
   io::createDirectories(dir);

@@ -21,9 +21,12 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   node.allowKeys({"method", "rtol", "atol", "max_step", "max_order", "stability_limit_detection", "max_num_steps"});
   if (node.has("method")) {
     const std::string m = node["method"].asString("adams or bdf");
-    if (m == "adams") o.method = sim::Method::Adams;
-    else if (m == "bdf") o.method = sim::Method::BDF;
-    else node["method"].failExpected("adams or bdf");
+    if (m == "adams")
+      o.method = sim::Method::Adams;
+    else if (m == "bdf")
+      o.method = sim::Method::BDF;
+    else
+      node["method"].failExpected("adams or bdf");
   }
   o.rtol = node["rtol"].asDouble(o.rtol, "a relative tolerance > 0");
   if (!(o.rtol > 0)) node["rtol"].failExpected("a relative tolerance > 0");
@@ -31,7 +34,8 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   if (!(o.atol > 0)) node["atol"].failExpected("an absolute tolerance > 0");
   o.max_step = node["max_step"].asDouble(o.max_step, "a step in s (0 = unlimited)");
   if (o.max_step < 0) node["max_step"].failExpected("a step >= 0 s");
-  if (node.has("max_order")) o.max_order = static_cast<int>(node["max_order"].asInt("an order 1..5 (BDF) or 1..12 (Adams)"));
+  if (node.has("max_order"))
+    o.max_order = static_cast<int>(node["max_order"].asInt("an order 1..5 (BDF) or 1..12 (Adams)"));
   if (node.has("max_num_steps")) o.max_num_steps = node["max_num_steps"].asInt("a positive step count");
   if (node.has("stability_limit_detection"))
     o.stability_limit_detection = node["stability_limit_detection"].asBool("true or false");
@@ -51,7 +55,9 @@ control::Profile readProfile(const YamlValue& node, const std::string& unit) {
   const YamlValue type = node.required("type", "profile type");
   const std::string t = type.asString("a profile type");
   auto num = [&](const char* key, const std::string& what) { return node.required(key, what).asDouble(what); };
-  auto opt = [&](const char* key, double fallback, const std::string& what) { return node[key].asDouble(fallback, what); };
+  auto opt = [&](const char* key, double fallback, const std::string& what) {
+    return node[key].asDouble(fallback, what);
+  };
   try {
     if (t == "constant") {
       node.allowKeys({"type", "value"});
@@ -82,7 +88,8 @@ control::Profile readProfile(const YamlValue& node, const std::string& unit) {
       node.allowKeys({"type", "times", "values", "hold"});
       const bool hold = node.has("hold") && node["hold"].asBool("true or false");
       return control::Profile::piecewise(node.required("times", "times in s").asDoubles(0, "a list of times in s"),
-                                         node.required("values", "values").asDoubles(0, "a list of values in " + unit), hold);
+                                         node.required("values", "values").asDoubles(0, "a list of values in " + unit),
+                                         hold);
     }
     if (t == "csv") {
       node.allowKeys({"type", "file", "column"});
@@ -144,15 +151,16 @@ void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& o
       YAML::Node child;
       if (node.IsMap() && node[p].IsDefined()) {
         child = node[p];
-      } else if (node.IsSequence() && !p.empty() && p.size() < 10 && p.find_first_not_of("0123456789") == std::string::npos &&
-                 std::stoul(p) < node.size()) {
+      } else if (node.IsSequence() && !p.empty() && p.size() < 10 &&
+                 p.find_first_not_of("0123456789") == std::string::npos && std::stoul(p) < node.size()) {
         child = node[std::stoul(p)];
       } else {
         throw InputError("--set " + o + ": " + file + " has no key '" + walked + "'");
       }
       node.reset(child);
     }
-    if (!node.IsScalar() && !node.IsNull()) throw InputError("--set " + o + ": '" + path + "' in " + file + " is not a scalar");
+    if (!node.IsScalar() && !node.IsNull())
+      throw InputError("--set " + o + ": '" + path + "' in " + file + " is not a scalar");
     node = value;
   }
 }

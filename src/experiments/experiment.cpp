@@ -30,7 +30,9 @@ void Experiment::setIdentity(std::string name, std::string type, std::string fil
   file_ = std::move(file);
 }
 
-void Experiment::setConfig(const nlohmann::ordered_json& config) { config_ = std::make_shared<nlohmann::ordered_json>(config); }
+void Experiment::setConfig(const nlohmann::ordered_json& config) {
+  config_ = std::make_shared<nlohmann::ordered_json>(config);
+}
 
 std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::vector<std::string>& overrides,
                                            const std::vector<systems::Fault>& faults) {
@@ -49,8 +51,10 @@ std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::v
   const ExperimentType* type = findExperimentType(t);
   if (!type) type_node.failExpected("an experiment type (known: " + experimentTypeNames() + ")");
   if (!faults.empty() && !type->accepts_faults)
-    type_node.fail("faults (" + systems::describe(faults.front()) + ", ...) apply to experiments with a robot with drives "
-                   "(type tracking), not to type '" + t + "'");
+    type_node.fail("faults (" + systems::describe(faults.front()) +
+                   ", ...) apply to experiments with a robot with drives "
+                   "(type tracking), not to type '" +
+                   t + "'");
   std::unique_ptr<Experiment> e = type->load(root, LoadContext{name, path, faults});
   e->setIdentity(name, t, path);
   e->setConfig(detail::yamlToJson(root));
@@ -78,8 +82,8 @@ sim::SimulationResult execute(Experiment& e, const std::function<void(const Eige
     shown = true;
     const double t = row[0], rtf = t / wall, t_end = options.t_end;
     if (rtf > 0.0)
-      std::fprintf(stderr, "\r  %s: t = %.4g / %.4g s (%3.0f %%), real-time factor %.3g, ETA %.1f s   ", e.name().c_str(), t,
-                   t_end, 100.0 * t / t_end, rtf, (t_end - t) / rtf);
+      std::fprintf(stderr, "\r  %s: t = %.4g / %.4g s (%3.0f %%), real-time factor %.3g, ETA %.1f s   ",
+                   e.name().c_str(), t, t_end, 100.0 * t / t_end, rtf, (t_end - t) / rtf);
     else
       std::fprintf(stderr, "\r  %s: t = %.4g s   ", e.name().c_str(), t);
     std::fflush(stderr);
@@ -129,7 +133,8 @@ ExperimentResult runInMemory(Experiment& experiment) {
   const std::string started = utcNow();
   sim::TableSink sink(sim::tableColumns(experiment.plant()));
   ExperimentResult out;
-  out.result = execute(experiment, [&sink](const Eigen::VectorXd& row) { sink(row); }, false);
+  out.result = execute(
+      experiment, [&sink](const Eigen::VectorXd& row) { sink(row); }, false);
   out.log = sink.table();
   out.extras = experiment.extraTables();
   SummaryFields f;
@@ -153,7 +158,8 @@ RunReport runAndRecord(Experiment& experiment, const RunOptions& options) {
   SummaryFields f;
   const auto wall_start = std::chrono::steady_clock::now();
   try {
-    r = execute(experiment, [&csv](const Eigen::VectorXd& row) { csv.writeRow(row); }, options.progress);
+    r = execute(
+        experiment, [&csv](const Eigen::VectorXd& row) { csv.writeRow(row); }, options.progress);
   } catch (const SolverError& e) {
     r.sim_time_s = e.time();
     r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();

@@ -118,7 +118,10 @@ std::vector<Figure> genericFigures(const RunData& run) {
   const size_t per_page = 6, pages = (cols.size() + per_page - 1) / per_page;
   for (size_t page = 0; page < pages; ++page) {
     Figure f{run.experiment + "_columns_" + std::to_string(page + 1),
-             run.experiment + ": all columns (" + std::to_string(page + 1) + "/" + std::to_string(pages) + ")", 1, 1, {}};
+             run.experiment + ": all columns (" + std::to_string(page + 1) + "/" + std::to_string(pages) + ")",
+             1,
+             1,
+             {}};
     for (size_t k = page * per_page; k < std::min(cols.size(), (page + 1) * per_page); ++k) {
       const int c = cols[k];
       f.panels.push_back(timePanel(run, {c}, run.name(c), run.name(c)));

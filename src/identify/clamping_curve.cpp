@@ -2,8 +2,8 @@
 #include "jointsim/identify/clamping_curve.hpp"
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <sstream>
 
@@ -55,8 +55,9 @@ Line fitLine(size_t n, GetX gx, GetY gy) {
 Line fitLine(const Eigen::VectorXd& x, const Eigen::VectorXd& y, Eigen::Index from = 0, Eigen::Index to = -1) {
   if (to < 0) to = x.size() - 1;
   const size_t n = to >= from ? static_cast<size_t>(to - from + 1) : 0;
-  return fitLine(n, [&](size_t i) { return x[from + static_cast<Eigen::Index>(i)]; },
-                 [&](size_t i) { return y[from + static_cast<Eigen::Index>(i)]; });
+  return fitLine(
+      n, [&](size_t i) { return x[from + static_cast<Eigen::Index>(i)]; },
+      [&](size_t i) { return y[from + static_cast<Eigen::Index>(i)]; });
 }
 
 /// Linear interpolation in sorted x (held at the ends).
@@ -184,7 +185,8 @@ void ClampingCurveOptions::validate() const {
     bad("max_rejected_fraction", max_rejected_fraction, "a value in [0, 1]");
   if (!(coverage_fraction > 0 && coverage_fraction <= 1))
     bad("coverage_fraction", coverage_fraction, "a value in (0, 1]");
-  if (!(min_span_fraction >= 0 && min_span_fraction <= 1)) bad("min_span_fraction", min_span_fraction, "a value in [0, 1]");
+  if (!(min_span_fraction >= 0 && min_span_fraction <= 1))
+    bad("min_span_fraction", min_span_fraction, "a value in [0, 1]");
   if (grid_points < 20) bad("grid_points", grid_points, "an integer >= 20");
   if (!(slope_threshold > 0 && slope_threshold < 1)) bad("slope_threshold", slope_threshold, "a value in (0, 1)");
   if (!(slope_window_fraction > 0 && slope_window_fraction < 0.5))
@@ -365,7 +367,8 @@ GridCurve foldCurve(const GridCurve& merged, double middle, const ClampingCurveO
   const int start = std::min(nj, k + window / 2);  // beyond the window's reach into the flat part
   if (nj - start < o.min_linear_points)
     throw UnidentifiableError("stiffness: no linear region beyond the backlash interval of the folded clamping "
-                              "curve (" + std::to_string(std::max(0, nj - start)) + " points, need " +
+                              "curve (" +
+                              std::to_string(std::max(0, nj - start)) + " points, need " +
                               std::to_string(o.min_linear_points) + ")");
   const Line lin = fitLine(f.x, f.tau, start, nj - 1);
   stiffness = lin.slope;
@@ -399,7 +402,8 @@ void cleanHalfCycle(HalfCycle& h, const ClampingData& data, const std::vector<ch
     if (!stuck[static_cast<size_t>(k)]) idx.push_back(k);
   std::sort(idx.begin(), idx.end(), [&](int a, int b) { return data.angle[a] < data.angle[b]; });
   const size_t cut = static_cast<size_t>(std::floor(o.extreme_fraction * static_cast<double>(idx.size())));
-  if (2 * cut < idx.size()) idx = std::vector<int>(idx.begin() + static_cast<long>(cut), idx.end() - static_cast<long>(cut));
+  if (2 * cut < idx.size())
+    idx = std::vector<int>(idx.begin() + static_cast<long>(cut), idx.end() - static_cast<long>(cut));
   if (!idx.empty()) {
     const double lo = data.angle[idx.front()], hi = data.angle[idx.back()];
     const double a = lo + o.end_trim_fraction * (hi - lo), b = hi - o.end_trim_fraction * (hi - lo);
@@ -409,7 +413,8 @@ void cleanHalfCycle(HalfCycle& h, const ClampingData& data, const std::vector<ch
     idx.swap(kept);
   }
   auto line = [&](const std::vector<int>& v) {
-    return fitLine(v.size(), [&](size_t i) { return data.angle[v[i]]; }, [&](size_t i) { return data.torque[v[i]]; });
+    return fitLine(
+        v.size(), [&](size_t i) { return data.angle[v[i]]; }, [&](size_t i) { return data.torque[v[i]]; });
   };
   if (idx.size() >= 3) {
     const Line l = line(idx);
@@ -615,12 +620,13 @@ ClampingCurves preprocessClampingCurve(const ClampingData& data, const ClampingC
                      "back and forth as in a clamping experiment");
   const std::vector<char> stuck = stuckSamples(data, o);
   for (HalfCycle& h : r.half_cycles) cleanHalfCycle(h, data, stuck, r.mean_position, o);  // step 2
-  classifyHalfCycles(r.half_cycles, o, r.torque_half_span);                              // steps 3–5
+  classifyHalfCycles(r.half_cycles, o, r.torque_half_span);                               // steps 3–5
   requireUsableHalfCycles(r, o);
   r.upper = mergeGroup(r.half_cycles, active(r.half_cycles, 1), data, o);  // step 6
   r.lower = mergeGroup(r.half_cycles, active(r.half_cycles, 0), data, o);
   if (r.upper.empty() || r.lower.empty())
-    throw UnidentifiableError("clamping curve: the half-cycles of the " + std::string(r.upper.empty() ? "upper" : "lower") +
+    throw UnidentifiableError("clamping curve: the half-cycles of the " +
+                              std::string(r.upper.empty() ? "upper" : "lower") +
                               " curve do not cover a common position interval");
   const auto [u, l] = estimateFriction(r, o);  // step 7
   if (!backlashObservable(r, u, l, o)) return r;

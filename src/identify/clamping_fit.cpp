@@ -13,9 +13,9 @@
 #include <ceres/ceres.h>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/interpolate.hpp"
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/transmissions.hpp"
-#include "jointsim/common/interpolate.hpp"
 #include "jointsim/systems/joint_rig.hpp"
 
 namespace jointsim::identify {

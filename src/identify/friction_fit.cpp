@@ -19,11 +19,11 @@
 namespace jointsim::identify {
 namespace {
 
-constexpr int kNumParams = 4;           // α0, α1, α2, v_S
-constexpr double kDeltaMin = 0.25;      // bounds of a free δ [-]
+constexpr int kNumParams = 4;       // α0, α1, α2, v_S
+constexpr double kDeltaMin = 0.25;  // bounds of a free δ [-]
 constexpr double kDeltaMax = 8.0;
-constexpr double kSignificance = 3.0;   // α1 must exceed this many standard errors
-constexpr double kDipFactor = 2.0;      // points slower than kDipFactor·v_S sample the Stribeck dip
+constexpr double kSignificance = 3.0;  // α1 must exceed this many standard errors
+constexpr double kDipFactor = 2.0;     // points slower than kDipFactor·v_S sample the Stribeck dip
 constexpr int kMinDipPoints = 3;
 
 /// Shortest text that reads back as the same double.
@@ -51,10 +51,10 @@ struct MapResidual {
 
 /// The points of one direction as magnitudes, sorted by speed.
 struct Branch {
-  std::string name;        // "positive" / "negative"
-  std::string label;       // "positive direction (v > 0)"
-  std::vector<double> w;   // |v| [rad/s], ascending
-  std::vector<double> y;   // friction magnitude [N·m]
+  std::string name;       // "positive" / "negative"
+  std::string label;      // "positive direction (v > 0)"
+  std::vector<double> w;  // |v| [rad/s], ascending
+  std::vector<double> y;  // friction magnitude [N·m]
 };
 
 [[noreturn]] void unidentifiable(const Branch& b, const std::string& reason) {
@@ -261,7 +261,8 @@ std::string singularReason(const Branch& br, const std::array<double, kNumParams
   const double effect = p[1] * std::exp(-std::pow(br.w.front() / p[3], delta));  // Stribeck term at min |v|
   if (effect <= 1e-6 * (p[0] + p[1]))
     return "no Stribeck dip: the best fit puts v_s = " + num(p[3]) + " rad/s far below the slowest point (" +
-           num(br.w.front()) + " rad/s), so alpha1 and v_s have no effect on the data (fit a Coulomb–viscous model "
+           num(br.w.front()) +
+           " rad/s), so alpha1 and v_s have no effect on the data (fit a Coulomb–viscous model "
            "instead, or measure slower speeds)";
   return "the parameters are not determined by the data (singular covariance at alpha0 = " + num(p[0]) +
          ", alpha1 = " + num(p[1]) + ", alpha2 = " + num(p[2]) + ", v_s = " + num(p[3]) + ")";
@@ -271,7 +272,8 @@ std::string singularReason(const Branch& br, const std::array<double, kNumParams
 void checkIdentifiable(const Branch& br, const DirectionFit& d, const FrictionFitOptions& o) {
   if (d.alpha1.value <= kSignificance * d.alpha1.std_error)
     unidentifiable(br, "no significant Stribeck dip: alpha1 = " + num(d.alpha1.value) + " N·m with standard error " +
-                           num(d.alpha1.std_error) + " N·m, so v_s cannot be determined (fit a Coulomb–viscous "
+                           num(d.alpha1.std_error) +
+                           " N·m, so v_s cannot be determined (fit a Coulomb–viscous "
                            "model instead, or measure slower speeds)");
   int dip = 0;
   for (double w : br.w) dip += w < kDipFactor * d.v_s.value ? 1 : 0;
@@ -279,8 +281,9 @@ void checkIdentifiable(const Branch& br, const DirectionFit& d, const FrictionFi
     unidentifiable(br, "only " + std::to_string(dip) + " points slower than 2·v_s = " + num(kDipFactor * d.v_s.value) +
                            " rad/s (at least " + std::to_string(kMinDipPoints) +
                            " needed): the Stribeck dip is not sampled; measure slower speeds");
-  const std::pair<const char*, const ParameterEstimate*> checked[] = {
-      {"alpha0", &d.alpha0}, {"alpha1", &d.alpha1}, {"v_s", &d.v_s}};
+  const std::pair<const char*, const ParameterEstimate*> checked[] = {{"alpha0", &d.alpha0},
+                                                                      {"alpha1", &d.alpha1},
+                                                                      {"v_s", &d.v_s}};
   for (const auto& [name, e] : checked)
     if (!(e->std_error <= o.max_relative_std_error * std::abs(e->value)))
       unidentifiable(br, std::string(name) + " = " + num(e->value) + " has a standard error of " + num(e->std_error) +
@@ -333,9 +336,12 @@ FrictionFit fitFrictionMap(const std::vector<double>& velocity, const std::vecto
     if (!std::isfinite(v) || !std::isfinite(f))
       throw InputError("friction map point " + std::to_string(i) + ": expected finite velocity and torque, got " +
                        num(v) + " rad/s, " + num(f) + " N·m");
-    if (v > 0) pts_pos.emplace_back(v, f);
-    else if (v < 0) pts_neg.emplace_back(-v, -f);
-    else ++fit.dropped_zero;
+    if (v > 0)
+      pts_pos.emplace_back(v, f);
+    else if (v < 0)
+      pts_neg.emplace_back(-v, -f);
+    else
+      ++fit.dropped_zero;
   }
   for (auto* pr : {&pts_pos, &pts_neg}) std::sort(pr->begin(), pr->end());
   for (const auto& [w, y] : pts_pos) pos.w.push_back(w), pos.y.push_back(y);
@@ -343,8 +349,8 @@ FrictionFit fitFrictionMap(const std::vector<double>& velocity, const std::vecto
 
   for (const Branch* br : {&pos, &neg}) {
     if (br->w.empty())
-      unidentifiable(*br, "no points (the map has only " +
-                              std::string(br == &pos ? "v <= 0" : "v >= 0") + "); measure both directions");
+      unidentifiable(*br, "no points (the map has only " + std::string(br == &pos ? "v <= 0" : "v >= 0") +
+                              "); measure both directions");
     if (static_cast<int>(br->w.size()) < options.min_points)
       unidentifiable(*br, "only " + std::to_string(br->w.size()) + " points, at least " +
                               std::to_string(options.min_points) + " needed");
@@ -496,14 +502,13 @@ std::string frictionFitYaml(const FrictionFit& fit, const FrictionYamlOptions& o
       << "    points: " << d->points << "\n"
       << "    speed_range: [" << num(d->min_speed) << ", " << num(d->max_speed) << "]   # |v| [rad/s]\n"
       << "    rms_residual: " << num(d->rms_residual) << "   # [N*m]\n";
-    const std::tuple<const char*, const char*, const ParameterEstimate*> rows[] = {
-        {"alpha0", "N*m", &d->alpha0},
-        {"alpha1", "N*m", &d->alpha1},
-        {"alpha2", "N*m*s/rad", &d->alpha2},
-        {"v_s", "rad/s", &d->v_s}};
+    const std::tuple<const char*, const char*, const ParameterEstimate*> rows[] = {{"alpha0", "N*m", &d->alpha0},
+                                                                                   {"alpha1", "N*m", &d->alpha1},
+                                                                                   {"alpha2", "N*m*s/rad", &d->alpha2},
+                                                                                   {"v_s", "rad/s", &d->v_s}};
     for (const auto& [name, unit, e] : rows)
-      y << "    " << name << ": {value: " << num(e->value) << ", unit: \"" << unit << "\", std_error: "
-        << num(e->std_error) << ", initial: " << num(e->initial) << "}\n";
+      y << "    " << name << ": {value: " << num(e->value) << ", unit: \"" << unit
+        << "\", std_error: " << num(e->std_error) << ", initial: " << num(e->initial) << "}\n";
   }
   return y.str();
 }

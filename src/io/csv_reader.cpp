@@ -18,9 +18,12 @@ std::vector<std::string> splitRecord(const std::string& line) {
   for (size_t i = 0; i < line.size(); ++i) {
     const char c = line[i];
     if (quoted) {
-      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') cells.back() += '"', ++i;
-      else if (c == '"') quoted = false;
-      else cells.back() += c;
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"')
+        cells.back() += '"', ++i;
+      else if (c == '"')
+        quoted = false;
+      else
+        cells.back() += c;
     } else if (c == '"' && trim(cells.back()).empty()) {
       quoted = was_quoted = true;
       cells.back().clear();
@@ -52,7 +55,8 @@ int CsvTable::find(const std::string& name) const {
 int CsvTable::require(const std::string& name, const std::string& what) const {
   const int i = find(name);
   if (i >= 0) return i;
-  throw InputError(path + ":1: missing column '" + name + "' (expected " + what + "; the columns are: " + join(header, ", ") + ")");
+  throw InputError(path + ":1: missing column '" + name + "' (expected " + what +
+                   "; the columns are: " + join(header, ", ") + ")");
 }
 
 std::string CsvTable::where(Eigen::Index r, int c) const {
@@ -73,7 +77,8 @@ CsvText readCsvText(const std::string& path) {
     if (t.header.empty()) {
       for (size_t i = 0; i < cells.size(); ++i)
         if (cells[i].empty())
-          throw InputError(location(path, line_no) + ": empty column name in the header (column " + std::to_string(i + 1) + ")");
+          throw InputError(location(path, line_no) + ": empty column name in the header (column " +
+                           std::to_string(i + 1) + ")");
       t.header = std::move(cells);
       continue;
     }

@@ -26,7 +26,8 @@ bool readAll(const std::string& path, std::string& out) {
 
 std::string contentHash(const std::string& bytes) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "xxh3:%016llx", static_cast<unsigned long long>(XXH3_64bits(bytes.data(), bytes.size())));
+  std::snprintf(buf, sizeof buf, "xxh3:%016llx",
+                static_cast<unsigned long long>(XXH3_64bits(bytes.data(), bytes.size())));
   return buf;
 }
 

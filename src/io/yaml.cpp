@@ -166,7 +166,9 @@ double YamlValue::asDouble(const std::string& what) const {
   return v;
 }
 
-double YamlValue::asDouble(double fallback, const std::string& what) const { return defined() ? asDouble(what) : fallback; }
+double YamlValue::asDouble(double fallback, const std::string& what) const {
+  return defined() ? asDouble(what) : fallback;
+}
 
 long YamlValue::asInt(const std::string& what) const {
   if (!impl_->node.IsScalar()) failExpected(what);

@@ -18,14 +18,12 @@ using Eigen::Vector3d;
 
 void checkSize(const Model& model, const Data& data, const VecRef& x, const char* what) {
   if (x.size() != model.nq)
-    throw InputError(std::string(what) + " has " + std::to_string(x.size()) + " values, robot '" +
-                     model.name + "' has " + std::to_string(model.nq) + " joints");
+    throw InputError(std::string(what) + " has " + std::to_string(x.size()) + " values, robot '" + model.name +
+                     "' has " + std::to_string(model.nq) + " joints");
   if (data.nq != model.nq) throw InputError("Data was built for a different model");
 }
 
-inline bool isRevolute(const Model& model, size_t i) {
-  return model.joint_types[i] == JointType::Revolute;
-}
+inline bool isRevolute(const Model& model, size_t i) { return model.joint_types[i] == JointType::Revolute; }
 
 // liMi = X_tree · X_joint(q). Rotations about a coordinate axis (model.axis_kind 0, 1, 2) combine the
 // columns of X_tree.R directly; other axes use Rodrigues' formula.
@@ -193,8 +191,8 @@ void forwardKinematics(const Model& model, Data& data, const VecRef& q) {
   updateFramePlacements(model, data);
 }
 
-const Eigen::VectorXd& rnea(const Model& model, Data& data, const VecRef& q, const VecRef& qd,
-                            const VecRef& qdd, const Matrix6Xd* fext) {
+const Eigen::VectorXd& rnea(const Model& model, Data& data, const VecRef& q, const VecRef& qd, const VecRef& qdd,
+                            const Matrix6Xd* fext) {
   checkSize(model, data, q, "q");
   checkSize(model, data, qd, "qd");
   checkSize(model, data, qdd, "qdd");
@@ -209,8 +207,7 @@ const Eigen::VectorXd& gravityTorques(const Model& model, Data& data, const VecR
   return data.g;
 }
 
-const Eigen::VectorXd& nonLinearEffects(const Model& model, Data& data, const VecRef& q,
-                                        const VecRef& qd) {
+const Eigen::VectorXd& nonLinearEffects(const Model& model, Data& data, const VecRef& q, const VecRef& qd) {
   checkSize(model, data, q, "q");
   checkSize(model, data, qd, "qd");
   rneaCore<true>(model, data, q, qd, data.zeros, nullptr, data.nle);
@@ -265,8 +262,8 @@ const Eigen::MatrixXd& crba(const Model& model, Data& data, const VecRef& q) {
   return data.M;
 }
 
-const Eigen::VectorXd& aba(const Model& model, Data& data, const VecRef& q, const VecRef& qd,
-                           const VecRef& tau, const Matrix6Xd* fext) {
+const Eigen::VectorXd& aba(const Model& model, Data& data, const VecRef& q, const VecRef& qd, const VecRef& tau,
+                           const Matrix6Xd* fext) {
   checkSize(model, data, q, "q");
   checkSize(model, data, qd, "qd");
   checkSize(model, data, tau, "tau");
@@ -341,9 +338,8 @@ const Eigen::VectorXd& aba(const Model& model, Data& data, const VecRef& q, cons
   return data.ddq;
 }
 
-const Eigen::VectorXd& forwardDynamicsCrba(const Model& model, Data& data, const VecRef& q,
-                                           const VecRef& qd, const VecRef& tau,
-                                           const Matrix6Xd* fext) {
+const Eigen::VectorXd& forwardDynamicsCrba(const Model& model, Data& data, const VecRef& q, const VecRef& qd,
+                                           const VecRef& tau, const Matrix6Xd* fext) {
   checkSize(model, data, tau, "tau");
   checkSize(model, data, qd, "qd");
   checkFext(model, fext);

@@ -12,8 +12,7 @@
 namespace jointsim::multibody {
 
 Eigen::Matrix3d rotationFromRpy(double roll, double pitch, double yaw) {
-  return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+  return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
           Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
       .toRotationMatrix();
 }
@@ -38,8 +37,7 @@ std::string BodyInertia::validate() const {
   if (!com.allFinite()) return "centre of mass must be finite";
   if (!inertia.allFinite()) return "inertia tensor must be finite";
   const double scale = std::max(inertia.cwiseAbs().maxCoeff(), 1e-300);
-  if ((inertia - inertia.transpose()).cwiseAbs().maxCoeff() > 1e-12 * scale)
-    return "inertia tensor must be symmetric";
+  if ((inertia - inertia.transpose()).cwiseAbs().maxCoeff() > 1e-12 * scale) return "inertia tensor must be symmetric";
   const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(inertia).eigenvalues();
   if (mass > 0.0 && ev.minCoeff() <= 0.0) {
     os << "inertia tensor about the CoM must be positive definite for a body with mass > 0, "
@@ -54,8 +52,8 @@ std::string BodyInertia::validate() const {
     return os.str();
   }
   if (mass == 0.0 && ev.minCoeff() < -1e-14 * scale) {
-    os << "inertia tensor must be positive semi-definite, its eigenvalues are [" << ev(0) << ", "
-       << ev(1) << ", " << ev(2) << "] kg·m²";
+    os << "inertia tensor must be positive semi-definite, its eigenvalues are [" << ev(0) << ", " << ev(1) << ", "
+       << ev(2) << "] kg·m²";
     return os.str();
   }
   return {};
@@ -106,8 +104,7 @@ int Model::frameIndex(const std::string& frame_name) const {
     if (frames[i].name == frame_name) return static_cast<int>(i);
   std::vector<std::string> names;
   for (const auto& f : frames) names.push_back(f.name);
-  throw InputError("unknown frame '" + frame_name + "' in robot '" + name +
-                   "'; known frames: " + listNames(names));
+  throw InputError("unknown frame '" + frame_name + "' in robot '" + name + "'; known frames: " + listNames(names));
 }
 
 void Model::updateDerived() {
@@ -148,8 +145,7 @@ ModelBuilder& ModelBuilder::addLink(const std::string& parent_link, const JointS
                                     const std::string& child_name, const BodyInertia& inertia) {
   const std::string where = "robot '" + model_.name + "', joint '" + joint.name + "'";
   const LinkRecord* parent = findLink(parent_link);
-  if (parent == nullptr)
-    throw InputError(where + ": parent link '" + parent_link + "' is not defined (yet)");
+  if (parent == nullptr) throw InputError(where + ": parent link '" + parent_link + "' is not defined (yet)");
   if (findLink(child_name) != nullptr || model_.hasFrame(child_name))
     throw InputError(where + ": link or frame '" + child_name + "' is defined twice");
   for (const auto& n : model_.joint_names)
@@ -158,8 +154,7 @@ ModelBuilder& ModelBuilder::addLink(const std::string& parent_link, const JointS
     throw InputError("robot '" + model_.name + "', link '" + child_name + "': " + why);
   if (!(joint.armature >= 0.0) || !std::isfinite(joint.armature))
     throw InputError(where + ": armature must be a finite number >= 0");
-  if (!joint.origin.R.allFinite() || !joint.origin.p.allFinite())
-    throw InputError(where + ": origin must be finite");
+  if (!joint.origin.R.allFinite() || !joint.origin.p.allFinite()) throw InputError(where + ": origin must be finite");
 
   const Placement parent_placement = parent->placement;  // parent link in its joint frame
   const int parent_joint = parent->joint;
@@ -197,14 +192,11 @@ ModelBuilder& ModelBuilder::addLink(const std::string& parent_link, const JointS
   return *this;
 }
 
-ModelBuilder& ModelBuilder::addFrame(const std::string& name, const std::string& link,
-                                     const Placement& placement) {
+ModelBuilder& ModelBuilder::addFrame(const std::string& name, const std::string& link, const Placement& placement) {
   const LinkRecord* rec = findLink(link);
   if (rec == nullptr)
-    throw InputError("robot '" + model_.name + "', frame '" + name + "': link '" + link +
-                     "' is not defined");
-  if (model_.hasFrame(name))
-    throw InputError("robot '" + model_.name + "': frame '" + name + "' is defined twice");
+    throw InputError("robot '" + model_.name + "', frame '" + name + "': link '" + link + "' is not defined");
+  if (model_.hasFrame(name)) throw InputError("robot '" + model_.name + "': frame '" + name + "' is defined twice");
   model_.frames.push_back({name, rec->joint, rec->placement * placement});
   return *this;
 }

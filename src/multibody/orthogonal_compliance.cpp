@@ -22,7 +22,8 @@ Model withOrthogonalCompliance(const Model& model, const std::vector<std::string
   link_names.insert(model.base_name);
   for (int i = 0; i < model.nq; ++i) {
     const auto k = static_cast<size_t>(i);
-    const std::string parent = model.parents[k] < 0 ? model.base_name : model.body_names[static_cast<size_t>(model.parents[k])];
+    const std::string parent =
+        model.parents[k] < 0 ? model.base_name : model.body_names[static_cast<size_t>(model.parents[k])];
     JointSpec js;
     js.name = model.joint_names[k];
     js.type = model.joint_types[k];
@@ -37,9 +38,12 @@ Model withOrthogonalCompliance(const Model& model, const std::vector<std::string
     // getOrthVectors ([Olsson2017, A.15]).
     const Eigen::Vector3d n = model.axes[k].normalized();
     Eigen::Vector3d u;
-    if (n.x() == 0.0) u = Eigen::Vector3d::UnitX().cross(n);
-    else if (n.y() == 0.0) u = Eigen::Vector3d::UnitY().cross(n);
-    else u = Eigen::Vector3d::UnitZ().cross(n);
+    if (n.x() == 0.0)
+      u = Eigen::Vector3d::UnitX().cross(n);
+    else if (n.y() == 0.0)
+      u = Eigen::Vector3d::UnitY().cross(n);
+    else
+      u = Eigen::Vector3d::UnitZ().cross(n);
     u.normalize();
     const Eigen::Vector3d v = n.cross(u);
     const std::string body = model.body_names[k];
@@ -65,4 +69,3 @@ Model withOrthogonalCompliance(const Model& model, const std::vector<std::string
 }
 
 }  // namespace jointsim::multibody
-

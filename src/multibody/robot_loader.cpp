@@ -9,9 +9,9 @@
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include "jointsim/common/error.hpp"
 #include "jointsim/io/input_files.hpp"
 #include "jointsim/io/yaml.hpp"
-#include "jointsim/common/error.hpp"
 
 namespace jointsim::multibody {
 namespace {
@@ -169,8 +169,14 @@ Model buildDhChain(const YamlValue& root, const std::string& name) {
     units.allowKeys({"length", "angle"});
     const std::string L = units["length"].asString("m", "m or mm");
     const std::string A = units["angle"].asString("rad", "rad or deg");
-    if (L == "mm") length_scale = 1e-3; else if (L != "m") units["length"].failExpected("m or mm");
-    if (A == "deg") angle_scale = kPi / 180.0; else if (A != "rad") units["angle"].failExpected("rad or deg");
+    if (L == "mm")
+      length_scale = 1e-3;
+    else if (L != "m")
+      units["length"].failExpected("m or mm");
+    if (A == "deg")
+      angle_scale = kPi / 180.0;
+    else if (A != "rad")
+      units["angle"].failExpected("rad or deg");
   }
   ModelBuilder builder(name, root["base_link"].asString("base", "a link name"));
   const YamlValue links = root.required("links", "the list of links of the chain");
@@ -271,7 +277,8 @@ Model buildTree(const YamlValue& root, const std::string& name) {
   std::string base;
   for (const auto& n : link_order)
     if (!parent_joint.count(n)) {
-      if (!base.empty()) links.fail("links '" + base + "' and '" + n + "' both have no parent joint; expected a single root");
+      if (!base.empty())
+        links.fail("links '" + base + "' and '" + n + "' both have no parent joint; expected a single root");
       base = n;
     }
   if (base.empty()) links.fail("every link has a parent joint (a cycle); expected one root link");

@@ -61,9 +61,8 @@ void checkTime(const CsvTable& t, int col) {
       throw InputError(t.path + ":" + std::to_string(t.lines[r]) + ": time column '" + t.header[col] +
                        "' is not finite");
     if (r > 0 && x < t.data(r - 1, col))
-      throw InputError(t.path + ":" + std::to_string(t.lines[r]) + ": time column '" + t.header[col] +
-                       "' decreases (" + num(t.data(r - 1, col)) + " -> " + num(x) +
-                       "); expected non-decreasing times");
+      throw InputError(t.path + ":" + std::to_string(t.lines[r]) + ": time column '" + t.header[col] + "' decreases (" +
+                       num(t.data(r - 1, col)) + " -> " + num(x) + "); expected non-decreasing times");
   }
 }
 
@@ -137,8 +136,8 @@ class Sampler {
   /// Linear interpolation of column c at t (held at B's range ends); at a repeated time, the last row.
   double interpolate(int c, double t) const {
     return interpolateLinear(
-        t_.size(), [this](size_t i) { return t_[i]; }, [this, c](size_t i) { return b_.data(static_cast<Eigen::Index>(i), c); },
-        t, Ends::Hold);
+        t_.size(), [this](size_t i) { return t_[i]; },
+        [this, c](size_t i) { return b_.data(static_cast<Eigen::Index>(i), c); }, t, Ends::Hold);
   }
 
   const CsvTable& b_;
@@ -171,8 +170,8 @@ CompareResult compareTables(const CsvTable& a, const CsvTable& b, const CompareO
   {
     const std::string ua = unitOf(a.header[ta]), ub = unitOf(b.header[tb]);
     if (!ua.empty() && !ub.empty() && ua != ub)
-      throw InputError("incompatible files: time column '" + a.header[ta] + "' of " + a.path + " vs '" +
-                       b.header[tb] + "' of " + b.path + " (different units)");
+      throw InputError("incompatible files: time column '" + a.header[ta] + "' of " + a.path + " vs '" + b.header[tb] +
+                       "' of " + b.path + " (different units)");
   }
   checkTime(a, ta);
   checkTime(b, tb);
@@ -270,9 +269,8 @@ CompareResult compareTables(const CsvTable& a, const CsvTable& b, const CompareO
       if (!std::isfinite(x) || !band.finite) {
         // Non-finite values: equal only when B has the same value (both NaN, or the same infinity).
         const std::vector<double> v = sampler.raw(cc.column_b, t);
-        const bool same = std::all_of(v.begin(), v.end(), [x](double z) {
-          return (std::isnan(x) && std::isnan(z)) || x == z;
-        });
+        const bool same =
+            std::all_of(v.begin(), v.end(), [x](double z) { return (std::isnan(x) && std::isnan(z)) || x == z; });
         dev = same ? 0.0 : std::numeric_limits<double>::infinity();
         y = v.front();
       } else if (x < band.lo) {

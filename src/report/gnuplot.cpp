@@ -11,9 +11,12 @@ namespace jointsim::report::gp {
 std::string quote(const std::string& s) {
   std::string out = "'";
   for (char c : s) {
-    if (c == '\'') out += "''";
-    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) out += ' ';
-    else out += c;
+    if (c == '\'')
+      out += "''";
+    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      out += ' ';
+    else
+      out += c;
   }
   return out + "'";
 }
@@ -42,13 +45,15 @@ const char* styleOf(experiments::LineStyle s) {
 
 }  // namespace
 
-Figure translate(const experiments::Figure& f, const std::string& var, int time_col, std::map<std::string, std::string>& blocks) {
+Figure translate(const experiments::Figure& f, const std::string& var, int time_col,
+                 std::map<std::string, std::string>& blocks) {
   Figure g{f.stem, f.title, f.rows, f.cols, {}};
   for (const experiments::Panel& p : f.panels) {
     Panel q;
     static_cast<experiments::PanelLayout&>(q) = p;
     if (p.y_step > 0) q.settings += "set ytics " + num(p.y_step) + "\n";
-    if (std::isfinite(p.y_min) && std::isfinite(p.y_max)) q.settings += "set yrange [" + num(p.y_min) + ":" + num(p.y_max) + "]\n";
+    if (std::isfinite(p.y_min) && std::isfinite(p.y_max))
+      q.settings += "set yrange [" + num(p.y_min) + ":" + num(p.y_max) + "]\n";
     for (const experiments::Series& s : p.series) {
       Series t;
       t.title = s.title;
@@ -82,31 +87,28 @@ Figure translate(const experiments::Figure& f, const std::string& var, int time_
   return g;
 }
 
-
 /// Standard look: white background, light grid, colour-blind-friendly line colours (matplotlib's tab10).
-const char* const kStyle =
-    "set encoding utf8\n"
-    "set datafile separator comma\n"
-    "set grid lc rgb '#d8d8d8' lw 1 dt 1\n"
-    "set border lw 1.2\n"
-    "set tics out nomirror\n"
-    "set mxtics\n"
-    "set mytics\n"
-    "set format y '%g'\n"
-    "set format x '%g'\n";
+const char* const kStyle = "set encoding utf8\n"
+                           "set datafile separator comma\n"
+                           "set grid lc rgb '#d8d8d8' lw 1 dt 1\n"
+                           "set border lw 1.2\n"
+                           "set tics out nomirror\n"
+                           "set mxtics\n"
+                           "set mytics\n"
+                           "set format y '%g'\n"
+                           "set format x '%g'\n";
 
-const char* const kLineTypes =
-    "set linetype 1 lc rgb '#1f77b4' lw 1.6 pt 7\n"
-    "set linetype 2 lc rgb '#d62728' lw 1.6 pt 7\n"
-    "set linetype 3 lc rgb '#2ca02c' lw 1.6 pt 7\n"
-    "set linetype 4 lc rgb '#ff7f0e' lw 1.6 pt 7\n"
-    "set linetype 5 lc rgb '#9467bd' lw 1.6 pt 7\n"
-    "set linetype 6 lc rgb '#8c564b' lw 1.6 pt 7\n"
-    "set linetype 7 lc rgb '#e377c2' lw 1.6 pt 7\n"
-    "set linetype 8 lc rgb '#7f7f7f' lw 1.6 pt 7\n"
-    "set linetype 9 lc rgb '#bcbd22' lw 1.6 pt 7\n"
-    "set linetype 10 lc rgb '#17becf' lw 1.6 pt 7\n"
-    "set linetype cycle 10\n";
+const char* const kLineTypes = "set linetype 1 lc rgb '#1f77b4' lw 1.6 pt 7\n"
+                               "set linetype 2 lc rgb '#d62728' lw 1.6 pt 7\n"
+                               "set linetype 3 lc rgb '#2ca02c' lw 1.6 pt 7\n"
+                               "set linetype 4 lc rgb '#ff7f0e' lw 1.6 pt 7\n"
+                               "set linetype 5 lc rgb '#9467bd' lw 1.6 pt 7\n"
+                               "set linetype 6 lc rgb '#8c564b' lw 1.6 pt 7\n"
+                               "set linetype 7 lc rgb '#e377c2' lw 1.6 pt 7\n"
+                               "set linetype 8 lc rgb '#7f7f7f' lw 1.6 pt 7\n"
+                               "set linetype 9 lc rgb '#bcbd22' lw 1.6 pt 7\n"
+                               "set linetype 10 lc rgb '#17becf' lw 1.6 pt 7\n"
+                               "set linetype cycle 10\n";
 
 /// The smallest of 1, 2, 5 × 10^n that is at least x > 0.
 double niceCeil(double x) {
@@ -184,8 +186,9 @@ std::string renderPanel(const Panel& p, double key_at = 0) {
   o << "set ylabel " << quote(p.ylabel) << "\n";
   if (y2)
     o << "set y2label " << quote(p.y2label) << "\nset link y2 via y*" << num(k) << " inverse y/" << num(k)
-      << "\nset y2tics " << y2Tics(p.y2_step > 0 ? p.y2_step : niceCeil(k * (mag1 > 0 ? mag1 : 1) / 5),
-                                   1.6 * std::max(k * mag1, mag2)) << "\nunset my2tics\n";
+      << "\nset y2tics "
+      << y2Tics(p.y2_step > 0 ? p.y2_step : niceCeil(k * (mag1 > 0 ? mag1 : 1) / 5), 1.6 * std::max(k * mag1, mag2))
+      << "\nunset my2tics\n";
   else
     o << "unset y2label\nunset link y2\nunset y2tics\nunset my2tics\n";
   o << (p.time_axis ? "set autoscale xfix\n" : "set autoscale x\n");

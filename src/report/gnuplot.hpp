@@ -13,18 +13,18 @@ namespace jointsim::report::gp {
 using experiments::Key;
 
 struct Series {
-  std::string data;       ///< gnuplot expression naming the data: a path variable or a datablock ($name)
-  std::string using_;     ///< the `using` specification
-  std::string title;      ///< legend entry (empty: none)
+  std::string data;             ///< gnuplot expression naming the data: a path variable or a datablock ($name)
+  std::string using_;           ///< the `using` specification
+  std::string title;            ///< legend entry (empty: none)
   std::string style = "lines";  ///< what follows `with`
-  double magnitude = 0;   ///< max |y|, for the automatic right axis (0: stays on the left)
-  bool header = true;     ///< the data start with a header line to skip
-  bool y2 = false;        ///< on the right axis
+  double magnitude = 0;         ///< max |y|, for the automatic right axis (0: stays on the left)
+  bool header = true;           ///< the data start with a header line to skip
+  bool y2 = false;              ///< on the right axis
 };
 
 struct Panel : experiments::PanelLayout {
   std::vector<Series> series;
-  std::string settings;   ///< extra gnuplot commands for this panel (built here, never from input text)
+  std::string settings;  ///< extra gnuplot commands for this panel (built here, never from input text)
 };
 
 struct Figure {
@@ -43,7 +43,8 @@ std::string num(double x);
 double niceCeil(double x);
 /// A figure of a run whose CSV is the gnuplot variable `var` (its time column `time_col`); inline points become
 /// datablocks added to `blocks`.
-Figure translate(const experiments::Figure& f, const std::string& var, int time_col, std::map<std::string, std::string>& blocks);
+Figure translate(const experiments::Figure& f, const std::string& var, int time_col,
+                 std::map<std::string, std::string>& blocks);
 /// The script lines drawing one figure into `output` (+ the suffix variable outsuffix) with `terminal`.
 std::string renderFigure(const Figure& f, const std::string& terminal, const std::string& output, double font_scale);
 /// Line colours (matplotlib's tab10) for the top of a script.

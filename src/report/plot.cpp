@@ -116,7 +116,6 @@ std::vector<Figure> runFigures(const LoadedRun& run, std::map<std::string, std::
 
 // ------------------------------------------------------------------------------------------------ sweeps
 
-
 struct ManifestRow {
   std::string run, status, output_dir, overrides;
   double wall_time_s = NAN, sim_time_s = NAN, real_time_factor = NAN;
@@ -126,11 +125,11 @@ std::vector<ManifestRow> readManifest(const std::string& path) {
   const io::CsvText t = io::readCsvText(path);
   // The first seven columns as written by `jointsim batch` since its first version; later ones (version,
   // commit, start time, inputs) are not needed here.
-  const std::vector<std::string> expected{"run", "status", "wall_time_s", "sim_time_s", "real_time_factor",
+  const std::vector<std::string> expected{"run",        "status",   "wall_time_s", "sim_time_s", "real_time_factor",
                                           "output_dir", "overrides"};
   if (t.header.size() < expected.size() || !std::equal(expected.begin(), expected.end(), t.header.begin()))
     throw InputError(path + ":1: expected a manifest header starting run,status,wall_time_s,sim_time_s,"
-                     "real_time_factor,output_dir,overrides");
+                            "real_time_factor,output_dir,overrides");
   auto number = [](const std::string& s) {
     char* end = nullptr;
     const double x = std::strtod(s.c_str(), &end);
@@ -211,10 +210,9 @@ SweepPlan sweepFigures(const std::string& sweep_dir) {
   const bool labels = rows.size() <= 60;
   const std::string yrange = "set yrange [" + num(static_cast<double>(rows.size()) - 0.4) + ":-0.6]\n";
   bool first = true;
-  for (const auto& [col, quantity, title] :
-       std::vector<std::tuple<int, std::string, std::string>>{{3, "wall time [s]", "wall-clock time per run"},
-                                                              {4, "real-time factor (sim time / wall time)",
-                                                               "real-time factor per run"}}) {
+  for (const auto& [col, quantity, title] : std::vector<std::tuple<int, std::string, std::string>>{
+           {3, "wall time [s]", "wall-clock time per run"},
+           {4, "real-time factor (sim time / wall time)", "real-time factor per run"}}) {
     double vmax = 0.0;  // at most about four labelled x tics: the first panel is narrow
     for (const auto& r : rows) vmax = std::max(vmax, col == 3 ? r.wall_time_s : r.real_time_factor);
     const std::string xtics = vmax > 0 ? "set xtics " + num(gp::niceCeil(vmax / 4)) + "\n" : std::string();
@@ -224,9 +222,10 @@ SweepPlan sweepFigures(const std::string& sweep_dir) {
     p.ylabel = "";
     p.time_axis = false;
     p.key = Key::bottom_right;
-    p.settings = "set style fill solid 0.85 border lc rgb '#404040'\nset xrange [0:*]\nset grid xtics noytics\n" +
-                 yrange + xtics + (first && labels ? std::string("set ytics scale 0 font ',9'\n")
-                                           : std::string("set ytics scale 0 format ''\n"));
+    p.settings =
+        "set style fill solid 0.85 border lc rgb '#404040'\nset xrange [0:*]\nset grid xtics noytics\n" + yrange +
+        xtics +
+        (first && labels ? std::string("set ytics scale 0 font ',9'\n") : std::string("set ytics scale 0 format ''\n"));
     Series s;
     s.data = "$runs";
     s.header = false;
@@ -267,8 +266,11 @@ SweepPlan sweepFigures(const std::string& sweep_dir) {
       return plan;
   const auto key = keySignal(runs.front().second.data);
   if (!key) return plan;
-  Figure overlay{"sweep_overlay", name + ": " + key->what + " across runs (" + runs.front().second.data.experiment + ")",
-                 1, 1, {}};
+  Figure overlay{"sweep_overlay",
+                 name + ": " + key->what + " across runs (" + runs.front().second.data.experiment + ")",
+                 1,
+                 1,
+                 {}};
   Panel p;
   p.title = key->what;
   p.xlabel = key->xlabel;
@@ -284,8 +286,7 @@ SweepPlan sweepFigures(const std::string& sweep_dir) {
     Series s;
     s.data = r.var;
     s.title = runs[i].first;
-    const std::string yexpr =
-        "$" + std::to_string(y + 1) + (ym >= 0 ? "-$" + std::to_string(ym + 1) : std::string());
+    const std::string yexpr = "$" + std::to_string(y + 1) + (ym >= 0 ? "-$" + std::to_string(ym + 1) : std::string());
     s.using_ = std::to_string(x + 1) + ":((" + yexpr + ")*" + num(key->factor) + ")";
     p.series.push_back(s);
     plan.runs.push_back(r);
@@ -354,7 +355,7 @@ std::vector<std::string> plotRun(const std::string& run_dir, const std::string& 
   const bool is_sweep = !is_run && fs::is_regular_file(dir / "manifest.csv");
   if (!is_run && !is_sweep)
     throw InputError(run_dir + ": neither a run folder (summary.json and the CSV log of `jointsim run`) nor a sweep "
-                     "folder (manifest.csv of `jointsim batch`)");
+                               "folder (manifest.csv of `jointsim batch`)");
   const std::string gnuplot = findGnuplot(options.gnuplot);
 
   // What to draw.

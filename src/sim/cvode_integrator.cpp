@@ -115,21 +115,21 @@ struct CvodeIntegrator::Impl {
 
   SUNContext ctx = nullptr;
   void* mem = nullptr;
-  N_Vector y = nullptr;               // state work/output vector (also the template vector)
-  SUNMatrix A = nullptr;              // BDF only
-  SUNLinearSolver LS = nullptr;       // BDF only
-  SUNNonlinearSolver NLS = nullptr;   // Adams only (BDF uses CVODE's own default Newton solver)
+  N_Vector y = nullptr;              // state work/output vector (also the template vector)
+  SUNMatrix A = nullptr;             // BDF only
+  SUNLinearSolver LS = nullptr;      // BDF only
+  SUNNonlinearSolver NLS = nullptr;  // Adams only (BDF uses CVODE's own default Newton solver)
 
   bool initialized = false;
-  bool fresh = true;                  // no CVode call since the last (Re)Init
-  double t0 = kNaN;                   // time of the last initialize()
-  double t_last = kNaN;               // last result time (see time())
+  bool fresh = true;     // no CVode call since the last (Re)Init
+  double t0 = kNaN;      // time of the last initialize()
+  double t_last = kNaN;  // last result time (see time())
 
-  bool stop_set = false;              // user stop time requested
+  bool stop_set = false;  // user stop time requested
   double stop_time = 0.0;
-  bool cvode_tstop_touched = false;   // CVodeSetStopTime was ever called (must be neutralised on clear)
+  bool cvode_tstop_touched = false;  // CVodeSetStopTime was ever called (must be neutralised on clear)
 
-  SolverStats base;                   // counters accumulated from earlier segments
+  SolverStats base;  // counters accumulated from earlier segments
   int n_roots = 0;
   RootFunction root_fn;
   bool root_found = false;
@@ -139,16 +139,16 @@ struct CvodeIntegrator::Impl {
   std::exception_ptr callback_exception;
   double callback_exception_time = kNaN;
   const char* callback_exception_source = "";  // "right-hand side" or "Jacobian"
-  bool poisoned = false;              // a callback failed fatally in this call: fail all further calls
+  bool poisoned = false;                       // a callback failed fatally in this call: fail all further calls
   bool nonfinite_seen = false;
-  long nonfinite_count = 0;           // non-finite RHS/Jacobian results in this advance() call
+  long nonfinite_count = 0;  // non-finite RHS/Jacobian results in this advance() call
   double nonfinite_time = kNaN;
   Eigen::Index nonfinite_row = -1;
-  Eigen::Index nonfinite_col = -1;    // -1 for the RHS
+  Eigen::Index nonfinite_col = -1;  // -1 for the RHS
   double nonfinite_value = 0.0;
-  std::string cvode_message;          // last CVODE error text (from the error handler)
-  std::string cvode_first_warning;    // first CVODE warning text in this call
-  std::string cvode_warning;          // last CVODE warning text in this call
+  std::string cvode_message;        // last CVODE error text (from the error handler)
+  std::string cvode_first_warning;  // first CVODE warning text in this call
+  std::string cvode_warning;        // last CVODE warning text in this call
   long cvode_warnings = 0;
 
   ~Impl() {
@@ -203,8 +203,8 @@ struct CvodeIntegrator::Impl {
       }
       msg << "CVODE integrator";
       if (!component.empty()) msg << " (" << component << ")";
-      msg << ": " << callback_exception_source << " threw at t = " << formatTime(t) << " s: " << original
-          << " [" << what << " returned " << name << ", flag RHS_EXCEPTION]";
+      msg << ": " << callback_exception_source << " threw at t = " << formatTime(t) << " s: " << original << " ["
+          << what << " returned " << name << ", flag RHS_EXCEPTION]";
       if (!cvode_message.empty()) msg << "; CVODE: " << cvode_message;
       auto ep = callback_exception;
       callback_exception = nullptr;
@@ -223,8 +223,8 @@ struct CvodeIntegrator::Impl {
       } else {
         msg << "J(" << nonfinite_row << ", " << nonfinite_col << ")";
       }
-      msg << " = " << nonfinite_value << ") at t = " << formatTime(nonfinite_time) << " s, "
-          << nonfinite_count << " time(s) in this call";
+      msg << " = " << nonfinite_value << ") at t = " << formatTime(nonfinite_time) << " s, " << nonfinite_count
+          << " time(s) in this call";
       if (nonfinite_count > opts.max_nonfinite_retries) msg << " (retry limit max_nonfinite_retries exceeded)";
     }
     if (cvode_warnings > 0) {
@@ -301,8 +301,8 @@ struct CvodeIntegrator::Impl {
     return 0;
   }
 
-  static int jacCallback(realtype t, N_Vector yv, N_Vector fyv, SUNMatrix J, void* user_data, N_Vector,
-                         N_Vector, N_Vector) noexcept {
+  static int jacCallback(realtype t, N_Vector yv, N_Vector fyv, SUNMatrix J, void* user_data, N_Vector, N_Vector,
+                         N_Vector) noexcept {
     auto* self = static_cast<Impl*>(user_data);
     if (self->poisoned) return -1;
     const Eigen::Map<const Eigen::VectorXd> ym(N_VGetArrayPointer(yv), self->n);
@@ -335,12 +335,11 @@ struct CvodeIntegrator::Impl {
     return 0;
   }
 
-  static void errCallback(int error_code, const char* module, const char* function, char* msg,
-                          void* eh_data) noexcept {
+  static void errCallback(int error_code, const char* module, const char* function, char* msg, void* eh_data) noexcept {
     auto* self = static_cast<Impl*>(eh_data);
     try {
-      std::string text = std::string("[") + (module ? module : "") + " " + (function ? function : "") + "] " +
-                         (msg ? msg : "");
+      std::string text =
+          std::string("[") + (module ? module : "") + " " + (function ? function : "") + "] " + (msg ? msg : "");
       if (error_code == CV_WARNING) {
         if (self->cvode_warnings == 0) self->cvode_first_warning = text;
         self->cvode_warning = std::move(text);
@@ -371,7 +370,7 @@ struct CvodeIntegrator::Impl {
       A = SUNDenseMatrix(n, n, ctx);
       if (A == nullptr) throw Error(prefix() + ": allocation of the dense Jacobian matrix failed");
       LS = opts.dense_solver == CvodeOptions::DenseSolver::Eigen ? makeEigenDenseSolver(n, ctx)
-                                                                  : SUNLinSol_Dense(y, A, ctx);
+                                                                 : SUNLinSol_Dense(y, A, ctx);
       if (LS == nullptr) throw Error(prefix() + ": creation of the dense linear solver failed");
       check(CVodeSetLinearSolver(mem, LS, A), "CVodeSetLinearSolver");
       if (jac) check(CVodeSetJacFn(mem, &Impl::jacCallback), "CVodeSetJacFn");
@@ -412,8 +411,8 @@ struct CvodeIntegrator::Impl {
     long nsteps = 0, nfe = 0, nsetups = 0, netf = 0;
     int qlast = 0, qcur = 0;
     double hinused = 0, hlast = 0, hcur = 0, tcur = 0;
-    if (CVodeGetIntegratorStats(mem, &nsteps, &nfe, &nsetups, &netf, &qlast, &qcur, &hinused, &hlast, &hcur,
-                                &tcur) == CV_SUCCESS) {
+    if (CVodeGetIntegratorStats(mem, &nsteps, &nfe, &nsetups, &netf, &qlast, &qcur, &hinused, &hlast, &hcur, &tcur) ==
+        CV_SUCCESS) {
       s.steps = nsteps;
       s.rhs_evals = nfe;
       s.lin_setups = nsetups;
@@ -449,8 +448,8 @@ CvodeIntegrator::CvodeIntegrator(int n, RhsFunction rhs, CvodeOptions options, J
   }
   if (options.atol_vector.size() > 0) {
     if (options.atol_vector.size() != n) {
-      bad("atol_vector has " + std::to_string(options.atol_vector.size()) + " entries, expected " +
-          std::to_string(n) + " (one per state)");
+      bad("atol_vector has " + std::to_string(options.atol_vector.size()) + " entries, expected " + std::to_string(n) +
+          " (one per state)");
     }
     for (Eigen::Index i = 0; i < n; ++i) {
       const double a = options.atol_vector[i];

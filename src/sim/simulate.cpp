@@ -17,7 +17,8 @@ constexpr double kSampleOutputTolerance = 1e-12;
 }  // namespace
 
 void SimulateOptions::validate() const {
-  if (!(t_end > 0.0) || !std::isfinite(t_end)) throw InputError("simulate: t_end: expected a finite time > 0 s, got " + formatNumber(t_end));
+  if (!(t_end > 0.0) || !std::isfinite(t_end))
+    throw InputError("simulate: t_end: expected a finite time > 0 s, got " + formatNumber(t_end));
   const bool rate = output_rate > 0.0, interval = output_interval > 0.0;
   if (rate == interval || !std::isfinite(output_rate) || !std::isfinite(output_interval))
     throw InputError("simulate: give exactly one output grid: output_rate > 0 Hz or output_interval > 0 s");
@@ -63,7 +64,10 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
   const int n = plant.stateSize();
   const double t_end = options.t_end;
   CvodeIntegrator integ(
-      n, [&plant](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) { plant.derivatives(t, y, yd); },
+      n,
+      [&plant](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+        plant.derivatives(t, y, yd);
+      },
       solver);
   if (plant.rootCount() > 0)
     integ.setRootFunction(plant.rootCount(), [&plant](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -96,7 +100,9 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
   Eigen::VectorXd row(1 + static_cast<Eigen::Index>(plant.signalNames().size()));
   SimulationResult result;
   Eigen::VectorXd y = plant.initialState();
-  if (y.size() != n) throw InputError(plant.name() + ": initial state has " + std::to_string(y.size()) + " entries, expected " + std::to_string(n));
+  if (y.size() != n)
+    throw InputError(plant.name() + ": initial state has " + std::to_string(y.size()) + " entries, expected " +
+                     std::to_string(n));
   auto emit = [&](double t) {
     row[0] = t;
     plant.signals(t, y, row.tail(row.size() - 1));
@@ -166,7 +172,8 @@ TableSink::TableSink(std::vector<std::string> columns) : columns_(std::move(colu
 
 void TableSink::operator()(const Eigen::VectorXd& row) {
   if (static_cast<size_t>(row.size()) != columns_.size())
-    throw Error("TableSink: row of " + std::to_string(row.size()) + " values for " + std::to_string(columns_.size()) + " columns");
+    throw Error("TableSink: row of " + std::to_string(row.size()) + " values for " + std::to_string(columns_.size()) +
+                " columns");
   data_.insert(data_.end(), row.data(), row.data() + row.size());
   ++rows_;
 }

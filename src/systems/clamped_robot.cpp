@@ -57,8 +57,8 @@ sim::CvodeOptions ClampingSetup::defaultSolver() { return sim::stiffDriveSolver(
 
 void ClampingSetup::validate() const {
   if (static_cast<int>(axes.size()) != arm.nq)
-    throw InputError("clamping: expected one axis per movable joint of '" + arm.name + "' (" +
-                     std::to_string(arm.nq) + "), got " + std::to_string(axes.size()));
+    throw InputError("clamping: expected one axis per movable joint of '" + arm.name + "' (" + std::to_string(arm.nq) +
+                     "), got " + std::to_string(axes.size()));
   std::set<std::string> seen;
   for (const auto& a : axes) {
     a.validate();
@@ -137,13 +137,14 @@ ClampedRobot::ClampedRobot(ClampingSetup setup) : s_((setup.validate(), std::mov
   for (int k = 0; k < n_; ++k) phi_m0_[k] = s_.axes[static_cast<size_t>(k)].ratio * phi_out[k];
   modes_.assign(static_cast<size_t>(n_), FrictionMode::Stuck);
   fext_ = multibody::Matrix6Xd::Zero(6, model_.nq);
-  for (Eigen::VectorXd* v : {&tau_out_, &qa_, &qda_, &phi_out_, &phid_out_, &tau_s_, &tau_m_, &tau_f_, &stuck_, &wdot_, &u_, &ref_})
+  for (Eigen::VectorXd* v :
+       {&tau_out_, &qa_, &qda_, &phi_out_, &phid_out_, &tau_s_, &tau_m_, &tau_f_, &stuck_, &wdot_, &u_, &ref_})
     v->setZero(n_);
   tau_.setZero(model_.nq);
   for (const auto& a : s_.axes)
-    for (const char* c : {".motor_angle[rad]", ".motor_speed[rad/s]", ".motor_torque[N·m]", ".spring_torque[N·m]",
-                          ".deflection[rad]", ".joint_angle[rad]", ".reference[rad]", ".friction_torque[N·m]",
-                          ".friction_mode[-]", ".orth_angle[rad]"})
+    for (const char* c :
+         {".motor_angle[rad]", ".motor_speed[rad/s]", ".motor_torque[N·m]", ".spring_torque[N·m]", ".deflection[rad]",
+          ".joint_angle[rad]", ".reference[rad]", ".friction_torque[N·m]", ".friction_mode[-]", ".orth_angle[rad]"})
       signals_.push_back(a.joint + c);
   for (const char* c : {"clamp.dx[m]", "clamp.dy[m]", "clamp.dz[m]", "clamp.rx[rad]", "clamp.ry[rad]", "clamp.rz[rad]",
                         "clamp.displacement[m]", "clamp.rotation[rad]", "clamp.force[N]", "clamp.moment[N·m]"})
@@ -222,10 +223,10 @@ void ClampedRobot::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) c
     u_[k] = a.controller_ratio * qdr + a.kp * (phi_m0_[k] + a.controller_ratio * qr - phi_m) - w_m;
     tau_m_[k] = a.ks * (u_[k] + x);
     stuck_[k] = tau_m_[k] - tau_s_[k];
-    tau_f_[k] = drive::frictionTorque(modes_[static_cast<size_t>(k)], drive::frictionTableValue(a.tau_pos, std::abs(w_m)),
-                                      stuck_[k]);
-    wdot_[k] = modes_[static_cast<size_t>(k)] == FrictionMode::Stuck ? 0.0
-                                                                      : (tau_m_[k] - tau_f_[k] - tau_s_[k]) / a.inertia;
+    tau_f_[k] = drive::frictionTorque(modes_[static_cast<size_t>(k)],
+                                      drive::frictionTableValue(a.tau_pos, std::abs(w_m)), stuck_[k]);
+    wdot_[k] =
+        modes_[static_cast<size_t>(k)] == FrictionMode::Stuck ? 0.0 : (tau_m_[k] - tau_f_[k] - tau_s_[k]) / a.inertia;
   }
   // Joint torques: τ_out = r τ_s on the gear outputs, τ_joint = G⁻ᵀ τ_out.
   auto& tau_out = tau_out_;
@@ -243,7 +244,8 @@ void ClampedRobot::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) c
   multibody::aba(model_, data_, q, qd, tau_, &fext_);
 }
 
-void ClampedRobot::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+void ClampedRobot::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                               Eigen::Ref<Eigen::VectorXd> ydot) const {
   solve(t, y);
   const int nq = model_.nq;
   ydot.head(nq) = y.segment(nq, nq);
@@ -262,7 +264,8 @@ void ClampedRobot::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, E
     const auto& a = s_.axes[static_cast<size_t>(k)];
     const double t0 = drive::frictionTableValue(a.tau_pos, 0.0);
     double g0 = 1, g1 = 1;
-    drive::frictionRoots(modes_[static_cast<size_t>(k)], stuck_[k], y[motorState(k) + 1], wdot_[k], t0, a.peak * t0, g0, g1);
+    drive::frictionRoots(modes_[static_cast<size_t>(k)], stuck_[k], y[motorState(k) + 1], wdot_[k], t0, a.peak * t0, g0,
+                         g1);
     g[2 * k] = g0;
     g[2 * k + 1] = g1;
   }
@@ -277,7 +280,8 @@ void ClampedRobot::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>
       const auto i = static_cast<size_t>(k);
       const drive::FrictionEventFlags f = iter == 0 ? drive::frictionEventFlags(fired, i) : drive::FrictionEventFlags{};
       const double t0 = drive::frictionTableValue(a.tau_pos, 0.0);
-      const FrictionMode m = drive::nextFrictionMode(modes_[i], false, stuck_[k], y[motorState(k) + 1], wdot_[k], t0, a.peak * t0, f);
+      const FrictionMode m =
+          drive::nextFrictionMode(modes_[i], false, stuck_[k], y[motorState(k) + 1], wdot_[k], t0, a.peak * t0, f);
       if (m != modes_[i]) {
         modes_[i] = m;
         changed = true;
@@ -302,7 +306,8 @@ std::vector<double> ClampedRobot::timeEvents(double) const {
   return t;
 }
 
-void ClampedRobot::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const {
+void ClampedRobot::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                           Eigen::Ref<Eigen::VectorXd> out) const {
   solve(t, y);
   Eigen::Index c = 0;
   for (int k = 0; k < n_; ++k) {

@@ -13,7 +13,8 @@ using drive::frictionModeNumber;
 using drive::frictionTableValue;
 
 bool ChainElement::isFriction() const {
-  return type == ChainElementType::Clutch || type == ChainElementType::Brake || type == ChainElementType::BearingFriction;
+  return type == ChainElementType::Clutch || type == ChainElementType::Brake ||
+         type == ChainElementType::BearingFriction;
 }
 
 sim::CvodeOptions DriveChainSetup::defaultSolver() { return sim::stiffDriveSolver(1e-6, 1e-8); }
@@ -23,7 +24,8 @@ void DriveChainSetup::validate() const {
   const char* const c = "drive chain";
   check::that(!inertias.empty(), c, "inertias", "expected at least one inertia");
   const int n = static_cast<int>(inertias.size());
-  for (size_t i = 0; i < inertias.size(); ++i) check::positive(c, "inertias[" + std::to_string(i) + "].J", inertias[i].J, "kg·m²");
+  for (size_t i = 0; i < inertias.size(); ++i)
+    check::positive(c, "inertias[" + std::to_string(i) + "].J", inertias[i].J, "kg·m²");
   for (size_t k = 0; k < elements.size(); ++k) {
     const ChainElement& e = elements[k];
     const std::string key = "elements[" + std::to_string(k) + "]";
@@ -217,7 +219,8 @@ void DriveChain::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) con
   for (int i = 0; i < n; ++i) acc_[i] = known_[i] * Jinv(i);
 }
 
-void DriveChain::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+void DriveChain::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                             Eigen::Ref<Eigen::VectorXd> ydot) const {
   solve(t, y);
   for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(s_.inertias.size()); ++i) {
     ydot[2 * i] = y[2 * i + 1];
@@ -284,7 +287,8 @@ void DriveChain::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& 
       // Crossings CVODE reported at this event (first pass only): the located point may sit exactly on
       // the threshold, so the decision follows the reported crossing rather than a strict comparison
       // (a root function that restarts at exactly zero is not reported again).
-      const drive::FrictionEventFlags flags = iter == 0 ? drive::frictionEventFlags(fired, k) : drive::FrictionEventFlags{};
+      const drive::FrictionEventFlags flags =
+          iter == 0 ? drive::frictionEventFlags(fired, k) : drive::FrictionEventFlags{};
       const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(e), S = tau_el_[e];
       const bool free = el.type != ChainElementType::BearingFriction && el.fn_max * el.normalized.value(t) <= 0.0;
       const FrictionMode m = drive::nextFrictionMode(modes_[k], free, S, w, a, t0, t0max, flags);

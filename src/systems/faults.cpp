@@ -13,8 +13,8 @@
 namespace jointsim::systems {
 namespace {
 
-const char* const kNames[] = {"gear_stiffness_scale", "backlash_add", "coulomb_friction_scale", "sigma0_scale",
-                              "torque_constant_scale", "sensor_bias"};
+const char* const kNames[] = {"gear_stiffness_scale", "backlash_add",          "coulomb_friction_scale",
+                              "sigma0_scale",         "torque_constant_scale", "sensor_bias"};
 
 [[noreturn]] void notApplicable(const Fault& f, const std::string& component) {
   throw InputError("fault " + describe(f) + ": does not apply to " + component);
@@ -147,8 +147,7 @@ void applyFault(DriveSpec& d, const Fault& f) {
     case FaultType::CoulombFrictionScale:
     case FaultType::Sigma0Scale: frictionFault(d, f); break;
     case FaultType::TorqueConstantScale:
-      if (!d.electrics)
-        notApplicable(f, "a torque-controlled motor without electrics (k_t and k_e are not used)");
+      if (!d.electrics) notApplicable(f, "a torque-controlled motor without electrics (k_t and k_e are not used)");
       d.motor.kt *= f.value;
       d.motor.ke *= f.value;
       break;

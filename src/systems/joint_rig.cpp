@@ -14,8 +14,8 @@ void JointRigSetup::validate() const {
   // Keys as in a joint_rig experiment file.
   const char* const c = "joint rig";
   check::that(transmission != nullptr, c, "transmission", "missing");
-  check::that(!((input == RigInput::Voltage || (input == RigInput::VelocityPI && pi.voltage_output)) && !motor), c, "motor",
-              "voltage input needs the motor electrics (motor parameters)");
+  check::that(!((input == RigInput::Voltage || (input == RigInput::VelocityPI && pi.voltage_output)) && !motor), c,
+              "motor", "voltage input needs the motor electrics (motor parameters)");
   if (motor) {
     try {
       motor->validate();
@@ -32,7 +32,8 @@ void JointRigSetup::validate() const {
               "friction on the output side of a clamped output has no effect; use side: motor");
   if (input == RigInput::VelocityPI) {
     check::positive(c, "input.controller.limit", pi.limit, "(N·m or V)");
-    check::that(!(pi.measure == Side::Output && clamped), c, "input.controller.measure", "the clamped output does not move");
+    check::that(!(pi.measure == Side::Output && clamped), c, "input.controller.measure",
+                "the clamped output does not move");
   }
   check::positive(c, "duration", duration, "s");
   check::positive(c, "log_rate", log_rate, "Hz");
@@ -163,8 +164,8 @@ JointRig::Eval JointRig::evaluate(double t, const Eigen::Ref<const Eigen::Vector
     e.tau_out = N * e.tau_in;
     return e;
   }
-  const drive::PortTorques pt = s_.transmission->evaluate({q_m, qd_m, e.q_l, e.qd_l}, nx_ > 0 ? y.data() + x_idx_ : nullptr,
-                                                           xdot_tr);
+  const drive::PortTorques pt =
+      s_.transmission->evaluate({q_m, qd_m, e.q_l, e.qd_l}, nx_ > 0 ? y.data() + x_idx_ : nullptr, xdot_tr);
   e.tau_in = pt.tau_in;
   e.tau_out = pt.tau_out;
   const double drive_m = e.tau_motor - e.tau_in;
@@ -182,7 +183,8 @@ JointRig::Eval JointRig::evaluate(double t, const Eigen::Ref<const Eigen::Vector
   return e;
 }
 
-void JointRig::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+void JointRig::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                           Eigen::Ref<Eigen::VectorXd> ydot) const {
   const Eval e = evaluate(t, y, nx_ > 0 ? ydot.data() + x_idx_ : nullptr, nz_ > 0 ? ydot.data() + z_idx_ : nullptr);
   ydot[0] = y[1];
   ydot[1] = e.qdd_m;

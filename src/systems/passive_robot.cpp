@@ -70,7 +70,8 @@ Eigen::VectorXd PassiveRobot::initialState() const {
   return y;
 }
 
-void PassiveRobot::derivatives(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+void PassiveRobot::derivatives(double, const Eigen::Ref<const Eigen::VectorXd>& y,
+                               Eigen::Ref<Eigen::VectorXd> ydot) const {
   const Eigen::Index n = model_.nq;
   tau_.noalias() = -damping_.cwiseProduct(y.tail(n));
   ydot.head(n) = y.tail(n);

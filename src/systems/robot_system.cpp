@@ -127,10 +127,10 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
   }
   id_data_ = multibody::Data(id_model_);
   tip_ = model_.frameIndex(model_.tip_frame);
-  const char* per_joint[][2] = {{"q_set", "rad"},          {"q", "rad"},           {"q_fb", "rad"},
-                                {"qd", "rad/s"},           {"motor_velocity", "rad/s"}, {"current", "A"},
-                                {"current_ref", "A"},      {"voltage", "V"},       {"gear_torque", "N·m"},
-                                {"friction_torque", "N·m"}, {"id_torque", "N·m"}};
+  const char* per_joint[][2] = {
+      {"q_set", "rad"},    {"q", "rad"},         {"q_fb", "rad"},  {"qd", "rad/s"},        {"motor_velocity", "rad/s"},
+      {"current", "A"},    {"current_ref", "A"}, {"voltage", "V"}, {"gear_torque", "N·m"}, {"friction_torque", "N·m"},
+      {"id_torque", "N·m"}};
   for (const auto& name : model_.joint_names)
     for (const auto& c : per_joint) signal_names_.push_back(std::string(c[0]) + "_" + name + "[" + c[1] + "]");
   for (const char* c : {"tcp_x[m]", "tcp_y[m]", "tcp_z[m]", "tcp_roll[rad]", "tcp_pitch[rad]", "tcp_yaw[rad]"})
@@ -291,8 +291,8 @@ void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>&
     qdm_meas += rng_->gauss(S.motor_velocity_noise);
     prev_qm_meas_[k] = qm_meas;
     const double i_meas = quantise(i + rng_->gauss(S.current_noise), S.current_quantum);
-    const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q_meas, qm_meas, qdm_meas, i_meas, L.ratio,
-                                       d.motor.V_supply};
+    const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q_meas,  qm_meas,
+                                       qdm_meas,      i_meas,         L.ratio, d.motor.V_supply};
     double* x = L.controller >= 0 ? ctrl_x_.data() + L.controller : nullptr;
     const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(in, x, xdot.data());
     for (int j = 0; j < L.n_controller; ++j) x[j] += Ts * xdot[static_cast<size_t>(j)];  // forward Euler
@@ -338,8 +338,8 @@ void RobotSystem::controllerStage(const Eigen::Ref<const Eigen::VectorXd>& y, do
       out.u = held_u_[k];
       out.i_ref = held_i_ref_[k];
     } else {
-      const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], sig_.q_fb[k], sig_.qm[k], sig_.qdm[k],
-                                         sig_.current[k], L.ratio, d.motor.V_supply};
+      const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k],  sig_.q_fb[k], sig_.qm[k],
+                                         sig_.qdm[k],   sig_.current[k], L.ratio,      d.motor.V_supply};
       out = controllers_[static_cast<size_t>(k)].evaluate(in, L.controller >= 0 ? y.data() + L.controller : nullptr,
                                                           L.controller >= 0 ? ydot + L.controller : nullptr);
     }
@@ -382,8 +382,8 @@ void RobotSystem::transmissionStage(const Eigen::Ref<const Eigen::VectorXd>& y, 
       continue;
     }
     const drive::PortTorques pt =
-        d.transmission->evaluate({sig_.qm[k], sig_.qdm[k], phi_[k], phid_[k]}, L.gear >= 0 ? y.data() + L.gear : nullptr,
-                                 L.gear >= 0 ? ydot + L.gear : nullptr);
+        d.transmission->evaluate({sig_.qm[k], sig_.qdm[k], phi_[k], phid_[k]},
+                                 L.gear >= 0 ? y.data() + L.gear : nullptr, L.gear >= 0 ? ydot + L.gear : nullptr);
     sig_.tau_gear[k] = pt.tau_out;
     ydot[L.motor] = sig_.qdm[k];
     ydot[L.motor + 1] = (sig_.tau_motor[k] - pt.tau_in) / d.motor.J_M;  // rotor: J_M q̈_m = τ_M − τ_in
@@ -395,18 +395,20 @@ void RobotSystem::frictionStage(const Eigen::Ref<const Eigen::VectorXd>& y, doub
   for (int k = 0; k < model_.nq; ++k) {
     const DriveSpec& d = drives_[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
-    sig_.tau_friction[k] =
-        d.friction ? d.friction->evaluate({phid_[k], sig_.tau_gear[k]}, L.friction >= 0 ? y.data() + L.friction : nullptr,
-                                          L.friction >= 0 ? ydot + L.friction : nullptr)
-                   : 0.0;
+    sig_.tau_friction[k] = d.friction ? d.friction->evaluate({phid_[k], sig_.tau_gear[k]},
+                                                             L.friction >= 0 ? y.data() + L.friction : nullptr,
+                                                             L.friction >= 0 ? ydot + L.friction : nullptr)
+                                      : 0.0;
   }
 }
 
 void RobotSystem::jointTorqueStage() const {
   // τ_out = τ_gear − τ_f on the gear outputs; τ_joint = G⁻ᵀ τ_out.
   tau_out_ = sig_.tau_gear - sig_.tau_friction;
-  if (coupled_) tau_.noalias() = Ginv_.transpose() * tau_out_;
-  else tau_ = tau_out_;
+  if (coupled_)
+    tau_.noalias() = Ginv_.transpose() * tau_out_;
+  else
+    tau_ = tau_out_;
   sig_.tau_joint = tau_;
 }
 
@@ -423,8 +425,10 @@ void RobotSystem::multibodyStage(double t, const Eigen::Ref<const Eigen::VectorX
   }
   if (crba_path_) {
     // (M + G⁻ᵀ diag(N² J_M) G⁻¹) q̈ = τ − h(q, q̇) [− Jᵀ f_ext through RNEA]
-    if (fext) data_.nle = multibody::rnea(model_, data_, q, qd, zero_, fext);
-    else multibody::nonLinearEffects(model_, data_, q, qd);
+    if (fext)
+      data_.nle = multibody::rnea(model_, data_, q, qd, zero_, fext);
+    else
+      multibody::nonLinearEffects(model_, data_, q, qd);
     M_ = multibody::crba(model_, data_, q);
     M_ += reflected_;
     llt_.compute(M_);
@@ -462,7 +466,8 @@ void RobotSystem::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
   yd.segment(n, n) = sig_.qdd;
 }
 
-void RobotSystem::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+void RobotSystem::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                              Eigen::Ref<Eigen::VectorXd> ydot) const {
   evaluate(t, y, ydot.data());
 }
 
@@ -517,7 +522,7 @@ double RobotSystem::mechanicalEnergy(const Eigen::Ref<const Eigen::VectorXd>& y)
     const double qdm = y[L.motor + 1];
     E += 0.5 * drives_[static_cast<size_t>(k)].motor.J_M * qdm * qdm;
     E += drives_[static_cast<size_t>(k)].transmission->storedEnergy({y[L.motor], qdm, phi[k], phid[k]},
-                                                                     L.gear >= 0 ? y.data() + L.gear : nullptr);
+                                                                    L.gear >= 0 ? y.data() + L.gear : nullptr);
   }
   return E;
 }

@@ -86,9 +86,10 @@ RobotSystem loadRobotWithDrives(const std::string& path, const std::vector<Fault
     if (d.has("friction")) s.friction = drive::frictionFromYaml(d["friction"]);
     s.controller = readController(d["controller"]);
     if (const YamlValue sn = d["sensors"]; sn.defined()) {
-      sn.expectMap("a sensors mapping {joint_quantum, motor_quantum, current_quantum, joint_noise, motor_velocity_noise, current_noise}");
-      sn.allowKeys({"joint_quantum", "motor_quantum", "current_quantum", "joint_noise", "motor_velocity_noise", "current_noise",
-                    "joint_bias"});
+      sn.expectMap(
+          "a sensors mapping {joint_quantum, motor_quantum, current_quantum, joint_noise, motor_velocity_noise, current_noise}");
+      sn.allowKeys({"joint_quantum", "motor_quantum", "current_quantum", "joint_noise", "motor_velocity_noise",
+                    "current_noise", "joint_bias"});
       s.sensors.joint_bias = sn["joint_bias"].asDouble(0.0, "a joint-angle bias in rad");
       auto nonneg = [&](const char* key, const char* unit) {
         const double v = sn[key].asDouble(0.0, std::string("a value in ") + unit);

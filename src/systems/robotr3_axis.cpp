@@ -119,7 +119,8 @@ RobotR3Axis::Eval RobotR3Axis::evaluate(double t, const Eigen::Ref<const Eigen::
   return ev;
 }
 
-void RobotR3Axis::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+void RobotR3Axis::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                              Eigen::Ref<Eigen::VectorXd> ydot) const {
   const Eval ev = evaluate(t, y);
   const auto& m = s_.motor;
   ydot[0] = y[1];
@@ -154,7 +155,8 @@ void RobotR3Axis::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>&
   for (int iter = 0; iter < 20; ++iter) {
     const Eval ev = evaluate(t, y);
     const drive::FrictionEventFlags f = iter == 0 ? drive::frictionEventFlags(fired, 0) : drive::FrictionEventFlags{};
-    const FrictionMode m = drive::nextFrictionMode(mode_, false, ev.stuck_torque, ev.wm, ev.wm_dot, s_.Rv0, s_.peak * s_.Rv0, f);
+    const FrictionMode m =
+        drive::nextFrictionMode(mode_, false, ev.stuck_torque, ev.wm, ev.wm_dot, s_.Rv0, s_.peak * s_.Rv0, f);
     if (m == mode_) break;
     mode_ = m;
   }

@@ -86,9 +86,11 @@ RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
   Mbar_.setZero(n_, n_);
   for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".controller.PI.x[rad/s]");
   for (int j = 1; j <= n_; ++j)
-    if (s_.axes[static_cast<size_t>(j - 1)].type == 1) signals_.push_back("axis" + std::to_string(j) + ".gear.spring.phi_rel[rad]");
+    if (s_.axes[static_cast<size_t>(j - 1)].type == 1)
+      signals_.push_back("axis" + std::to_string(j) + ".gear.spring.phi_rel[rad]");
   for (int j = 1; j <= n_; ++j)
-    if (s_.axes[static_cast<size_t>(j - 1)].type == 1) signals_.push_back("axis" + std::to_string(j) + ".gear.spring.w_rel[rad/s]");
+    if (s_.axes[static_cast<size_t>(j - 1)].type == 1)
+      signals_.push_back("axis" + std::to_string(j) + ".gear.spring.w_rel[rad/s]");
   for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".motor.C.v[V]");
   for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".motor.La.i[A]");
   signals_.emplace_back("mechanics.b2.body.w_a[1][rad/s]");
@@ -121,13 +123,13 @@ Eigen::VectorXd RobotR3Full::initialState() const {
     if (a.type == 1) {
       const double tau_s = -G[j] / a.ratio;  // τ_j = −N τ_s = G
       phi_rel = tau_s / a.c;
-      i = -tau_s / a.motor.k;                // k i = τ_f(0) − τ_s with τ_f(0) = 0
+      i = -tau_s / a.motor.k;  // k i = τ_f(0) − τ_s with τ_f(0) = 0
       y[rel_[static_cast<size_t>(j)]] = phi_rel;
     } else {
-      i = G[j] / (a.ratio * a.motor.k);      // N k i = G + τ_f(0)
+      i = G[j] / (a.ratio * a.motor.k);  // N k i = G + τ_f(0)
     }
     const int c = ctrl_[static_cast<size_t>(j)];
-    y[c] = i / a.ks - a.kp * phi_rel;        // x = i/ks − e(0)
+    y[c] = i / a.ks - a.kp * phi_rel;  // x = i/ks − e(0)
     y[c + 1] = -(a.motor.Ra * i) / a.motor.amp_gain;
     y[c + 2] = i;
   }
@@ -158,7 +160,8 @@ void RobotR3Full::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) co
     e_[j] = a.kp * (N * q_ref_[j] - phi_m) + N * qd_ref_[j] - wm_[j];
     iref_[j] = a.ks * (y[c] + e_[j]);
     const double w = a.type == 1 ? wm_[j] : qd[j];
-    tau_f_[j] = drive::frictionTorque(modes_[static_cast<size_t>(j)], a.Rv0 + a.Rv1 * std::abs(w), 0.0);  // stuck: below
+    tau_f_[j] =
+        drive::frictionTorque(modes_[static_cast<size_t>(j)], a.Rv0 + a.Rv1 * std::abs(w), 0.0);  // stuck: below
     if (a.type == 2 && modes_[static_cast<size_t>(j)] != FrictionMode::Stuck) tau_[j] -= tau_f_[j];
   }
   // Arm: M̄ q̈ = τ − h, with q̈_j = 0 and τ_f,j unknown for stuck type-2 joints.
@@ -168,7 +171,8 @@ void RobotR3Full::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) co
   Eigen::Matrix<int, Eigen::Dynamic, 1, 0, 12, 1> freeIdx(n_);
   int nf = 0;
   for (int j = 0; j < n_; ++j) {
-    const bool stuck2 = s_.axes[static_cast<size_t>(j)].type == 2 && modes_[static_cast<size_t>(j)] == FrictionMode::Stuck;
+    const bool stuck2 =
+        s_.axes[static_cast<size_t>(j)].type == 2 && modes_[static_cast<size_t>(j)] == FrictionMode::Stuck;
     if (!stuck2) freeIdx[nf++] = j;
   }
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 12, 12> Mff(nf, nf);
@@ -209,7 +213,8 @@ void RobotR3Full::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) co
   }
 }
 
-void RobotR3Full::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const {
+void RobotR3Full::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                              Eigen::Ref<Eigen::VectorXd> ydot) const {
   solve(t, y);
   ydot.head(n_) = y.segment(n_, n_);
   ydot.segment(n_, n_) = qdd_;
@@ -262,7 +267,7 @@ void RobotR3Full::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>&
   }
 }
 
-void RobotR3Full::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
+void RobotR3Full::signals(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
   Eigen::Index c = 0;
   for (int j = 0; j < n_; ++j) row[c++] = y[ctrl_[static_cast<size_t>(j)]];
   for (int j = 0; j < n_; ++j)

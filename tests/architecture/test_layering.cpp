@@ -16,7 +16,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const std::vector<std::string> kLayers{"common", "io",      "multibody", "drive",    "control",
+const std::vector<std::string> kLayers{"common", "io",      "multibody",   "drive",    "control",
                                        "sim",    "systems", "experiments", "identify", "report"};
 
 int rank(const std::string& layer) {
@@ -42,7 +42,7 @@ struct Violation {
 std::vector<Violation> violations(const fs::path& root) {
   std::vector<Violation> out;
   const std::regex include_re(R"re(^\s*#\s*include\s*"([^"]+)")re");
-  for (const fs::path base : {root / "include" / "jointsim", root / "src"}) {
+  for (const fs::path& base : {root / "include" / "jointsim", root / "src"}) {
     if (!fs::exists(base)) continue;
     for (const auto& entry : fs::recursive_directory_iterator(base)) {
       if (!entry.is_regular_file()) continue;
@@ -77,7 +77,8 @@ TEST(Layering, TheCheckFindsTheFixtureViolations) {
   const auto v = violations(jointsim::test::sourcePath("tests/data/layering_violation"));
   ASSERT_EQ(v.size(), 2u);
   std::vector<std::string> found;
-  for (const auto& x : v) found.push_back(fs::path(x.file).filename().string() + ":" + std::to_string(x.line) + ":" + x.text);
+  for (const auto& x : v)
+    found.push_back(fs::path(x.file).filename().string() + ":" + std::to_string(x.line) + ":" + x.text);
   std::sort(found.begin(), found.end());
   EXPECT_EQ(found[0], "bad_motor.hpp:7:jointsim/experiments/registry.hpp");
   EXPECT_EQ(found[1], "bad_reader.cpp:4:report/gnuplot.hpp");
@@ -89,8 +90,9 @@ TEST(Layering, EveryLayerHasItsFolders) {
     EXPECT_TRUE(fs::is_directory(jointsim::test::sourcePath("src/" + layer))) << layer;
     EXPECT_TRUE(fs::is_directory(jointsim::test::sourcePath("include/jointsim/" + layer))) << layer;
   }
-  for (const auto& entry : fs::directory_iterator(jointsim::test::sourcePath("src")))
+  for (const auto& entry : fs::directory_iterator(jointsim::test::sourcePath("src"))) {
     if (entry.is_directory()) EXPECT_GE(rank(entry.path().filename().string()), 0) << entry.path();
+  }
   // The same order as the build's layer list.
   std::ifstream cmake(jointsim::test::sourcePath("src/CMakeLists.txt"));
   std::string line, listed;

@@ -62,12 +62,11 @@ TEST(StandsOnItsOwn, ProductCitesSourcesByKeyOnly) {
 }
 
 TEST(StandsOnItsOwn, TheCheckFindsInternalReferences) {
-  std::istringstream text(
-      "// Friction of seed 002 (fine: [Raviola2023, eq. 7])\n"
-      "x = 1;  // see MODEL_REFERENCE §3.7\n"
-      "// clamp (000 §3.9, A.11) and 001's Algorithm II, ../shared/ROBOTR3.md\n"
-      "control: {rate: 2000, seed: 7}   # a random seed is fine\n"
-      "// [Olsson2017, A.12] is fine, 9000 N/m is fine\n");
+  std::istringstream text("// Friction of seed 002 (fine: [Raviola2023, eq. 7])\n"
+                          "x = 1;  // see MODEL_REFERENCE §3.7\n"
+                          "// clamp (000 §3.9, A.11) and 001's Algorithm II, ../shared/ROBOTR3.md\n"
+                          "control: {rate: 2000, seed: 7}   # a random seed is fine\n"
+                          "// [Olsson2017, A.12] is fine, 9000 N/m is fine\n");
   const auto f = findings("fixture", text);
   ASSERT_EQ(f.size(), 3u);
   EXPECT_EQ(f[0].rfind("fixture:1:", 0), 0u);

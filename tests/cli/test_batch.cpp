@@ -47,7 +47,8 @@ fs::path freshDir(const std::string& name) {
 
 Result run(const std::string& args, const fs::path& dir) {
   const fs::path out = dir / "cli.out", err = dir / "cli.err";
-  const int rc = std::system((std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string()).c_str());
+  const int rc =
+      std::system((std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string()).c_str());
   return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurp(out), slurp(err)};
 }
 
@@ -55,16 +56,19 @@ Result run(const std::string& args, const fs::path& dir) {
 // per fault type (24 faulty runs), plus `extra` YAML appended to the runs list.
 fs::path writeSweep(const fs::path& dir, double duration, const std::string& extra = "") {
   const fs::path p = dir / "sweep.yaml";
-  std::ofstream(p) << "sweep:\n  name: test_sweep\n  experiment: " << jointsim::test::sourcePath("config/experiments/ur5_excitation.yaml")
-                   << "\n  set: {robot: ../robots/ur5_drives_elastic.yaml, duration: " << duration << ", log_rate: 50}\n"
-                   << "runs:\n  - name: nominal\n" << extra
-                   << "faults:\n"
-                      "  - {type: gear_stiffness_scale,   joints: [shoulder_lift_joint, elbow_joint], values: [0.8, 0.6]}\n"
-                      "  - {type: backlash_add,           joints: [shoulder_lift_joint, elbow_joint], values: [2.9e-4, 1.0e-3]}\n"
-                      "  - {type: coulomb_friction_scale, joints: [shoulder_pan_joint, shoulder_lift_joint], values: [1.5, 2.0]}\n"
-                      "  - {type: sigma0_scale,           joints: [shoulder_pan_joint, elbow_joint], values: [0.5, 2.0]}\n"
-                      "  - {type: torque_constant_scale,  joints: [shoulder_lift_joint, wrist_1_joint], values: [0.9, 0.8]}\n"
-                      "  - {type: sensor_bias,            joints: [shoulder_pan_joint, wrist_2_joint], values: [1.0e-3, -1.0e-3]}\n";
+  std::ofstream(p)
+      << "sweep:\n  name: test_sweep\n  experiment: "
+      << jointsim::test::sourcePath("config/experiments/ur5_excitation.yaml")
+      << "\n  set: {robot: ../robots/ur5_drives_elastic.yaml, duration: " << duration << ", log_rate: 50}\n"
+      << "runs:\n  - name: nominal\n"
+      << extra
+      << "faults:\n"
+         "  - {type: gear_stiffness_scale,   joints: [shoulder_lift_joint, elbow_joint], values: [0.8, 0.6]}\n"
+         "  - {type: backlash_add,           joints: [shoulder_lift_joint, elbow_joint], values: [2.9e-4, 1.0e-3]}\n"
+         "  - {type: coulomb_friction_scale, joints: [shoulder_pan_joint, shoulder_lift_joint], values: [1.5, 2.0]}\n"
+         "  - {type: sigma0_scale,           joints: [shoulder_pan_joint, elbow_joint], values: [0.5, 2.0]}\n"
+         "  - {type: torque_constant_scale,  joints: [shoulder_lift_joint, wrist_1_joint], values: [0.9, 0.8]}\n"
+         "  - {type: sensor_bias,            joints: [shoulder_pan_joint, wrist_2_joint], values: [1.0e-3, -1.0e-3]}\n";
   return p;
 }
 
@@ -140,7 +144,8 @@ TEST(CliBatch, KilledMidwayResumesOnlyTheMissingRuns) {
   ASSERT_LT(done_before, 25) << "the batch finished before it could be killed";
   std::map<std::string, fs::file_time_type> stamps;
   for (const auto& e : fs::directory_iterator(out))
-    if (fs::exists(e.path() / "summary.json")) stamps[e.path().filename()] = fs::last_write_time(e.path() / "summary.json");
+    if (fs::exists(e.path() / "summary.json"))
+      stamps[e.path().filename()] = fs::last_write_time(e.path() / "summary.json");
   // The interrupted manifest is consistent: every run is listed.
   EXPECT_EQ(manifest(out / "manifest.csv").size(), 25u);
 
@@ -204,7 +209,8 @@ TEST(CliBatch, BadSweepFilesExitTwoWithFileAndLine) {
   struct Case {
     std::string text, expected;
   };
-  const std::string head = "sweep:\n  name: s\n  experiment: " + jointsim::test::sourcePath("config/experiments/ur5_fall.yaml") + "\n";
+  const std::string head =
+      "sweep:\n  name: s\n  experiment: " + jointsim::test::sourcePath("config/experiments/ur5_fall.yaml") + "\n";
   const std::vector<Case> cases{
       {head + "runs:\n  - name: a\n  - name: a\n", "duplicate run name 'a'"},
       {head + "faults:\n  - {type: gear_wear, joints: [j], values: [1]}\n", "unknown fault 'gear_wear'"},
@@ -231,7 +237,8 @@ TEST(CliBatch, ResumeReusesOnlyRunsWhoseSettingsAreUnchanged) {
   auto write = [&](const std::string& durations, int log_rate) {
     std::ofstream(dir / "grid.yaml") << "sweep:\n  name: g\n  experiment: "
                                      << jointsim::test::sourcePath("config/experiments/ur5_fall.yaml")
-                                     << "\n  set: {log_rate: " << log_rate << "}\ngrid:\n  duration: [" << durations << "]\n";
+                                     << "\n  set: {log_rate: " << log_rate << "}\ngrid:\n  duration: [" << durations
+                                     << "]\n";
     return run("batch " + (dir / "grid.yaml").string() + " -o " + out.string(), dir);
   };
   Result r = write("0.2, 0.3", 50);

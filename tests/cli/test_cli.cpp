@@ -67,8 +67,9 @@ std::string oneLine(const std::string& s) { return s.substr(0, s.find('\n')); }
 
 TEST(CliDynamics, JsonMatchesLibrary) {
   const std::string robot = sourcePath("config/robots/ur5.yaml");
-  const Result r = runCli("dynamics --robot " + robot +
-                          " --q 0.1,-1.0,0.5,0.2,0.3,0.4 --qd 1,2,3,-1,-2,-3 --qdd 0.5,0.5,0.5,0.5,0.5,0.5 --tau 1,2,3,4,5,6");
+  const Result r =
+      runCli("dynamics --robot " + robot +
+             " --q 0.1,-1.0,0.5,0.2,0.3,0.4 --qd 1,2,3,-1,-2,-3 --qdd 0.5,0.5,0.5,0.5,0.5,0.5 --tau 1,2,3,4,5,6");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << "one JSON object on one line";
   using namespace jointsim::multibody;
@@ -92,7 +93,8 @@ TEST(CliDynamics, JsonMatchesLibrary) {
 }
 
 TEST(CliDynamics, QddOnlyWithTauAndNamedFrame) {
-  const Result r = runCli("dynamics --robot " + sourcePath("config/robots/ur5.urdf") + " --q 0,0,0,0,0,0 --frame base_link");
+  const Result r =
+      runCli("dynamics --robot " + sourcePath("config/robots/ur5.urdf") + " --q 0,0,0,0,0,0 --frame base_link");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, ::testing::Not(HasSubstr("\"qdd\"")));
   EXPECT_EQ(jsonNumbers(r.out, "tcp"), std::vector<double>({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}));

@@ -62,14 +62,18 @@ TEST(CliRig, BadInputExitTwoWithFileLineKeyPathAndNoOutput) {
   };
   const std::vector<Case> cases = {
       {"load: {clamped: true}", "load: {clamped: true, mass: 3}", "", ":7: load.mass: unknown key 'mass'"},
-      {"stiffness: 25.7", "stiffness: stiff", "", ":3: transmission.stiffness: expected a stiffness in N·m/rad, got 'stiff'"},
+      {"stiffness: 25.7", "stiffness: stiff", "",
+       ":3: transmission.stiffness: expected a stiffness in N·m/rad, got 'stiff'"},
       {"backlash: 0.0102, ", "", "", ":3: transmission: missing required key 'backlash'"},
-      {"stiffness: 25.7", "stiffness: -25.7", "", ":3: transmission.stiffness: expected a finite value > 0 N·m/rad, got -25.7"},
-      {"rotor_inertia: 0.01", "rotor_inertia: -0.01", "", ":2: rotor_inertia: expected a rotor inertia > 0 kg·m², got '-0.01'"},
+      {"stiffness: 25.7", "stiffness: -25.7", "",
+       ":3: transmission.stiffness: expected a finite value > 0 N·m/rad, got -25.7"},
+      {"rotor_inertia: 0.01", "rotor_inertia: -0.01", "",
+       ":2: rotor_inertia: expected a rotor inertia > 0 kg·m², got '-0.01'"},
       {"{type: triangle, amplitude: 5.0, period: 4.0}", "{type: csv, file: /nonexistent/torque.csv}", "",
        ":8: input.profile: /nonexistent/torque.csv: cannot open CSV file for reading"},
       {"", "", "--set load.inertia=2", "has no key 'load.inertia'"},
-      {"", "", "--set transmission.stiffness=abc", "transmission.stiffness: expected a stiffness in N·m/rad, got 'abc'"},
+      {"", "", "--set transmission.stiffness=abc",
+       "transmission.stiffness: expected a stiffness in N·m/rad, got 'abc'"},
   };
   const auto cfg = std::filesystem::temp_directory_path() / "jointsim_rig_bad.yaml";
   for (const Case& c : cases) {

@@ -73,8 +73,8 @@ struct Result {
 
 /// A scratch directory unique to this process and tag (CTest runs the tests in parallel processes).
 std::filesystem::path scratch(const std::string& tag) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("jointsim_golden_" + std::to_string(::getpid()) + "_" + tag);
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("jointsim_golden_" + std::to_string(::getpid()) + "_" + tag);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
@@ -144,8 +144,8 @@ TEST(Golden, CasesCoverEveryExperimentTypeAndReferencesAreSmall) {
     ASSERT_TRUE(std::filesystem::exists(ref)) << ref << " (bash scripts/regenerate-golden.sh)";
     bytes += std::filesystem::file_size(ref);
   }
-  for (const char* t : {"passive_robot", "joint_rig", "tracking", "drive_chain", "robotr3_axis", "robotr3_full",
-                        "clamping"})
+  for (const char* t :
+       {"passive_robot", "joint_rig", "tracking", "drive_chain", "robotr3_axis", "robotr3_full", "clamping"})
     EXPECT_EQ(types.count(t), 1u) << "no golden case of type " << t;
   EXPECT_LT(bytes, 1000000u) << "keep tests/golden/ small: decimate more";
 }

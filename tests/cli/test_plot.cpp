@@ -220,11 +220,11 @@ TEST(Plot, SweepBarsAndOverlay) {
   const Scratch dir("sweep");
   runExperiment("ur5_fall.yaml", {"duration=0.1"}, dir / "fall_a");
   runExperiment("ur5_fall.yaml", {"duration=0.1", "initial_state.qd[0]=1"}, dir / "fall_b");
-  std::ofstream(dir / "manifest.csv")
-      << "run,status,wall_time_s,sim_time_s,real_time_factor,output_dir,overrides\n"
-      << "fall_a,ok,0.02,0.1,5,fall_a,\"duration=0.1\"\n"
-      << "fall_b,ok,0.01,0.1,10," << (dir / "fall_b").string() << ",\"duration=0.1,initial_state.qd[0]=1\"\n"
-      << "fall_c,failed,0.005,0.01,2,fall_c,\"solver.rtol=1\"\n";
+  std::ofstream(dir / "manifest.csv") << "run,status,wall_time_s,sim_time_s,real_time_factor,output_dir,overrides\n"
+                                      << "fall_a,ok,0.02,0.1,5,fall_a,\"duration=0.1\"\n"
+                                      << "fall_b,ok,0.01,0.1,10," << (dir / "fall_b").string()
+                                      << ",\"duration=0.1,initial_state.qd[0]=1\"\n"
+                                      << "fall_c,failed,0.005,0.01,2,fall_c,\"solver.rtol=1\"\n";
   expectFigures(dir, {"sweep_runs", "sweep_overlay"});
   jointsim::report::PlotOptions options;
   options.keep_script = true;

@@ -7,9 +7,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "jointsim/control/trajectory_yaml.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/control/kinematic_ptp.hpp"
+#include "jointsim/control/trajectory_yaml.hpp"
 #include "test_util.hpp"
 
 using jointsim::InputError;
@@ -91,7 +91,7 @@ TEST(KinematicPtp, FullRobotTimingMatchesRobotR3Section45) {
   const auto p = fullRobot();
   EXPECT_EQ(p.dof(), 6);
   EXPECT_FALSE(p.degenerate());
-  EXPECT_FALSE(p.triangular());  // trapezoidal
+  EXPECT_FALSE(p.triangular());                // trapezoidal
   EXPECT_EQ(p.speedLimitingAxis(), 4);         // axis 5
   EXPECT_EQ(p.accelerationLimitingAxis(), 2);  // axis 3
   EXPECT_NEAR(p.speedRatioMax(), 1.2386207595, 1e-9);
@@ -249,8 +249,8 @@ TEST(KinematicPtp, TriangularProfile) {
   EXPECT_EQ(b[2], p.endTime());
   const auto peak = p.setpoint(b[1]);
   EXPECT_NEAR(peak.qd[1], 0.8 * 5 * std::sqrt(0.2), 1e-14);  // below the 10 rad/s limit
-  EXPECT_NEAR(peak.q[1], -0.5 + 0.4, 1e-14);                  // half way
-  EXPECT_NEAR(peak.qdd[1], -4.0, 1e-14);                      // deceleration starts at the switch
+  EXPECT_NEAR(peak.q[1], -0.5 + 0.4, 1e-14);                 // half way
+  EXPECT_NEAR(peak.qdd[1], -4.0, 1e-14);                     // deceleration starts at the switch
   EXPECT_NEAR(p.setpoint(5.0).q[1], 0.3, 1e-15);
   EXPECT_EQ(p.describe(), "kinematic_ptp(3 joints, triangular, start 0.25 s, end 1.14443 s)");
 }
@@ -339,8 +339,11 @@ TEST(KinematicPtp, ScalarParametersAreBroadcastAndBadInputRejected) {
   EXPECT_EQ(p.qBegin(), Eigen::VectorXd::Zero(3));
   EXPECT_EQ(p.qdMax(), Eigen::VectorXd::Constant(3, 2.0));
   EXPECT_EQ(p.accelerationLimitingAxis(), 2);
-  EXPECT_THAT([] { KinematicPtpTrajectory(vec({0, 0}), vec({1, 2, 3}), vec({1}), vec({1})); },
-              ThrowsMessage<InputError>(HasSubstr("q_begin has 2 entries, expected 3 (or 1)")));
+  EXPECT_THAT(
+      [] {
+        KinematicPtpTrajectory(vec({0, 0}), vec({1, 2, 3}), vec({1}), vec({1}));
+      },
+      ThrowsMessage<InputError>(HasSubstr("q_begin has 2 entries, expected 3 (or 1)")));
   EXPECT_THAT([] { KinematicPtpTrajectory(vec({0}), vec({1}), vec({0}), vec({1})); },
               ThrowsMessage<InputError>(HasSubstr("qd_max of axis 1 must be > 0 rad/s")));
   EXPECT_THAT([] { KinematicPtpTrajectory(vec({0}), vec({1}), vec({1}), vec({-2})); },
@@ -374,8 +377,7 @@ TEST(KinematicPtpYaml, OneAxisFromYaml) {
   EXPECT_EQ(p->startTime(), 0.0);
   EXPECT_NEAR(p->endTime(), 0.9981317008, 1e-9);
   const auto ref = oneAxis();
-  for (double t : {0.0, 0.2, 0.5, 0.8, 1.2})
-    EXPECT_TRUE(MatricesNear(p->setpoint(t).q, ref.setpoint(t).q, 1e-15));
+  for (double t : {0.0, 0.2, 0.5, 0.8, 1.2}) EXPECT_TRUE(MatricesNear(p->setpoint(t).q, ref.setpoint(t).q, 1e-15));
 }
 
 TEST(KinematicPtpYaml, StartTimeAndErrors) {
@@ -396,8 +398,7 @@ TEST(KinematicPtpYaml, StartTimeAndErrors) {
       "t.yaml:5: trajectory.qd_max: expected a list of 2 max joint speeds in rad/s, each > 0");
   err("trajectory:\n  type: kinematic_ptp\n  q_begin: [0, 1]\n  q_end: [1, 1]\n  qd_max: [1, 1]\n  qdd_max: [1]\n",
       "trajectory.qdd_max");
-  err("trajectory:\n  type: kinematic_ptp\n  q_begin: [0, 1]\n  q_end: [1, 1]\n  qd_max: [1, 1]\n",
-      "qdd_max");
+  err("trajectory:\n  type: kinematic_ptp\n  q_begin: [0, 1]\n  q_end: [1, 1]\n  qd_max: [1, 1]\n", "qdd_max");
   err("trajectory:\n  type: kinematic_ptp\n  q_begin: [0, 1]\n  q_end: [1, 1]\n  qd_max: [1, 1]\n  qdd_max: [1, 1]\n"
       "  start_time: -1\n",
       "trajectory.start_time");

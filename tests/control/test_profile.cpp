@@ -53,9 +53,11 @@ TEST(Profile, CsvLinearInterpolationAndErrors) {
   const auto bad = dir / "jointsim_profile_bad.csv";
   std::ofstream(bad) << "t,v\n0,1\n1,oops\n";
   EXPECT_THAT([&] { Profile::csv(bad.string()); },
-              ::testing::ThrowsMessage<jointsim::InputError>(HasSubstr("jointsim_profile_bad.csv:3:2: column 'v': expected a number, got 'oops'")));
+              ::testing::ThrowsMessage<jointsim::InputError>(
+                  HasSubstr("jointsim_profile_bad.csv:3:2: column 'v': expected a number, got 'oops'")));
   EXPECT_THAT([&] { Profile::csv((dir / "missing_profile.csv").string()); },
-              ::testing::ThrowsMessage<jointsim::InputError>(HasSubstr("missing_profile.csv: cannot open CSV file for reading")));
+              ::testing::ThrowsMessage<jointsim::InputError>(
+                  HasSubstr("missing_profile.csv: cannot open CSV file for reading")));
   EXPECT_THAT([&] { Profile::csv(good.string(), "nope"); },
               ::testing::ThrowsMessage<jointsim::InputError>(HasSubstr(":1: no column named 'nope'")));
 }

@@ -8,9 +8,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "jointsim/control/trajectory_yaml.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/control/trajectory.hpp"
+#include "jointsim/control/trajectory_yaml.hpp"
 #include "test_util.hpp"
 
 using jointsim::InputError;
@@ -200,18 +200,30 @@ TEST(TrajectoryPointToPoint, InvalidSegmentsAreRejected) {
   std::vector<PtpSegment> segs(1);
   segs[0].target = vec({1.0, 0.0});
   segs[0].velocity = 1.0;
-  EXPECT_THAT([&] { PointToPointTrajectory(vec({0, 0}), segs); },
-              ThrowsMessage<InputError>(HasSubstr("segment 0: acceleration must be > 0")));
+  EXPECT_THAT(
+      [&] {
+        PointToPointTrajectory(vec({0, 0}), segs);
+      },
+      ThrowsMessage<InputError>(HasSubstr("segment 0: acceleration must be > 0")));
   segs[0].duration = 1.0;
   segs[0].acceleration = 1.0;
-  EXPECT_THAT([&] { PointToPointTrajectory(vec({0, 0}), segs); },
-              ThrowsMessage<InputError>(HasSubstr("either velocity (with acceleration) or duration")));
+  EXPECT_THAT(
+      [&] {
+        PointToPointTrajectory(vec({0, 0}), segs);
+      },
+      ThrowsMessage<InputError>(HasSubstr("either velocity (with acceleration) or duration")));
   segs[0].velocity = 0.0;  // 1 rad in 1 s needs a >= 4 rad/s²
-  EXPECT_THAT([&] { PointToPointTrajectory(vec({0, 0}), segs); },
-              ThrowsMessage<InputError>(HasSubstr("too low to move 1 rad in 1 s")));
+  EXPECT_THAT(
+      [&] {
+        PointToPointTrajectory(vec({0, 0}), segs);
+      },
+      ThrowsMessage<InputError>(HasSubstr("too low to move 1 rad in 1 s")));
   segs[0].target = vec({1.0});
-  EXPECT_THAT([&] { PointToPointTrajectory(vec({0, 0}), segs); },
-              ThrowsMessage<InputError>(HasSubstr("target has 1 joint positions, expected 2")));
+  EXPECT_THAT(
+      [&] {
+        PointToPointTrajectory(vec({0, 0}), segs);
+      },
+      ThrowsMessage<InputError>(HasSubstr("target has 1 joint positions, expected 2")));
 }
 
 // ------------------------------------------------------------------------------------------ Fourier
@@ -367,8 +379,12 @@ TEST(TrajectorySampled, CsvByOrderAndByColumnName) {
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(path.string(), 2); },
               ThrowsMessage<InputError>(HasSubstr("jointsim_traj_named.csv:1: expected 1 + 2 = 3 columns (time, "
                                                   "then one per joint), got 4; name the joint columns")));
-  EXPECT_THAT([&] { SampledTrajectory::fromCsv(path.string(), 2, {"q1", "q3"}); },
-              ThrowsMessage<InputError>(HasSubstr("jointsim_traj_named.csv:1: no column named 'q3' (columns: time [s], qd1, q1, q2)")));
+  EXPECT_THAT(
+      [&] {
+        SampledTrajectory::fromCsv(path.string(), 2, {"q1", "q3"});
+      },
+      ThrowsMessage<InputError>(
+          HasSubstr("jointsim_traj_named.csv:1: no column named 'q3' (columns: time [s], qd1, q1, q2)")));
   const auto ordered = SampledTrajectory::fromCsv(path.string(), 3);
   EXPECT_DOUBLE_EQ(ordered.setpoint(0.0).q[0], 9.0);
 }
@@ -383,8 +399,8 @@ TEST(TrajectorySampled, CsvErrorsNameTheFileAndRow) {
   }
   const auto gap = writeFile("jointsim_traj_gap.csv", text);
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(gap.string(), 2); },
-              ThrowsMessage<InputError>(HasSubstr(
-                  "jointsim_traj_gap.csv:57: time step 0.05 s is more than 3x the median 0.008 s (a gap)")));
+              ThrowsMessage<InputError>(
+                  HasSubstr("jointsim_traj_gap.csv:57: time step 0.05 s is more than 3x the median 0.008 s (a gap)")));
   EXPECT_NO_THROW(SampledTrajectory::fromCsv(gap.string(), 2, {}, 10.0));
   EXPECT_NO_THROW(SampledTrajectory::fromCsv(gap.string(), 2, {}, 0.0));
 
@@ -401,12 +417,14 @@ TEST(TrajectorySampled, CsvErrorsNameTheFileAndRow) {
                   HasSubstr("jointsim_traj_cols.csv:3: expected 3 cells as in the header, got 2")));
   const auto trailing = writeFile("jointsim_traj_trailing.csv", "t,q1,q2\n0,1,2,\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(trailing.string(), 2); },
-              ThrowsMessage<InputError>(HasSubstr("jointsim_traj_trailing.csv:2: expected 3 cells as in the header, got 4")));
+              ThrowsMessage<InputError>(
+                  HasSubstr("jointsim_traj_trailing.csv:2: expected 3 cells as in the header, got 4")));
   const auto one = writeFile("jointsim_traj_one.csv", "t,q1\n0,1\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(one.string(), 1); },
               ThrowsMessage<InputError>(HasSubstr("at least 2 data rows")));
-  EXPECT_THAT([&] { SampledTrajectory::fromCsv((std::filesystem::temp_directory_path() / "jointsim_nope.csv").string(), 1); },
-              ThrowsMessage<InputError>(HasSubstr("cannot open")));
+  EXPECT_THAT(
+      [&] { SampledTrajectory::fromCsv((std::filesystem::temp_directory_path() / "jointsim_nope.csv").string(), 1); },
+      ThrowsMessage<InputError>(HasSubstr("cannot open")));
 }
 
 // ------------------------------------------------------------------------------------------ limits
@@ -500,8 +518,9 @@ TEST(TrajectoryYaml, FourierAndCsv) {
 
 TEST(TrajectoryYaml, ErrorsNameFileLineAndKeyPath) {
   const std::string head = "trajectory:\n  type: point_to_point\n  start: [0, 0]\n  segments:\n";
-  yamlError(head + "    - {target: [1, 2, 3], velocity: 1, acceleration: 1}\n", 2,
-            "t.yaml:5: trajectory.segments[0].target: expected a list of 2 joint positions in rad, got a list of 3 items")();
+  yamlError(
+      head + "    - {target: [1, 2, 3], velocity: 1, acceleration: 1}\n", 2,
+      "t.yaml:5: trajectory.segments[0].target: expected a list of 2 joint positions in rad, got a list of 3 items")();
   yamlError(head + "    - {target: [1, 2], velocty: 1, acceleration: 1}\n", 2,
             "t.yaml:5: trajectory.segments[0].velocty: unknown key 'velocty' (did you mean 'velocity'?)")();
   yamlError(head + "    - {target: [1, 2], velocity: 1}\n", 2,
@@ -523,8 +542,9 @@ TEST(TrajectoryYaml, ErrorsNameFileLineAndKeyPath) {
   yamlError("trajectory: [1, 2]\n", 2, "t.yaml:1: trajectory: expected a trajectory mapping")();
 
   const std::string fh = "trajectory:\n  type: fourier\n  base_frequency: 0.1\n  offset: [0, 0]\n";
-  yamlError(fh + "  a: [[0.1, 0.2], [0.3]]\n  b: [[0, 0], [0, 0]]\n", 2,
-            "t.yaml:5: trajectory.a[1]: expected a list of 2 coefficients in rad/s (one per harmonic), got a list of 1 items")();
+  yamlError(
+      fh + "  a: [[0.1, 0.2], [0.3]]\n  b: [[0, 0], [0, 0]]\n", 2,
+      "t.yaml:5: trajectory.a[1]: expected a list of 2 coefficients in rad/s (one per harmonic), got a list of 1 items")();
   yamlError(fh + "  a: [[0.1, 0.2]]\n  b: [[0, 0], [0, 0]]\n", 2,
             "t.yaml:5: trajectory.a: expected a list of 2 rows (one per joint) of coefficients in rad/s")();
   yamlError(fh + "  a: [[0.1, 0.2], [0.3, 0]]\n  b: [[0, 0, 1], [0, 0, 1]]\n", 2,
@@ -536,8 +556,7 @@ TEST(TrajectoryYaml, ErrorsNameFileLineAndKeyPath) {
   yamlError(fh + "  a: [[0.1], [0.3]]\n", 2, "t.yaml:2: trajectory: missing required key 'b'")();
 
   std::ofstream(std::filesystem::temp_directory_path() / "jointsim_traj_yaml_bad.csv") << "t,q1,q2\n0,1,2\n0.008,x,2\n";
-  yamlError("trajectory:\n  type: csv\n  file: jointsim_traj_yaml_bad.csv\n", 2,
-            "t.yaml:3: trajectory.file: ")();
+  yamlError("trajectory:\n  type: csv\n  file: jointsim_traj_yaml_bad.csv\n", 2, "t.yaml:3: trajectory.file: ")();
   yamlError("trajectory:\n  type: csv\n  file: jointsim_traj_yaml_bad.csv\n", 2,
             "jointsim_traj_yaml_bad.csv:3:2: column 'q1': expected a number, got 'x'")();
   yamlError("trajectory:\n  type: csv\n  file: log.csv\n  columns: [a]\n", 2,

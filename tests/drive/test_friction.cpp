@@ -15,8 +15,8 @@
 #include <vector>
 
 // Internal header (src/ is not on the test include path, hence the relative path).
-#include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/common/error.hpp"
+#include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/sim/cvode_integrator.hpp"
 
 namespace {
@@ -97,15 +97,16 @@ struct InertiaSim {
       : f(friction),
         J(inertia),
         tau(std::move(torque)),
-        cv(2 + friction.stateSize(),
-           [this](double t, const Eigen::Ref<const Eigen::VectorXd>& s, Eigen::Ref<Eigen::VectorXd> sd) {
-             double* zdot = sd.data() + 2;
-             const double td = tau(t);
-             const double tf = f.evaluate({s[1], td}, s.data() + 2, zdot);
-             sd[0] = s[1];
-             sd[1] = (td - tf) / J;
-           },
-           opt),
+        cv(
+            2 + friction.stateSize(),
+            [this](double t, const Eigen::Ref<const Eigen::VectorXd>& s, Eigen::Ref<Eigen::VectorXd> sd) {
+              double* zdot = sd.data() + 2;
+              const double td = tau(t);
+              const double tf = f.evaluate({s[1], td}, s.data() + 2, zdot);
+              sd[0] = s[1];
+              sd[1] = (td - tf) / J;
+            },
+            opt),
         y(Eigen::VectorXd::Zero(2 + friction.stateSize())) {
     y[1] = v0;
     f.initialState(y.data() + 2);
@@ -190,7 +191,8 @@ TEST(FrictionLuGre, PreslidingOscillationHasBristleStiffnessAndDamping) {
   const double wn = std::sqrt(259.0 / J);
   const double zeta = (10.0 + 0.5 * (kPos.a2 + kNeg.a2)) / (2.0 * std::sqrt(259.0 * J));
   const double wd = wn * std::sqrt(1.0 - zeta * zeta);
-  InertiaSim sim(f, J, [](double) { return 0.0; }, v0, tightOptions(1e-14));
+  InertiaSim sim(
+      f, J, [](double) { return 0.0; }, v0, tightOptions(1e-14));
   for (double t : {0.1, 0.2, 0.3, 0.5, 0.8, 1.2}) {
     sim.advance(t);
     const double ref = v0 / wd * std::exp(-zeta * wn * t) * std::sin(wd * t);
@@ -210,7 +212,8 @@ TEST(FrictionLuGre, SlowTorqueRampBreaksAwayNearAlpha0PlusAlpha1) {
     const double vs = dir > 0 ? kPos.vs : kNeg.vs;
     double previous_error = std::numeric_limits<double>::infinity();
     for (double rate : {0.1, 0.03, 0.01}) {  // N·m/s
-      InertiaSim sim(f, 3.41, [=](double t) { return dir * rate * t; }, 0.0, tightOptions(1e-12));
+      InertiaSim sim(
+          f, 3.41, [=](double t) { return dir * rate * t; }, 0.0, tightOptions(1e-12));
       double breakaway = 0.0;
       const double dt = 0.002 / rate;  // torque steps of 2 mN·m between samples
       double t = 0.0;
@@ -237,7 +240,8 @@ TEST(FrictionLuGre, FreeDecelerationIsDissipative) {
   const LuGreFriction f(shoulderLuGre());
   const double J = 3.41, v0 = 1.0;
   ASSERT_LT(10.0 * v0, 4.0 * std::min(kPos.a0, kNeg.a0));
-  InertiaSim sim(f, J, [](double) { return 0.0; }, v0, tightOptions(1e-12));
+  InertiaSim sim(
+      f, J, [](double) { return 0.0; }, v0, tightOptions(1e-12));
   auto energy = [&] { return 0.5 * J * sim.v() * sim.v() + 0.5 * 259.0 * sim.z() * sim.z(); };
   const double E0 = energy();
   double E_prev = E0;
@@ -419,7 +423,8 @@ TEST(FrictionCoulombViscous, InertiaCoastsDownAsClosedForm) {
   // t* = (J/b) ln(1 + b v0/F_C); afterwards the regularised model holds v within v_reg of 0.
   const double J = 0.05, fc = 1.91, b = 0.2, v0 = 3.0;
   const CoulombViscousFriction f(CoulombViscousParams{fc, b, 1e-3});
-  InertiaSim sim(f, J, [](double) { return 0.0; }, v0, tightOptions(1e-12));
+  InertiaSim sim(
+      f, J, [](double) { return 0.0; }, v0, tightOptions(1e-12));
   const double t_stop = (J / b) * std::log(1.0 + b * v0 / fc);
   for (double s : {0.25, 0.5, 0.9}) {
     const double t = s * t_stop;
@@ -453,7 +458,8 @@ TEST(FrictionTable, StuckBelowPeakTimesM) {
     for (double tau : {0.05, 0.15, 0.199, -0.15, -0.199}) {
       // atol 1e-12: in the band J v̇ = τ − τ_f is a cancellation with rounding noise ~ulp(τ), and a
       // tighter velocity tolerance makes CVODE's difference-quotient Jacobian meaningless.
-      InertiaSim sim(f, J, [=](double) { return tau; }, v0, tightOptions(1e-12));
+      InertiaSim sim(
+          f, J, [=](double) { return tau; }, v0, tightOptions(1e-12));
       sim.advance(1.0);
       double expected = 0.0;
       if (v0 > 0.0) {
@@ -472,7 +478,8 @@ TEST(FrictionTable, StickingBandRelaxesVelocityWithDStick) {
   p.d_stick = 0.01;
   const TableFriction f(p);
   const double J = 1e-3, v0 = 5e-4;
-  InertiaSim sim(f, J, [](double) { return 0.15; }, v0, tightOptions(1e-12));
+  InertiaSim sim(
+      f, J, [](double) { return 0.15; }, v0, tightOptions(1e-12));
   for (double t : {0.05, 0.2, 1.0}) {
     sim.advance(t);
     EXPECT_NEAR(sim.q(), (J * v0 / 0.01) * (1.0 - std::exp(-0.01 * t / J)), 1e-6 * J * v0 / 0.01) << "t = " << t;
@@ -485,7 +492,8 @@ TEST(FrictionTable, BreaksAwayAbovePeakAndSlidesAtKOmegaPlusM) {
   const TableFriction f(joint1Table());
   const double J = 1e-3, m = 0.1, k = 0.3;
   for (double tau : {0.21, 0.25, -0.25}) {
-    InertiaSim sim(f, J, [=](double) { return tau; }, 0.0, tightOptions(1e-12));
+    InertiaSim sim(
+        f, J, [=](double) { return tau; }, 0.0, tightOptions(1e-12));
     const double w_ss = sgn(tau) * (std::abs(tau) - m) / k;
     for (double t : {1e-3, 5e-3, 0.1}) {
       sim.advance(t);
@@ -554,10 +562,9 @@ TEST(FrictionYaml, EveryTypeParses) {
   auto flat = parse("friction: {type: table, tau_pos: [0, 1.91]}\n");  // [KR300Thesis]: constant 1.91 N·m
   EXPECT_NEAR(flat->steadyState(-3.0), -1.91, 1e-15);
 
-  auto stribeck = parse(
-      "friction:\n  type: stribeck\n"
-      "  positive: {alpha0: 7.9707, alpha1: 1.4476, alpha2: 4.9349, v_s: 0.0363}\n"
-      "  negative: {alpha0: 7.7538, alpha1: 0.8626, alpha2: 4.3267, v_s: 0.0221}\n");
+  auto stribeck = parse("friction:\n  type: stribeck\n"
+                        "  positive: {alpha0: 7.9707, alpha1: 1.4476, alpha2: 4.9349, v_s: 0.0363}\n"
+                        "  negative: {alpha0: 7.7538, alpha1: 0.8626, alpha2: 4.3267, v_s: 0.0221}\n");
   EXPECT_EQ(stribeck->type(), "stribeck");
   EXPECT_NEAR(stribeck->steadyState(-0.1), eq421(-0.1), 1e-9);
   EXPECT_NEAR(stribeck->steadyState(0.1), eq421(0.1), 1e-9);

@@ -63,7 +63,8 @@ TEST(JointRig, DcMotorDrivesViscousLoadToHandDerivedSpeed) {
 
 TEST(JointRig, VelocityPiTracksStepWithElasticGear) {
   JointRigSetup s;
-  s.transmission = std::make_shared<drive::ElasticGear>(drive::ElasticGearParams{20.0, 5.0, 0.02, drive::ComplianceSide::Motor});
+  s.transmission =
+      std::make_shared<drive::ElasticGear>(drive::ElasticGearParams{20.0, 5.0, 0.02, drive::ComplianceSide::Motor});
   s.rotor_inertia = 1e-3;
   s.load_inertia = 0.5;
   s.load_damping = 2.0;
@@ -84,7 +85,8 @@ TEST(JointRig, ClampedBacklashCurveSlopeAndGap) {
   // motor angle follows (τ − d φ̇)/c ± b/2 (spring plus damper lag; rotor inertia negligible).
   const double c = 25.7, b = 0.0102;
   JointRigSetup s;
-  s.transmission = std::make_shared<drive::ElastoBacklash>(drive::ElastoBacklashParams{1.0, c, 0.5, b, drive::ComplianceSide::Motor});
+  s.transmission = std::make_shared<drive::ElastoBacklash>(
+      drive::ElastoBacklashParams{1.0, c, 0.5, b, drive::ComplianceSide::Motor});
   s.rotor_inertia = 1e-3;
   s.clamped = true;
   s.profile = control::Profile::triangle(2.0, 20.0);
@@ -92,7 +94,8 @@ TEST(JointRig, ClampedBacklashCurveSlopeAndGap) {
   s.log_rate = 100;
   JointRig rig(s);
   const auto rows = run(rig);
-  const int ia = test::rowIndex(rig, "motor_angle"), iv = test::rowIndex(rig, "motor_velocity"), it = test::rowIndex(rig, "command_torque");
+  const int ia = test::rowIndex(rig, "motor_angle"), iv = test::rowIndex(rig, "motor_velocity"),
+            it = test::rowIndex(rig, "command_torque");
   double max_err = 0, max_lag = 0;
   for (const auto& r : rows) {
     const double tau = r[it], phi = r[ia], lag = 0.5 * r[iv] / c;

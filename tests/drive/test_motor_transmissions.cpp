@@ -32,7 +32,8 @@ TEST(DcMotor, LockedRotorCurrentStep) {
   const DcMotor motor(DcMotorParams::ur5(1));
   const auto& p = motor.params();
   const double V = 12.0;
-  CvodeIntegrator integ(1, [&](double, CRef y, Ref yd) { yd[0] = motor.currentDerivative(y[0], V, 0.0); }, tight());
+  CvodeIntegrator integ(
+      1, [&](double, CRef y, Ref yd) { yd[0] = motor.currentDerivative(y[0], V, 0.0); }, tight());
   integ.initialize(0.0, Eigen::VectorXd::Zero(1));
   Eigen::VectorXd y(1);
   for (double t : {0.5e-3, 1e-3, 2.77e-3, 1e-2}) {
@@ -50,10 +51,13 @@ TEST(DcMotor, FreeRunningSteadySpeedByHand) {
   p.ke = 0.08;
   const DcMotor motor(p);
   const double V = 24.0, b = 1e-4;
-  CvodeIntegrator integ(2, [&](double, CRef y, Ref yd) {
-    yd[0] = motor.currentDerivative(y[0], V, y[1]);
-    yd[1] = (motor.torque(y[0]) - b * y[1]) / p.J_M;
-  }, tight());
+  CvodeIntegrator integ(
+      2,
+      [&](double, CRef y, Ref yd) {
+        yd[0] = motor.currentDerivative(y[0], V, y[1]);
+        yd[1] = (motor.torque(y[0]) - b * y[1]) / p.J_M;
+      },
+      tight());
   integ.initialize(0.0, Eigen::VectorXd::Zero(2));
   Eigen::VectorXd y(2);
   integ.advance(5.0, y);  // mechanical time constant J R / (R b + kt ke) ≈ 5 ms
@@ -68,7 +72,8 @@ TEST(DcMotor, SupplySaturatesAndValidates) {
   EXPECT_DOUBLE_EQ(motor.supplyVoltage(10.0), 10.0);
   DcMotorParams bad;
   bad.L = -1;
-  EXPECT_THAT([&] { DcMotor m(bad); }, ::testing::ThrowsMessage<jointsim::InputError>(::testing::HasSubstr("motor: L: expected a finite value > 0 H, got -1")));
+  EXPECT_THAT([&] { DcMotor m(bad); }, ::testing::ThrowsMessage<jointsim::InputError>(
+                                           ::testing::HasSubstr("motor: L: expected a finite value > 0 H, got -1")));
 }
 
 TEST(ElastoBacklash, ZeroInGapSlopeOutsideNeverWrongSign) {
@@ -134,10 +139,13 @@ PassivityResult freeTwoInertias(const Transmission& tr, double Jm, double Jl, do
     const ShaftPorts s{y[0], y[1], y[2], y[3]};
     return 0.5 * Jm * y[1] * y[1] + 0.5 * Jl * y[3] * y[3] + tr.storedEnergy(s, nullptr);
   };
-  CvodeIntegrator integ(4, [&](double, CRef y, Ref yd) {
-    const PortTorques t = tr.evaluate({y[0], y[1], y[2], y[3]}, nullptr, nullptr);
-    yd << y[1], -t.tau_in / Jm, y[3], t.tau_out / Jl;
-  }, options);
+  CvodeIntegrator integ(
+      4,
+      [&](double, CRef y, Ref yd) {
+        const PortTorques t = tr.evaluate({y[0], y[1], y[2], y[3]}, nullptr, nullptr);
+        yd << y[1], -t.tau_in / Jm, y[3], t.tau_out / Jl;
+      },
+      options);
   Eigen::VectorXd y(4);
   y << 0.0, qd_in0, 0.0, 0.0;
   integ.initialize(0.0, y);
@@ -157,7 +165,8 @@ PassivityResult freeTwoInertias(const Transmission& tr, double Jm, double Jl, do
 TEST(TransmissionPassivity, ElasticAndBacklashNeverGainEnergy) {
   const ElasticGear elastic({50.0, 30.0, 0.05, ComplianceSide::Motor});
   const ElastoBacklash backlash({50.0, 30.0, 0.05, 0.02, ComplianceSide::Motor});
-  for (const Transmission* tr : {static_cast<const Transmission*>(&elastic), static_cast<const Transmission*>(&backlash)}) {
+  for (const Transmission* tr :
+       {static_cast<const Transmission*>(&elastic), static_cast<const Transmission*>(&backlash)}) {
     const PassivityResult r = freeTwoInertias(*tr, 1e-3, 2.0, 20.0, 2.0);
     EXPECT_LT(r.max_increase, 1e-9 * r.E0) << tr->type();
     EXPECT_LT(r.E_end, r.E0) << tr->type() << ": damping must dissipate";
@@ -173,10 +182,13 @@ TEST(ElasticGear, TwoMassFrequencyMatchesClosedForm) {
   // Output-side stiffness K between J_l and the reflected rotor N² J_m: ω² = K (1/J_l + 1/(N² J_m)).
   const double N = 10, K = 400, Jm = 0.01, Jl = 3.5;
   const ElasticGear gear({N, K, 0.0, ComplianceSide::Output});
-  CvodeIntegrator integ(4, [&](double, CRef y, Ref yd) {
-    const PortTorques t = gear.evaluate({y[0], y[1], y[2], y[3]}, nullptr, nullptr);
-    yd << y[1], -t.tau_in / Jm, y[3], t.tau_out / Jl;
-  }, tight());
+  CvodeIntegrator integ(
+      4,
+      [&](double, CRef y, Ref yd) {
+        const PortTorques t = gear.evaluate({y[0], y[1], y[2], y[3]}, nullptr, nullptr);
+        yd << y[1], -t.tau_in / Jm, y[3], t.tau_out / Jl;
+      },
+      tight());
   Eigen::VectorXd y(4);
   y << 0.1 * N, 0, 0, 0;  // deflected, at rest
   integ.initialize(0, y);

@@ -146,7 +146,8 @@ TEST(OpAmpMotor, CurrentStepIsSecondOrderResponse) {
     const OpAmpMotor m(OpAmpMotorParams::robotR3Axis(a));
     const auto& p = m.params();
     const SecondOrderStep step{p.w, p.D};
-    CvodeIntegrator integ(2, [&](double, CRef y, Ref yd) { m.derivatives(I, 0.0, y, yd); }, tight());
+    CvodeIntegrator integ(
+        2, [&](double, CRef y, Ref yd) { m.derivatives(I, 0.0, y, yd); }, tight());
     integ.initialize(0.0, m.steadyState(0.0, 0.0));
     Eigen::VectorXd y(2);
     const double v_scale = p.Ra * I / p.amp_gain;  // |v_C| at the final steady state
@@ -177,7 +178,8 @@ TEST(OpAmpMotor, ConstantSpeedBackEmfIsRejected) {
   const auto& p = m.params();
   const double I = -1.25, omega = 150.0;
   const SecondOrderStep step{p.w, p.D};
-  CvodeIntegrator integ(2, [&](double, CRef y, Ref yd) { m.derivatives(I, omega, y, yd); }, tight());
+  CvodeIntegrator integ(
+      2, [&](double, CRef y, Ref yd) { m.derivatives(I, omega, y, yd); }, tight());
   integ.initialize(0.0, m.steadyState(0.0, omega));
   Eigen::VectorXd y(2);
   const double v_scale = std::abs(m.steadyState(I, omega)[0]);
@@ -219,7 +221,8 @@ TEST(OpAmpMotor, SteadyStateInitialEquations) {
     }
   }
   const double i0 = 0.8, om = 31.4;
-  CvodeIntegrator integ(2, [&](double, CRef y, Ref yd) { m.derivatives(i0, om, y, yd); }, tight());
+  CvodeIntegrator integ(
+      2, [&](double, CRef y, Ref yd) { m.derivatives(i0, om, y, yd); }, tight());
   const Eigen::Vector2d x0 = m.steadyState(i0, om);
   integ.initialize(0.0, x0);
   Eigen::VectorXd y(2);
@@ -278,7 +281,9 @@ TEST(OpAmpMotor, ArmaturePowerBalance) {
   const OpAmpMotor m(OpAmpMotorParams::robotR3Axis(5));
   const auto& p = m.params();
   const double b = 2e-4;  // viscous load [N·m·s/rad]
-  auto i_ref = [](double t) { return 0.5 + 1.5 * std::sin(2.0 * kPi * 50.0 * t) - 0.7 * std::cos(2.0 * kPi * 130.0 * t); };
+  auto i_ref = [](double t) {
+    return 0.5 + 1.5 * std::sin(2.0 * kPi * 50.0 * t) - 0.7 * std::cos(2.0 * kPi * 130.0 * t);
+  };
   // States: v_C, i, ω, E_el, E_R, E_m, E_b.
   auto rhs = [&](double t, CRef y, Ref yd) {
     m.derivatives(i_ref(t), y[2], y.head<2>(), yd.head<2>());
@@ -321,10 +326,14 @@ TEST(OpAmpMotorParams, ValidationErrors) {
     const char* name;
     double OpAmpMotorParams::*ptr;
   };
-  const Field fields[] = {{"J", &OpAmpMotorParams::J},   {"k", &OpAmpMotorParams::k},
-                          {"w", &OpAmpMotorParams::w},   {"D", &OpAmpMotorParams::D},
-                          {"Ri", &OpAmpMotorParams::Ri}, {"Ra", &OpAmpMotorParams::Ra},
-                          {"amp_gain", &OpAmpMotorParams::amp_gain}, {"w_max", &OpAmpMotorParams::w_max},
+  const Field fields[] = {{"J", &OpAmpMotorParams::J},
+                          {"k", &OpAmpMotorParams::k},
+                          {"w", &OpAmpMotorParams::w},
+                          {"D", &OpAmpMotorParams::D},
+                          {"Ri", &OpAmpMotorParams::Ri},
+                          {"Ra", &OpAmpMotorParams::Ra},
+                          {"amp_gain", &OpAmpMotorParams::amp_gain},
+                          {"w_max", &OpAmpMotorParams::w_max},
                           {"i_max", &OpAmpMotorParams::i_max}};
   for (const Field& f : fields) {
     for (double bad : {0.0, -1.0, nan, inf}) {
@@ -334,7 +343,8 @@ TEST(OpAmpMotorParams, ValidationErrors) {
         p.validate();
         ADD_FAILURE() << f.name << " = " << bad << " accepted";
       } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find(std::string("op-amp motor: ") + f.name + ": expected a finite value > 0"), std::string::npos)
+        EXPECT_NE(std::string(e.what()).find(std::string("op-amp motor: ") + f.name + ": expected a finite value > 0"),
+                  std::string::npos)
             << e.what();
       }
       EXPECT_THROW(OpAmpMotor{p}, InputError) << f.name;

@@ -18,8 +18,8 @@
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
-#include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/common/error.hpp"
+#include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/drive/strain_wave_gear.hpp"
 #include "jointsim/sim/cvode_integrator.hpp"
 #include "test_util.hpp"
@@ -45,8 +45,8 @@ constexpr int kN = 4 + StrainWaveGear::kStateSize;
 // UR5 rotor inertias ([Raviola2023, Table 2]) and link-only joint inertias (our derived values).
 constexpr double kJmA = 1.877e-4, kJmB = 2.076e-5, kJlBase = 1.279, kJlWrist1 = 0.0152;
 
-StrainWaveGearParams paramsWith(StrainWaveGearParams p, ReactionForm form,
-                                DampingMode mode = DampingMode::Coefficient, double damping = -1.0) {
+StrainWaveGearParams paramsWith(StrainWaveGearParams p, ReactionForm form, DampingMode mode = DampingMode::Coefficient,
+                                double damping = -1.0) {
   p.reaction_form = form;
   p.damping_mode = mode;
   if (damping >= 0.0) p.c_WG = p.c_b = p.c_m = p.c_FS = p.c_CS = damping;
@@ -492,8 +492,9 @@ TEST(StrainWaveGearSim, SlowOutputTorqueRampShowsStaticStiffness) {
   // closed form to 1e-4 and the static torque ratio τ (EnergyConsistent) at the end of the ramp.
   const StiffnessResult a = rampStiffness(StrainWaveGearParams::ur5SizeA());
   const StiffnessResult b = rampStiffness(StrainWaveGearParams::ur5SizeB());
-  std::printf("[ measured ] K_out A = %.6g (fit %.6g), B = %.6g (fit %.6g) N·m/rad; ratio A %.8g B %.8g; steps %ld/%ld\n",
-              a.K, a.K_fit, b.K, b.K_fit, a.torque_ratio, b.torque_ratio, a.steps, b.steps);
+  std::printf(
+      "[ measured ] K_out A = %.6g (fit %.6g), B = %.6g (fit %.6g) N·m/rad; ratio A %.8g B %.8g; steps %ld/%ld\n", a.K,
+      a.K_fit, b.K, b.K_fit, a.torque_ratio, b.torque_ratio, a.steps, b.steps);
   EXPECT_NEAR(a.K, 1.4462e5, 0.005 * 1.4462e5);
   EXPECT_NEAR(b.K, 2.6141e4, 0.005 * 2.6141e4);
   EXPECT_NEAR(a.K_fit, 1.4462e5, 0.005 * 1.4462e5);
@@ -521,8 +522,7 @@ TEST(StrainWaveGearSim, FreeOutputFollowsConstantInputSpeedOverRatio) {
   // relative wobble that CVODE's local error control, rtol·|q̇_WG|, leaves in the instantaneous speed until
   // it takes large steps) and as the instantaneous speed at 2 t_s.
   for (ReactionForm form : {ReactionForm::EnergyConsistent, ReactionForm::PaperLiteral}) {
-    const StrainWaveGear g(
-        paramsWith(StrainWaveGearParams::ur5SizeA(), form, DampingMode::DampingRatio, 0.2));
+    const StrainWaveGear g(paramsWith(StrainWaveGearParams::ur5SizeA(), form, DampingMode::DampingRatio, 0.2));
     const double w = 30.0;
     Rig rig{g, kInf, 1e-3, nullptr};
     Eigen::EigenSolver<Eigen::MatrixXd> es(rig.stateMatrix().bottomRightCorner(kN - 2, kN - 2), false);
@@ -655,8 +655,9 @@ TEST(StrainWaveGearSim, InternalModeFrequenciesMatchLinearModel) {
         }
       }
       const double f_sim = spectralPeak(sig, dt, 0.85 * f_lin[i], 1.15 * f_lin[i]);
-      std::printf("[ measured ] r_g %.4g internal mode %d: simulated %.6g Hz, linearised %.6g Hz, zeta %.2g (%ld steps)\n",
-                  base.r_g, i + 1, f_sim, f_lin[i], zeta, s.steps);
+      std::printf(
+          "[ measured ] r_g %.4g internal mode %d: simulated %.6g Hz, linearised %.6g Hz, zeta %.2g (%ld steps)\n",
+          base.r_g, i + 1, f_sim, f_lin[i], zeta, s.steps);
       if (zeta > 0.05) continue;
       EXPECT_NEAR(f_sim, f_lin[i], 0.01 * f_lin[i]) << "mode " << i + 1;
       ++checked;
@@ -693,7 +694,8 @@ TEST(StrainWaveGear, PowerBalanceIsExactForBothForms) {
       ym[0] -= h * y[1];
       yp[2] += h * y[3];
       ym[2] -= h * y[3];
-      const double dEdt = (g.storedEnergy(portsOf(yp), yp.data() + 4) - g.storedEnergy(portsOf(ym), ym.data() + 4)) / (2 * h);
+      const double dEdt =
+          (g.storedEnergy(portsOf(yp), yp.data() + 4) - g.storedEnergy(portsOf(ym), ym.data() + 4)) / (2 * h);
       const double port = tq.tau_in * y[1] - tq.tau_out * y[3];
       const double D = g.dissipatedPower(ports, y.data() + 4);
       const double S = g.spuriousPower(ports, y.data() + 4);
@@ -758,8 +760,9 @@ EnergyTrace energyTrace(const StrainWaveGear& g, double J_in, double J_out, doub
     running_max = std::max(running_max, E);
     const double dt = s.t[k] - s.t[k - 1];
     budget += 0.5 * dt * (net(s.y[k - 1]) + net(s.y[k]));
-    integral_S += 0.5 * dt * (g.spuriousPower(portsOf(s.y[k - 1]), s.y[k - 1].data() + 4) +
-                              g.spuriousPower(portsOf(s.y[k]), s.y[k].data() + 4));
+    integral_S += 0.5 * dt *
+                  (g.spuriousPower(portsOf(s.y[k - 1]), s.y[k - 1].data() + 4) +
+                   g.spuriousPower(portsOf(s.y[k]), s.y[k].data() + 4));
     r.max_abs_integral_S = std::max(r.max_abs_integral_S, std::abs(integral_S));
     r.max_budget_error = std::max(r.max_budget_error, std::abs(E - r.E0 - budget));
   }
@@ -824,9 +827,8 @@ TEST(StrainWaveYaml, PresetsAndOverrides) {
   EXPECT_EQ(a.K_b, StrainWaveGearParams::ur5SizeA().K_b);
   EXPECT_EQ(a.reaction_form, ReactionForm::EnergyConsistent);
   EXPECT_EQ(a.damping_mode, DampingMode::Coefficient);
-  const auto b = fromYaml(
-      "type: strain_wave_gear\nsize: B\nK_b: 1.5e8\nalpha_t_deg: 20\nreaction_form: paper_literal\n"
-      "damping: {mode: damping_ratio, value: 0.05}\nc_CS: 0.2\n");
+  const auto b = fromYaml("type: strain_wave_gear\nsize: B\nK_b: 1.5e8\nalpha_t_deg: 20\nreaction_form: paper_literal\n"
+                          "damping: {mode: damping_ratio, value: 0.05}\nc_CS: 0.2\n");
   EXPECT_EQ(b.r_g, StrainWaveGearParams::ur5SizeB().r_g);
   EXPECT_EQ(b.K_b, 1.5e8);
   EXPECT_NEAR(b.alpha_t, 20.0 * kPi / 180.0, 1e-15);
@@ -841,9 +843,9 @@ TEST(StrainWaveYaml, PresetsAndOverrides) {
   EXPECT_EQ(t.c_b, 0.1);  // preset number, now read as ζ
   EXPECT_EQ(t.damping_mode, DampingMode::DampingRatio);
   // Without a preset every physical parameter is given.
-  const auto full = fromYaml(
-      "r_g: 0.02\nalpha_t_deg: 30\nK_WG: 1e4\nK_b: 1e8\nK_FS: 5e4\nK_m: 2e8\nK_CS: 1e6\nJ_WG: 1e-6\n"
-      "J_FS: 1e-5\nJ_CS: 1e-5\ntau: 51\n");
+  const auto full =
+      fromYaml("r_g: 0.02\nalpha_t_deg: 30\nK_WG: 1e4\nK_b: 1e8\nK_FS: 5e4\nK_m: 2e8\nK_CS: 1e6\nJ_WG: 1e-6\n"
+               "J_FS: 1e-5\nJ_CS: 1e-5\ntau: 51\n");
   EXPECT_EQ(full.r_g, 0.02);
   EXPECT_EQ(full.tau, 51.0);
   EXPECT_EQ(full.c_FS, 0.1);

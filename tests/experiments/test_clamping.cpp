@@ -13,11 +13,11 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/control/clamping_path.hpp"
 #include "jointsim/drive/transmissions.hpp"
-#include "jointsim/multibody/orthogonal_compliance.hpp"
-#include "jointsim/systems/clamped_robot.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/multibody/algorithms.hpp"
+#include "jointsim/multibody/orthogonal_compliance.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
+#include "jointsim/systems/clamped_robot.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;
@@ -191,9 +191,12 @@ TEST(OrthogonalCompliance, ExtendedModelAtZeroBendingEqualsTheRigidArm) {
   const multibody::Model ext = multibody::withOrthogonalCompliance(arm, {"joint1", "joint2", "joint3"});
   ASSERT_EQ(ext.nq, 12);
   // getOrthVectors: J1 (n = y): u = e_x × n = z, v = n × u = x; J2 (n = z): u = e_x × z = −y, v = x.
-  EXPECT_TRUE(test::MatricesNear(ext.axes[static_cast<size_t>(ext.jointIndex("joint1_orth_u"))], Eigen::Vector3d(0, 0, 1), 1e-15));
-  EXPECT_TRUE(test::MatricesNear(ext.axes[static_cast<size_t>(ext.jointIndex("joint1_orth_v"))], Eigen::Vector3d(1, 0, 0), 1e-15));
-  EXPECT_TRUE(test::MatricesNear(ext.axes[static_cast<size_t>(ext.jointIndex("joint2_orth_u"))], Eigen::Vector3d(0, -1, 0), 1e-15));
+  EXPECT_TRUE(test::MatricesNear(ext.axes[static_cast<size_t>(ext.jointIndex("joint1_orth_u"))],
+                                 Eigen::Vector3d(0, 0, 1), 1e-15));
+  EXPECT_TRUE(test::MatricesNear(ext.axes[static_cast<size_t>(ext.jointIndex("joint1_orth_v"))],
+                                 Eigen::Vector3d(1, 0, 0), 1e-15));
+  EXPECT_TRUE(test::MatricesNear(ext.axes[static_cast<size_t>(ext.jointIndex("joint2_orth_u"))],
+                                 Eigen::Vector3d(0, -1, 0), 1e-15));
   multibody::Data da(arm), de(ext);
   std::mt19937 rng(7);
   for (int trial = 0; trial < 5; ++trial) {
@@ -206,13 +209,16 @@ TEST(OrthogonalCompliance, ExtendedModelAtZeroBendingEqualsTheRigidArm) {
     multibody::forwardKinematics(arm, da, q);
     multibody::forwardKinematics(ext, de, qe);
     const int fa = arm.frameIndex("flange"), fe = ext.frameIndex("flange");
-    EXPECT_TRUE(test::MatricesNear(de.oMf[static_cast<size_t>(fe)].homogeneous(), da.oMf[static_cast<size_t>(fa)].homogeneous(), 1e-12));
+    EXPECT_TRUE(test::MatricesNear(de.oMf[static_cast<size_t>(fe)].homogeneous(),
+                                   da.oMf[static_cast<size_t>(fa)].homogeneous(), 1e-12));
     const Eigen::MatrixXd Ma = multibody::crba(arm, da, q), Me = multibody::crba(ext, de, qe);
-    const Eigen::VectorXd ha = multibody::nonLinearEffects(arm, da, q, qd), he = multibody::nonLinearEffects(ext, de, qe, qde);
+    const Eigen::VectorXd ha = multibody::nonLinearEffects(arm, da, q, qd),
+                          he = multibody::nonLinearEffects(ext, de, qe, qde);
     for (int i = 0; i < 6; ++i) {
       const int ei = ext.jointIndex(arm.joint_names[static_cast<size_t>(i)]);
       EXPECT_NEAR(he[ei], ha[i], 1e-9);
-      for (int j = 0; j < 6; ++j) EXPECT_NEAR(Me(ei, ext.jointIndex(arm.joint_names[static_cast<size_t>(j)])), Ma(i, j), 1e-12);
+      for (int j = 0; j < 6; ++j)
+        EXPECT_NEAR(Me(ei, ext.jointIndex(arm.joint_names[static_cast<size_t>(j)])), Ma(i, j), 1e-12);
     }
     // Bending DOFs carry inertia (M stays positive definite).
     EXPECT_GT(Me.llt().matrixL().toDenseMatrix().diagonal().minCoeff(), 0.0);
@@ -334,7 +340,8 @@ TEST(ClampingExperiment, Irb140DemoRunsAndWritesCurves) {
   experiments::RunOptions o;
   o.output_dir = dir;
   o.overrides = {"duration=3", "log_rate=100"};
-  const experiments::RunReport r = experiments::runExperimentFile(test::sourcePath("config/experiments/irb140_clamping.yaml"), o);
+  const experiments::RunReport r =
+      experiments::runExperimentFile(test::sourcePath("config/experiments/irb140_clamping.yaml"), o);
   EXPECT_EQ(r.status, "ok");
   for (int j = 1; j <= 6; ++j)
     EXPECT_TRUE(std::filesystem::exists(dir + "/irb140_clamping_joint" + std::to_string(j) + "_curve.csv")) << j;

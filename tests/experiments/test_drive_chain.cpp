@@ -10,8 +10,8 @@
 #include <gtest/gtest.h>
 
 #include "jointsim/common/error.hpp"
-#include "jointsim/systems/drive_chain.hpp"
 #include "jointsim/experiments/experiment.hpp"
+#include "jointsim/systems/drive_chain.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;
@@ -88,7 +88,8 @@ TEST(DriveChainFriction, StopsAndSticksAgainWhenTheDriveDrops) {
   // Stuck again: the acceleration is constrained to zero, so the speed keeps exactly the (tiny) value it
   // had at the stop — as in MSL, it is not reset — and the shaft does not creep.
   const auto& cols = sim::tableColumns(chain);
-  const auto mode_col = static_cast<Eigen::Index>(std::find(cols.begin(), cols.end(), "bearing.mode[-]") - cols.begin());
+  const auto mode_col =
+      static_cast<Eigen::Index>(std::find(cols.begin(), cols.end(), "bearing.mode[-]") - cols.begin());
   ASSERT_LT(static_cast<size_t>(mode_col), cols.size());
   const Eigen::VectorXd* first_stuck = nullptr;
   for (const auto& r : rows) {
@@ -173,8 +174,8 @@ TEST(RobotR3OneAxis, RunsToTheTerminationTimeAndClosesItsEnergyBalance) {
     return static_cast<size_t>(it - cols.begin());
   };
   const size_t iW = col("energy.amplifier_work[J]"), iS = col("energy.stored[J]"), iR = col("energy.resistor_loss[J]"),
-               iD = col("energy.damper_loss[J]"), iF = col("energy.friction_loss[J]"), iq = col("axis.initializeFlange.phi_flange[rad]"),
-               iMode = col("axis.gear.bearingFriction.mode[-]");
+               iD = col("energy.damper_loss[J]"), iF = col("energy.friction_loss[J]"),
+               iq = col("axis.initializeFlange.phi_flange[rad]"), iMode = col("axis.gear.bearingFriction.mode[-]");
   double max_residual = 0, max_work = 0, E0 = 0;
   bool first = true, slid = false;
   std::vector<double> last;
@@ -191,7 +192,8 @@ TEST(RobotR3OneAxis, RunsToTheTerminationTimeAndClosesItsEnergyBalance) {
     last = r;
   }
   ASSERT_GT(max_work, 1.0);
-  EXPECT_LT(max_residual / max_work, 1e-4) << "energy balance residual " << max_residual << " J of " << max_work << " J";
+  EXPECT_LT(max_residual / max_work, 1e-4)
+      << "energy balance residual " << max_residual << " J of " << max_work << " J";
   EXPECT_TRUE(slid) << "the bearing friction broke away";
   EXPECT_NEAR(last[iq], 2.0943951023931953, 1e-3) << "the load reaches 120°";
 }
@@ -240,8 +242,8 @@ TEST(RobotR3FullRobot, StartsFromTheDocumentedStateAndReachesTheTarget) {
   std::string last_line;
   while (std::getline(in, line)) last_line = line;
   const auto last = read(last_line);
-  const double q_end[6] = {1.0471975511965976, -1.2217304763960306, -0.6108652381980153, 0.7853981633974483,
-                           1.9198621771937625, 0.7853981633974483};
+  const double q_end[6] = {1.0471975511965976, -1.2217304763960306, -0.6108652381980153,
+                           0.7853981633974483, 1.9198621771937625,  0.7853981633974483};
   for (int j = 1; j <= 6; ++j)
     EXPECT_NEAR(last[col("mechanics.r" + std::to_string(j) + ".phi")], q_end[j - 1], 0.02) << "joint " << j;
 }

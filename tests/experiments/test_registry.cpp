@@ -30,7 +30,8 @@ class MassSpringDamper : public sim::Plant {
   std::string name() const override { return "mass-spring-damper"; }
   int stateSize() const override { return 2; }
   Eigen::VectorXd initialState() const override { return Eigen::Vector2d::Zero(); }
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) const override {
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> yd) const override {
     yd[0] = y[1];
     yd[1] = (force(t) - c_ * y[1] - k_ * y[0]) / m_;
   }
@@ -42,7 +43,8 @@ class MassSpringDamper : public sim::Plant {
   /// Closed form: underdamped step response x(t) = F/k (1 − e^{−ζω τ} (cos ω_d τ + ζω/ω_d sin ω_d τ)), τ = t − t_step.
   double exact(double t) const {
     if (t < t_step_) return 0.0;
-    const double w = std::sqrt(k_ / m_), z = c_ / (2 * std::sqrt(k_ * m_)), wd = w * std::sqrt(1 - z * z), tau = t - t_step_;
+    const double w = std::sqrt(k_ / m_), z = c_ / (2 * std::sqrt(k_ * m_)), wd = w * std::sqrt(1 - z * z),
+                 tau = t - t_step_;
     return F_ / k_ * (1 - std::exp(-z * w * tau) * (std::cos(wd * tau) + z * w / wd * std::sin(wd * tau)));
   }
 
@@ -82,7 +84,8 @@ experiments::ExperimentType msdType() {
   t.name = "mass_spring_damper";
   t.description = "a mass on a spring and damper under a force step (test type)";
   t.load = [](const io::YamlValue& root, const experiments::LoadContext&) -> std::unique_ptr<experiments::Experiment> {
-    root.allowKeys({"experiment", "mass", "stiffness", "damping", "force", "step_time", "duration", "log_rate", "solver"});
+    root.allowKeys(
+        {"experiment", "mass", "stiffness", "damping", "force", "step_time", "duration", "log_rate", "solver"});
     const double m = root.required("mass", "mass in kg").asDouble("a mass in kg");
     if (!(m > 0)) root["mass"].failExpected("a mass > 0 kg");
     double duration = 0, log_rate = 100;
@@ -126,7 +129,8 @@ TEST(ExperimentRegistry, ANewTypeRunsThroughTheFileEntryPointAndThePlantSeam) {
   ASSERT_EQ(log.rows(), 501);
   const MassSpringDamper ref(2.0, 4.0, 800.0, 10.0, 0.05);
   double worst = 0;
-  for (Eigen::Index k = 0; k < log.rows(); ++k) worst = std::max(worst, std::abs(log.data(k, 1) - ref.exact(log.data(k, 0))));
+  for (Eigen::Index k = 0; k < log.rows(); ++k)
+    worst = std::max(worst, std::abs(log.data(k, 1) - ref.exact(log.data(k, 0))));
   EXPECT_LT(worst, 1e-7) << "closed-form step response (peak x ≈ 0.02 m)";
   std::ifstream in(r.summary_path);
   const nlohmann::json summary = nlohmann::json::parse(in);
@@ -168,7 +172,8 @@ TEST(ExperimentRegistry, ANewTypeRunsThroughTheFileEntryPointAndThePlantSeam) {
 TEST(ExperimentRegistry, TypesAreUniqueAndTheUnknownTypeErrorListsThem) {
   if (!experiments::findExperimentType("mass_spring_damper")) experiments::registerExperimentType(msdType());
   EXPECT_THROW(experiments::registerExperimentType(msdType()), InputError);
-  for (const char* t : {"passive_robot", "joint_rig", "tracking", "drive_chain", "robotr3_axis", "robotr3_full", "clamping"}) {
+  for (const char* t :
+       {"passive_robot", "joint_rig", "tracking", "drive_chain", "robotr3_axis", "robotr3_full", "clamping"}) {
     const experiments::ExperimentType* row = experiments::findExperimentType(t);
     ASSERT_NE(row, nullptr) << t;
     EXPECT_FALSE(row->description.empty()) << t;

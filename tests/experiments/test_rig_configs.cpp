@@ -23,7 +23,8 @@ struct Table {
 };
 
 Table runConfig(const std::string& config, std::vector<std::string> overrides = {}) {
-  const auto dir = std::filesystem::temp_directory_path() / ("jointsim_cfg_" + std::filesystem::path(config).stem().string());
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("jointsim_cfg_" + std::filesystem::path(config).stem().string());
   std::filesystem::remove_all(dir);
   experiments::RunOptions options;
   options.output_dir = dir.string();
@@ -134,5 +135,6 @@ TEST(RigConfigs, Ur5StrainWaveGearJointTracksVelocity) {
   EXPECT_NEAR(t.at(r, "motor_velocity"), 101.0, 0.01 * 101.0);
   EXPECT_NEAR(t.at(r, "output_velocity"), t.at(r, "motor_velocity") / 101.0, 1e-4);
   // The output carries the friction torque at steady speed, the motor 1/101 of it (plus its own share).
-  EXPECT_NEAR(t.at(r, "transmission_torque_out"), t.at(r, "friction_torque"), 0.02 * std::abs(t.at(r, "friction_torque")) + 1e-3);
+  EXPECT_NEAR(t.at(r, "transmission_torque_out"), t.at(r, "friction_torque"),
+              0.02 * std::abs(t.at(r, "friction_torque")) + 1e-3);
 }

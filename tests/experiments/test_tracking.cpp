@@ -93,7 +93,8 @@ TEST(Tracking, TrajectoryBeyondLimitsAndBadSetpointCsvExitTwoAndWriteNothing) {
   const std::string robot = test::sourcePath("config/robots/ur5_drives.yaml");
   auto run = [&](const std::string& trajectory) {
     const auto cfg = dir / "exp.yaml";
-    std::ofstream(cfg) << "experiment: {name: bad, type: tracking}\nrobot: " << robot << "\ntrajectory:\n" << trajectory;
+    std::ofstream(cfg) << "experiment: {name: bad, type: tracking}\nrobot: " << robot << "\ntrajectory:\n"
+                       << trajectory;
     const auto out = dir / "out";
     const std::string cmd = std::string(JOINTSIM_CLI_PATH) + " run " + cfg.string() + " -o " + out.string() + " 2>" +
                             (dir / "err").string();
@@ -103,8 +104,9 @@ TEST(Tracking, TrajectoryBeyondLimitsAndBadSetpointCsvExitTwoAndWriteNothing) {
     return std::make_pair(WEXITSTATUS(rc), slurp(dir / "err"));
   };
   // Beyond the ±2π joint limits of ur5.yaml.
-  auto [rc1, err1] = run("  type: point_to_point\n  start: [0, -1.5, 1.5, -1.5, -1.5, 0]\n"
-                         "  segments:\n    - {target: [0, -1.5, 1.5, -1.5, -1.5, 7.0], velocity: 3.0, acceleration: 8.0}\n");
+  auto [rc1, err1] =
+      run("  type: point_to_point\n  start: [0, -1.5, 1.5, -1.5, -1.5, 0]\n"
+          "  segments:\n    - {target: [0, -1.5, 1.5, -1.5, -1.5, 7.0], velocity: 3.0, acceleration: 8.0}\n");
   EXPECT_EQ(rc1, 2);
   EXPECT_THAT(err1, HasSubstr("exp.yaml:4: trajectory: trajectory leaves the limits of joint wrist_3_joint at t = "));
   // Set-point CSV with a gap and with non-monotonic time.
@@ -129,8 +131,11 @@ TEST(Tracking, SampledControlWithNoisySensorsIsReproducibleBySeed) {
   std::filesystem::create_directories(dir);
   std::string drives = slurp(test::sourcePath("config/robots/ur5_drives.yaml"));
   drives.replace(drives.find("multibody: ur5.yaml"), 19, "multibody: " + test::sourcePath("config/robots/ur5.yaml"));
-  for (size_t at = drives.find("    controller:"); at != std::string::npos; at = drives.find("    controller:", at + 200))
-    drives.insert(at, "    sensors: {motor_quantum: 4.79e-5, joint_quantum: 3.83e-4, current_noise: 0.01, current_quantum: 0.001}\n");
+  for (size_t at = drives.find("    controller:"); at != std::string::npos;
+       at = drives.find("    controller:", at + 200))
+    drives.insert(
+        at,
+        "    sensors: {motor_quantum: 4.79e-5, joint_quantum: 3.83e-4, current_noise: 0.01, current_quantum: 0.001}\n");
   std::ofstream(dir / "drives.yaml") << drives;
   std::string exp = slurp(test::sourcePath("config/experiments/ur5_excitation.yaml"));
   exp.replace(exp.find("robot: ../robots/ur5_drives.yaml"), 32, "robot: drives.yaml\ncontrol: {rate: 20000, seed: 7}");

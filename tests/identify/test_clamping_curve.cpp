@@ -72,8 +72,8 @@ TEST(ClampingCurve, MergeAveragesOverTheCoveredInterval) {
   const GridCurve any = mergeCurves({{x1, y1}, {x2, y2}}, 1, 31);
   EXPECT_NEAR(any.x[0], 0.0, 1e-12);
   EXPECT_NEAR(any.x[30], 1.5, 1e-12);
-  EXPECT_NEAR(any.at(0.25), 0.5, 1e-12);   // only curve 1
-  EXPECT_NEAR(any.at(1.25), 3.5, 1e-12);   // only curve 2
+  EXPECT_NEAR(any.at(0.25), 0.5, 1e-12);  // only curve 1
+  EXPECT_NEAR(any.at(1.25), 3.5, 1e-12);  // only curve 2
   EXPECT_TRUE(mergeCurves({{x1, y1}, {x2, y2}}, 3, 21).empty());
 }
 

@@ -22,9 +22,9 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/transmissions.hpp"
-#include "jointsim/systems/joint_rig.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/identify/clamping_fit.hpp"
+#include "jointsim/systems/joint_rig.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;
@@ -35,7 +35,7 @@ namespace {
 
 constexpr double kC = 25.7, kB = 0.0102, kF = 1.91;
 constexpr double kAngleNoise = 5e-5, kTorqueNoise = 0.05;  // rad, N·m
-constexpr double kEncoderZero = 1.234;                      // rad: arbitrary zero of the logged angle
+constexpr double kEncoderZero = 1.234;                     // rad: arbitrary zero of the logged angle
 
 /// The clamping rig of [KR300Thesis] (config/experiments/kr300_joint1_clamping.yaml) through the C++ API: torque
 /// triangle amplitude 5 N·m, period 40 s, `offset` [N·m], `duration` [s] (240 s: 12 half-cycles, as many as
@@ -167,8 +167,9 @@ TEST(ClampingFitCli, RoundTripAndGearRatioScaling) {
   EXPECT_THAT(a.out, HasSubstr("stiffness"));
   const fs::path ya = dir / "motor_clamping.yaml";  // default output next to the data
   ASSERT_TRUE(fs::exists(ya));
-  const Result b = run("identify clamping " + (dir / "arm.csv").string() + " --gear-ratio 120 -o " +
-                       (dir / "arm.yaml").string(), dir);
+  const Result b =
+      run("identify clamping " + (dir / "arm.csv").string() + " --gear-ratio 120 -o " + (dir / "arm.yaml").string(),
+          dir);
   ASSERT_EQ(b.status, 0) << b.err;
   for (const char* p : {"stiffness", "backlash", "friction"}) {
     const double va = reportValue(ya, p), vb = reportValue(dir / "arm.yaml", p);
@@ -196,7 +197,8 @@ TEST(ClampingFitCli, NeverCrossingZeroTorqueIsUnidentifiableUnlessBacklashFixed)
   EXPECT_THAT(r.err, HasSubstr("never crosses zero torque"));
   EXPECT_FALSE(fs::exists(dir / "o.yaml"));
   const Result f = run("identify clamping " + (dir / "offset.csv").string() + " --fix-backlash 0.0102 -o " +
-                       (dir / "o.yaml").string(), dir);
+                           (dir / "o.yaml").string(),
+                       dir);
   ASSERT_EQ(f.status, 0) << f.err;
   EXPECT_NEAR(reportValue(dir / "o.yaml", "stiffness"), kC, 0.03 * kC);
   EXPECT_NEAR(reportValue(dir / "o.yaml", "friction"), kF, 0.03 * kF);

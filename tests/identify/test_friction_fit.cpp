@@ -24,12 +24,12 @@
 
 #include <gtest/gtest.h>
 
-#include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/common/error.hpp"
+#include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/transmissions.hpp"
-#include "jointsim/systems/joint_rig.hpp"
 #include "jointsim/identify/friction_fit.hpp"
+#include "jointsim/systems/joint_rig.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;
@@ -220,7 +220,8 @@ TEST(FrictionFit, RigTimeSimulationRecoversTable43WithinTwoPercent) {
   s.solver.rtol = 1e-8;
   s.solver.atol = 1e-10;
   systems::JointRig rig(s);
-  const int it = test::rowIndex(rig, "time"), iv = test::rowIndex(rig, "output_velocity"), iq = test::rowIndex(rig, "motor_torque");
+  const int it = test::rowIndex(rig, "time"), iv = test::rowIndex(rig, "output_velocity"),
+            iq = test::rowIndex(rig, "motor_torque");
   std::vector<double> sum_v(times.size(), 0.0), sum_tau(times.size(), 0.0), count(times.size(), 0.0);
   const auto wall0 = std::chrono::steady_clock::now();
   sim::simulate(rig, rig.simulateOptions(), [&](const Eigen::VectorXd& row) {

@@ -204,7 +204,8 @@ TEST_P(CrossCheck, GravityTorqueIsGradientOfPotentialEnergy) {
   Eigen::VectorXd grad(n);
   for (Eigen::Index i = 0; i < n; ++i)
     grad[i] = (potentialEnergy(model(), data, q + h * Eigen::VectorXd::Unit(n, i)) -
-               potentialEnergy(model(), data, q - h * Eigen::VectorXd::Unit(n, i))) / (2 * h);
+               potentialEnergy(model(), data, q - h * Eigen::VectorXd::Unit(n, i))) /
+              (2 * h);
   EXPECT_TRUE(MatricesNear(g, grad, 1e-7)) << entry_->name;
 }
 

@@ -125,7 +125,8 @@ TEST(CrossFormat, PlanarRobotIdenticalInUrdfDhAndTree) {
     EXPECT_TRUE(MatricesNear(tipPosition(tree, q), tip, 1e-12));
     // Closed form of the tip: (cos q1 (l1 + l2 cos q2), sin q1 (l1 + l2 cos q2), l2 sin q2).
     const double r = 0.7 + 0.5 * std::cos(q[1]);
-    EXPECT_TRUE(MatricesNear(tip, Eigen::Vector3d(std::cos(q[0]) * r, std::sin(q[0]) * r, 0.5 * std::sin(q[1])), 1e-12));
+    EXPECT_TRUE(
+        MatricesNear(tip, Eigen::Vector3d(std::cos(q[0]) * r, std::sin(q[0]) * r, 0.5 * std::sin(q[1])), 1e-12));
   }
 }
 
@@ -168,8 +169,8 @@ TEST(LoaderErrors, GoodChainLoads) {
 TEST(LoaderErrors, UnknownKeyWithLineAndSuggestion) {
   std::string text = kGoodChain;
   text.replace(text.find("    mass: 2.0"), 13, "    mas: 2.0");
-  EXPECT_THAT(yamlError(text), AllOf(HasSubstr("robot.yaml:6: links[0].mas: unknown key 'mas'"),
-                                     HasSubstr("did you mean 'mass'")));
+  EXPECT_THAT(yamlError(text),
+              AllOf(HasSubstr("robot.yaml:6: links[0].mas: unknown key 'mas'"), HasSubstr("did you mean 'mass'")));
 }
 
 TEST(LoaderErrors, MissingField) {
@@ -199,7 +200,8 @@ TEST(LoaderErrors, InertiaViolatingTriangleInequality) {
 TEST(LoaderErrors, WrongTypeAndWrongLength) {
   std::string text = kGoodChain;
   text.replace(text.find("[-0.25, 0, 0]"), 13, "[-0.25, 0]");
-  EXPECT_THAT(yamlError(text), HasSubstr("links[0].com: expected a list of 3 numbers [x, y, z] in m, got a list of 2 items"));
+  EXPECT_THAT(yamlError(text),
+              HasSubstr("links[0].com: expected a list of 3 numbers [x, y, z] in m, got a list of 2 items"));
   text = kGoodChain;
   text.replace(text.find("a: 0.5"), 6, "a: half");
   EXPECT_THAT(yamlError(text), HasSubstr("links[0].joint.a: expected a length, got 'half'"));
@@ -251,7 +253,8 @@ TEST(Urdf, ContinuousPrismaticInertialRpyAndLimits) {
   X.p = {0, 0, 0.3};
   X.R = rotationFromRpy(0.1, 0.2, 0.3);
   Eigen::Matrix3d I1 = Eigen::Vector3d(0.02, 0.03, 0.04).asDiagonal();
-  b.addLink("base", {"spin", JointType::Revolute, X, Eigen::Vector3d(0, 0.6, 0.8), 0, {}}, "l1", {2.0, {0.1, 0, 0.05}, I1});
+  b.addLink("base", {"spin", JointType::Revolute, X, Eigen::Vector3d(0, 0.6, 0.8), 0, {}}, "l1",
+            {2.0, {0.1, 0, 0.05}, I1});
   Eigen::Matrix3d I2;
   I2 << 0.01, 0.001, 0, 0.001, 0.015, 0.002, 0, 0.002, 0.02;
   const Eigen::Matrix3d R2 = rotationFromRpy(0.3, -0.2, 0.5);
@@ -283,5 +286,6 @@ TEST(Urdf, UnsupportedJointTypeIsNamed) {
   const char* xml = R"(<robot name="f"><link name="base"/><link name="b"/>
     <joint name="free" type="floating"><parent link="base"/><child link="b"/></joint></robot>)";
   EXPECT_THAT([&] { loadUrdfString(xml, "f.urdf"); },
-              ::testing::ThrowsMessage<InputError>(AllOf(HasSubstr("f.urdf: joint 'free'"), HasSubstr("not supported"))));
+              ::testing::ThrowsMessage<InputError>(
+                  AllOf(HasSubstr("f.urdf: joint 'free'"), HasSubstr("not supported"))));
 }

@@ -105,11 +105,13 @@ TEST(RobotR3Model, JointFramesAtStartPosture) {
     SCOPED_TRACE("joint r" + std::to_string(j + 1));
     const Placement& X = data.oMi[static_cast<size_t>(j)];
     EXPECT_TRUE(MatricesNear(X.p, checks[static_cast<size_t>(j)].originStart, kDocTol));
-    EXPECT_TRUE(MatricesNear(X.R * model.axes[static_cast<size_t>(j)], checks[static_cast<size_t>(j)].axisStart, kDocTol));
+    EXPECT_TRUE(
+        MatricesNear(X.R * model.axes[static_cast<size_t>(j)], checks[static_cast<size_t>(j)].axisStart, kDocTol));
   }
   const Placement& L = data.oMf[static_cast<size_t>(model.frameIndex("load"))];
   EXPECT_TRUE(MatricesNear(L.p, checks[5].originStart, kDocTol));
-  EXPECT_TRUE(MatricesNear(L.act(Eigen::Vector3d(0.1, 0.25, 0.1)), Eigen::Vector3d(-1.023128, 1.601240, 0.706173), kDocTol));
+  EXPECT_TRUE(
+      MatricesNear(L.act(Eigen::Vector3d(0.1, 0.25, 0.1)), Eigen::Vector3d(-1.023128, 1.601240, 0.706173), kDocTol));
 }
 
 TEST(RobotR3Model, GravityHoldingTorquesAtStartPosture) {

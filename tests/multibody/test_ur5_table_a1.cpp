@@ -46,8 +46,8 @@ using jointsim::test::sourcePath;
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kJoints = 6;
-constexpr int kGrid = 72;              // points per scanned joint on [−π, π) (5° steps)
-constexpr double kTolerance = 0.06;    // acceptance criterion: 6 % relative per entry
+constexpr int kGrid = 72;            // points per scanned joint on [−π, π) (5° steps)
+constexpr double kTolerance = 0.06;  // acceptance criterion: 6 % relative per entry
 
 // [Raviola2023, Table 2] rotor inertias [kg·m²] and [Raviola2023, eq. 2] gear ratio.
 constexpr double kRotorInertiaArm = 1.877e-4;    // base, shoulder, elbow
@@ -114,14 +114,13 @@ const char* scanLabel(int i) {
 
 void printTable(const std::string& title, const Stats& stats) {
   std::printf("\n%s\n", title.c_str());
-  std::printf("M_ii [kg m^2] incl. J_M tau^2; scan: 2 following joints, %d-pt grid on [-pi, pi), others 0\n",
-              kGrid);
+  std::printf("M_ii [kg m^2] incl. J_M tau^2; scan: 2 following joints, %d-pt grid on [-pi, pi), others 0\n", kGrid);
   std::printf("  %-9s %-7s %-5s %9s %10s %10s\n", "joint", "scan", "stat", "Table A1", "jointsim", "rel.diff");
   for (int i = 0; i < kJoints; ++i) {
     for (int s = 0; s < 3; ++s) {
-      std::printf("  %-9s %-7s %-5s %9.3f %10.4f %+9.2f%%\n", s == 0 ? kJointLabels[i] : "",
-                  s == 0 ? scanLabel(i) : "", kStatLabels[s], kTableA1[s][i],
-                  stats[static_cast<size_t>(s)][static_cast<size_t>(i)], 100.0 * relativeDifference(stats, s, i));
+      std::printf("  %-9s %-7s %-5s %9.3f %10.4f %+9.2f%%\n", s == 0 ? kJointLabels[i] : "", s == 0 ? scanLabel(i) : "",
+                  kStatLabels[s], kTableA1[s][i], stats[static_cast<size_t>(s)][static_cast<size_t>(i)],
+                  100.0 * relativeDifference(stats, s, i));
     }
   }
   std::fflush(stdout);

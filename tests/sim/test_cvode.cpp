@@ -42,7 +42,8 @@ TEST_P(ExponentialDecay, MatchesClosedFormAtSeveralTimes) {
   opt.method = GetParam();
   opt.rtol = 1e-10;
   opt.atol = 1e-16;
-  CvodeIntegrator cv(1, [k](double, const auto& y, auto ydot) { ydot[0] = -k * y[0]; }, opt);
+  CvodeIntegrator cv(
+      1, [k](double, const auto& y, auto ydot) { ydot[0] = -k * y[0]; }, opt);
   cv.initialize(0.0, Eigen::VectorXd::Constant(1, y0));
   Eigen::VectorXd y(1);
   for (double t : {0.05, 0.1, 0.5, 1.0, 2.0, 5.0}) {
@@ -78,7 +79,8 @@ TEST_P(ExponentialDecay, LooseToleranceIsMeasurablyLessAccurate) {
     opt.method = GetParam();
     opt.rtol = rtol;
     opt.atol = 1e-16;
-    CvodeIntegrator cv(1, [k](double, const auto& y, auto ydot) { ydot[0] = -k * y[0]; }, opt);
+    CvodeIntegrator cv(
+        1, [k](double, const auto& y, auto ydot) { ydot[0] = -k * y[0]; }, opt);
     cv.initialize(0.0, Eigen::VectorXd::Ones(1));
     Eigen::VectorXd y(1);
     cv.advance(2.0, y);
@@ -139,8 +141,7 @@ INSTANTIATE_TEST_SUITE_P(Methods, HarmonicOscillator,
 // ----------------------------------------------------------------------------- 3. Robertson (stiff)
 
 // cvRoberts_dns: y1' = -0.04 y1 + 1e4 y2 y3, y2' = 0.04 y1 - 1e4 y2 y3 - 3e7 y2^2, y3' = 3e7 y2^2.
-const RhsFunction kRobertsRhs = [](double, const Eigen::Ref<const Eigen::VectorXd>& y,
-                                   Eigen::Ref<Eigen::VectorXd> yd) {
+const RhsFunction kRobertsRhs = [](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
   yd[0] = -0.04 * y[0] + 1.0e4 * y[1] * y[2];
   yd[2] = 3.0e7 * y[1] * y[1];
   yd[1] = -yd[0] - yd[2];
@@ -393,7 +394,8 @@ TEST(CvodeErrors, TooMuchWorkThenContinue) {
   CvodeOptions opt;
   opt.max_num_steps = 20;
   opt.max_step = 0.01;
-  CvodeIntegrator cv(1, [](double, const auto&, auto ydot) { ydot[0] = 1.0; }, opt);
+  CvodeIntegrator cv(
+      1, [](double, const auto&, auto ydot) { ydot[0] = 1.0; }, opt);
   cv.initialize(0.0, Eigen::VectorXd::Zero(1));
   Eigen::VectorXd y(1);
   try {
@@ -495,7 +497,8 @@ TEST(CvodeReInit, PiecewiseConstantInputWithStateJump) {
     opt.method = method;
     opt.rtol = 1e-10;
     opt.atol = 1e-12;
-    CvodeIntegrator cv(1, [&u](double, const auto&, auto ydot) { ydot[0] = u; }, opt);
+    CvodeIntegrator cv(
+        1, [&u](double, const auto&, auto ydot) { ydot[0] = u; }, opt);
     cv.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0));
     Eigen::VectorXd y(1);
     cv.advance(1.0, y);
@@ -585,7 +588,8 @@ TEST(CvodeIntegrator, MoveKeepsWorking) {
   opt.rtol = 1e-10;
   opt.atol = 1e-14;
   opt.component = "moved";
-  CvodeIntegrator a(1, [](double, const auto& y, auto ydot) { ydot[0] = -y[0]; }, opt);
+  CvodeIntegrator a(
+      1, [](double, const auto& y, auto ydot) { ydot[0] = -y[0]; }, opt);
   a.initialize(0.0, Eigen::VectorXd::Ones(1));
   Eigen::VectorXd y(1);
   a.advance(0.5, y);
@@ -609,7 +613,8 @@ TEST(StopTimeRegression, ReachedAsOutputTimeIsCleared) {
   CvodeOptions o;
   o.rtol = 1e-8;
   o.atol = 1e-10;
-  CvodeIntegrator integ(1, [](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) { yd[0] = -y[0]; }, o);
+  CvodeIntegrator integ(
+      1, [](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) { yd[0] = -y[0]; }, o);
   Eigen::VectorXd y(1);
   integ.initialize(0.0, Eigen::VectorXd::Ones(1));
   integ.setStopTime(0.2);
@@ -624,8 +629,13 @@ TEST(RootFinding, LocatesCrossingWithinTolerance) {
   CvodeOptions o;
   o.rtol = 1e-8;
   o.atol = 1e-10;
-  CvodeIntegrator integ(1, [](double t, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::VectorXd> yd) { yd[0] = std::cos(t); }, o);
-  integ.setRootFunction(1, [](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) { g[0] = y[0] - 0.5; });
+  CvodeIntegrator integ(
+      1,
+      [](double t, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::VectorXd> yd) { yd[0] = std::cos(t); },
+      o);
+  integ.setRootFunction(1, [](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) {
+    g[0] = y[0] - 0.5;
+  });
   Eigen::VectorXd y(1);
   integ.initialize(0.0, Eigen::VectorXd::Zero(1));
   double t = integ.advance(3.0, y);

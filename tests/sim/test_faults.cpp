@@ -11,9 +11,9 @@
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/strain_wave_gear.hpp"
 #include "jointsim/drive/transmissions.hpp"
-#include "jointsim/systems/robot_with_drives.hpp"
 #include "jointsim/sim/cvode_integrator.hpp"
 #include "jointsim/systems/faults.hpp"
+#include "jointsim/systems/robot_with_drives.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;
@@ -47,18 +47,22 @@ std::pair<Eigen::VectorXd, Eigen::VectorXd> hold(const std::vector<Fault>& fault
       systems::loadRobotWithDrives(test::sourcePath("config/robots/ur5_drives_elastic.yaml"), faults);
   Eigen::VectorXd q0(6);
   q0 << 0.2, -1.2, 1.0, -0.8, 0.5, 0.1;
-  sys.setSetpoints([q0](double, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
-    q = q0;
-    qd.setZero();
-    qdd.setZero();
-  });
+  sys.setSetpoints(
+      [q0](double, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
+        q = q0;
+        qd.setZero();
+        qdd.setZero();
+      });
   sim::CvodeOptions o;
   o.rtol = 1e-8;
   o.atol = 1e-10;
   o.max_order = 2;
-  sim::CvodeIntegrator integ(sys.stateSize(), [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-    sys.derivatives(t, y, yd);
-  }, o);
+  sim::CvodeIntegrator integ(
+      sys.stateSize(),
+      [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+        sys.derivatives(t, y, yd);
+      },
+      o);
   Eigen::VectorXd y = sys.initialState(q0);
   integ.initialize(0.0, y);
   integ.advance(1.5, y);

@@ -5,8 +5,8 @@
 
 #include <gtest/gtest.h>
 
-#include "jointsim/systems/passive_robot.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
+#include "jointsim/systems/passive_robot.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;

@@ -21,8 +21,9 @@ namespace {
 const double kGains[6][5] = {{7400, 1.0, 0.1, 10, 10000}, {7500, 1.0, 0.2, 10, 10000}, {7500, 0.5, 0.1, 30, 10000},
                              {2900, 0.8, 0.2, 30, 10000}, {3000, 1.0, 0.2, 30, 10000}, {3250, 1.0, 0.2, 30, 10000}};
 
-std::vector<systems::DriveSpec> ur5Drives(const multibody::Model& m, const std::function<std::shared_ptr<const drive::Transmission>(int)>& gear,
-                                      bool controlled) {
+std::vector<systems::DriveSpec> ur5Drives(const multibody::Model& m,
+                                          const std::function<std::shared_ptr<const drive::Transmission>(int)>& gear,
+                                          bool controlled) {
   std::vector<systems::DriveSpec> drives;
   for (int k = 0; k < 6; ++k) {
     systems::DriveSpec d;
@@ -46,7 +47,8 @@ std::vector<systems::DriveSpec> ur5Drives(const multibody::Model& m, const std::
 
 // Smooth reference: q_set = q0 + A sin(ω t) with its derivatives.
 systems::SetpointFunction sineSetpoints(Eigen::VectorXd q0, double A, double w) {
-  return [q0, A, w](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
+  return [q0, A, w](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
+                    Eigen::Ref<Eigen::VectorXd> qdd) {
     q = q0.array() + A * std::sin(w * t);
     qd.setConstant(A * w * std::cos(w * t));
     qdd.setConstant(-A * w * w * std::sin(w * t));
@@ -62,15 +64,19 @@ Eigen::VectorXd homePose() {
 
 TEST(RobotSystem, RigidGearJointTorqueEqualsRneaOfSimulatedMotion) {
   const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
-  systems::RobotSystem sys(ur5, ur5Drives(ur5, [](int) { return std::make_shared<drive::RigidGear>(101.0); }, true));
+  systems::RobotSystem sys(ur5, ur5Drives(
+                                    ur5, [](int) { return std::make_shared<drive::RigidGear>(101.0); }, true));
   sys.setSetpoints(sineSetpoints(homePose(), 0.3, 2.0));
   sim::CvodeOptions o;
   o.rtol = 1e-8;
   o.atol = 1e-10;
   o.max_order = 2;
-  sim::CvodeIntegrator integ(sys.stateSize(), [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-    sys.derivatives(t, y, yd);
-  }, o);
+  sim::CvodeIntegrator integ(
+      sys.stateSize(),
+      [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+        sys.derivatives(t, y, yd);
+      },
+      o);
   Eigen::VectorXd y = sys.initialState(homePose());
   integ.initialize(0.0, y);
   multibody::Data data(ur5);
@@ -88,46 +94,63 @@ TEST(RobotSystem, RigidGearJointTorqueEqualsRneaOfSimulatedMotion) {
 
 TEST(RobotSystem, StartsAtRestHoldingGravity) {
   const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
-  systems::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
-    return std::make_shared<drive::StrainWaveGear>(k < 3 ? drive::StrainWaveGearParams::ur5SizeA() : drive::StrainWaveGearParams::ur5SizeB());
-  }, true));
+  systems::RobotSystem sys(ur5, ur5Drives(
+                                    ur5,
+                                    [](int k) {
+                                      return std::make_shared<drive::StrainWaveGear>(
+                                          k < 3 ? drive::StrainWaveGearParams::ur5SizeA()
+                                                : drive::StrainWaveGearParams::ur5SizeB());
+                                    },
+                                    true));
   const Eigen::VectorXd y0 = sys.initialState(homePose());
   Eigen::VectorXd yd(sys.stateSize());
   sys.derivatives(0.0, y0, yd);
   // Every state derivative vanishes: joints at rest, gears in static equilibrium, currents and integrators steady.
-  EXPECT_LT(yd.cwiseAbs().maxCoeff(), 1e-6) << "max |ydot| at index " << [&] { Eigen::Index i; yd.cwiseAbs().maxCoeff(&i); return i; }();
+  EXPECT_LT(yd.cwiseAbs().maxCoeff(), 1e-6) << "max |ydot| at index " << [&] {
+    Eigen::Index i;
+    yd.cwiseAbs().maxCoeff(&i);
+    return i;
+  }();
 }
 
 TEST(RobotSystem, StrainWaveGearSpeedRatio101) {
   const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
-  systems::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
-    auto p = k < 3 ? drive::StrainWaveGearParams::ur5SizeA() : drive::StrainWaveGearParams::ur5SizeB();
-    return std::make_shared<drive::StrainWaveGear>(p);
-  }, true));
+  systems::RobotSystem sys(ur5, ur5Drives(
+                                    ur5,
+                                    [](int k) {
+                                      auto p = k < 3 ? drive::StrainWaveGearParams::ur5SizeA()
+                                                     : drive::StrainWaveGearParams::ur5SizeB();
+                                      return std::make_shared<drive::StrainWaveGear>(p);
+                                    },
+                                    true));
   // Base joint turns at a constant 0.5 rad/s after a smooth start; the others hold.
   const Eigen::VectorXd q0 = homePose();
-  sys.setSetpoints([q0](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
-    q = q0;
-    qd.setZero();
-    qdd.setZero();
-    const double T = 0.2, v = 0.5;  // quadratic blend to 0.5 rad/s over 0.2 s
-    if (t < T) {
-      q[0] += 0.5 * v / T * t * t;
-      qd[0] = v / T * t;
-      qdd[0] = v / T;
-    } else {
-      q[0] += 0.5 * v * T + v * (t - T);
-      qd[0] = v;
-    }
-  });
+  sys.setSetpoints(
+      [q0](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
+        q = q0;
+        qd.setZero();
+        qdd.setZero();
+        const double T = 0.2, v = 0.5;  // quadratic blend to 0.5 rad/s over 0.2 s
+        if (t < T) {
+          q[0] += 0.5 * v / T * t * t;
+          qd[0] = v / T * t;
+          qdd[0] = v / T;
+        } else {
+          q[0] += 0.5 * v * T + v * (t - T);
+          qd[0] = v;
+        }
+      });
   sim::CvodeOptions o;
   o.rtol = 1e-8;
   o.atol = 1e-10;
   o.max_order = 2;
   o.max_step = 1e-3;
-  sim::CvodeIntegrator integ(sys.stateSize(), [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-    sys.derivatives(t, y, yd);
-  }, o);
+  sim::CvodeIntegrator integ(
+      sys.stateSize(),
+      [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+        sys.derivatives(t, y, yd);
+      },
+      o);
   Eigen::VectorXd y = sys.initialState(q0);
   integ.initialize(0.0, y);
   integ.setStopTime(0.2);
@@ -142,16 +165,23 @@ TEST(RobotSystem, StrainWaveGearSpeedRatio101) {
 TEST(RobotSystem, TorqueFreeFrictionlessRunConservesEnergy) {
   // Uncontrolled, frictionless, undamped elastic gears with rotor inertias: all energy is mechanical.
   const auto ur5 = multibody::loadRobot(test::sourcePath("config/robots/ur5.yaml"));
-  systems::RobotSystem sys(ur5, ur5Drives(ur5, [](int k) {
-    return std::make_shared<drive::ElasticGear>(drive::ElasticGearParams{101.0, k < 3 ? 1.4e5 : 2.6e4, 0.0, drive::ComplianceSide::Output});
-  }, false));
+  systems::RobotSystem sys(ur5, ur5Drives(
+                                    ur5,
+                                    [](int k) {
+                                      return std::make_shared<drive::ElasticGear>(drive::ElasticGearParams{
+                                          101.0, k < 3 ? 1.4e5 : 2.6e4, 0.0, drive::ComplianceSide::Output});
+                                    },
+                                    false));
   sim::CvodeOptions o;
   o.method = sim::Method::Adams;
   o.rtol = 1e-10;
   o.atol = 1e-12;
-  sim::CvodeIntegrator integ(sys.stateSize(), [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-    sys.derivatives(t, y, yd);
-  }, o);
+  sim::CvodeIntegrator integ(
+      sys.stateSize(),
+      [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+        sys.derivatives(t, y, yd);
+      },
+      o);
   Eigen::VectorXd y = sys.initialState(homePose());
   integ.initialize(0.0, y);
   const double E0 = sys.mechanicalEnergy(y);
@@ -191,14 +221,15 @@ TEST(RobotSystem, Irb140CoupledWristWith000ControllersHoldsAndBalancesTorques) {
   systems::RobotSystem sys(irb, drives, G);
   Eigen::VectorXd q0(6);
   q0 << 0.1, 0.2, -0.3, 0.2, 0.4, -0.1;
-  sys.setSetpoints([q0](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
-    q = q0;
-    q[4] += 0.05 * std::sin(3 * t);
-    qd.setZero();
-    qd[4] = 0.15 * std::cos(3 * t);
-    qdd.setZero();
-    qdd[4] = -0.45 * std::sin(3 * t);
-  });
+  sys.setSetpoints(
+      [q0](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd, Eigen::Ref<Eigen::VectorXd> qdd) {
+        q = q0;
+        q[4] += 0.05 * std::sin(3 * t);
+        qd.setZero();
+        qd[4] = 0.15 * std::cos(3 * t);
+        qdd.setZero();
+        qdd[4] = -0.45 * std::sin(3 * t);
+      });
   Eigen::VectorXd y = sys.initialState(q0);
   Eigen::VectorXd yd(sys.stateSize());
   sys.derivatives(0.0, y, yd);
@@ -207,9 +238,12 @@ TEST(RobotSystem, Irb140CoupledWristWith000ControllersHoldsAndBalancesTorques) {
   o.rtol = 1e-9;
   o.atol = 1e-11;
   o.max_order = 2;
-  sim::CvodeIntegrator integ(sys.stateSize(), [&](double t, const Eigen::Ref<const Eigen::VectorXd>& yy, Eigen::Ref<Eigen::VectorXd> d) {
-    sys.derivatives(t, yy, d);
-  }, o);
+  sim::CvodeIntegrator integ(
+      sys.stateSize(),
+      [&](double t, const Eigen::Ref<const Eigen::VectorXd>& yy, Eigen::Ref<Eigen::VectorXd> d) {
+        sys.derivatives(t, yy, d);
+      },
+      o);
   integ.initialize(0.0, y);
   multibody::Data data(irb);
   // Reflected rotor inertia G⁻ᵀ diag(N² J_M) G⁻¹ (the coupled wrist makes it non-diagonal).

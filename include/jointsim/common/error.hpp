@@ -44,14 +44,15 @@ class InputError : public Error {
     e.message_ = message;
     return e;
   }
-  const std::string& file() const noexcept { return file_; }        ///< empty when unknown
-  int line() const noexcept { return line_; }                       ///< 1-based; 0 when unknown
-  const std::string& keyPath() const noexcept { return key_path_; } ///< empty when unknown
-  const std::string& message() const noexcept { return message_; }  ///< what() without the location
+  const std::string& file() const noexcept { return file_; }         ///< empty when unknown
+  int line() const noexcept { return line_; }                        ///< 1-based; 0 when unknown
+  const std::string& keyPath() const noexcept { return key_path_; }  ///< empty when unknown
+  const std::string& message() const noexcept { return message_; }   ///< what() without the location
   /// True when the error names a file (it needs no relocation by a caller).
   bool located() const noexcept { return !file_.empty(); }
 
-  static std::string compose(const std::string& file, int line, const std::string& key_path, const std::string& message) {
+  static std::string compose(const std::string& file, int line, const std::string& key_path,
+                             const std::string& message) {
     std::string s;
     if (!file.empty()) s += file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": ";
     if (!key_path.empty()) s += key_path + ": ";

@@ -33,8 +33,10 @@ double interpolateLinear(std::size_t n, X x, Y y, double at, Ends ends) {
     std::size_t lo = 0, hi = n - 1;  // invariant: x(lo) <= at < x(hi)
     while (hi - lo > 1) {
       const std::size_t mid = lo + (hi - lo) / 2;
-      if (x(mid) <= at) lo = mid;
-      else hi = mid;
+      if (x(mid) <= at)
+        lo = mid;
+      else
+        hi = mid;
     }
     k = hi;
   }

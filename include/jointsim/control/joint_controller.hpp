@@ -20,27 +20,27 @@ enum class ControllerType { None, Cascade002, MotorPPI000 };
 struct JointControllerParams {
   ControllerType type = ControllerType::None;
   // Cascade002 ([Raviola2023, Table 1])
-  double P_pos = 0.0;   ///< position P: joint error [rad] → motor speed [rad/s] [1/s], >= 0
-  double P_vel = 0.0;   ///< velocity P [A·s/rad], >= 0
-  double I_vel = 0.0;   ///< velocity I [A/rad], >= 0
-  double P_cur = 0.0;   ///< current P [V/A], >= 0
-  double I_cur = 0.0;   ///< current I [V/(A·s)], >= 0
+  double P_pos = 0.0;  ///< position P: joint error [rad] → motor speed [rad/s] [1/s], >= 0
+  double P_vel = 0.0;  ///< velocity P [A·s/rad], >= 0
+  double I_vel = 0.0;  ///< velocity I [A/rad], >= 0
+  double P_cur = 0.0;  ///< current P [V/A], >= 0
+  double I_cur = 0.0;  ///< current I [V/(A·s)], >= 0
   // MotorPPI000 ([Olsson2017, A.12])
-  double kp = 0.0;      ///< position gain [1/s], >= 0
-  double ks = 0.0;      ///< speed PI gain [N·m·s/rad], >= 0
-  double Ts = 0.01;     ///< PI integrator time constant [s], > 0
+  double kp = 0.0;   ///< position gain [1/s], >= 0
+  double ks = 0.0;   ///< speed PI gain [N·m·s/rad], >= 0
+  double Ts = 0.01;  ///< PI integrator time constant [s], > 0
   /// Throws InputError naming the gain and the rule (gains must be >= 0, Ts > 0).
   void validate(const std::string& where) const;
 };
 
 /// Measured and desired signals at one instant.
 struct ControllerInputs {
-  double q_set = 0, qd_set = 0;   ///< joint-side reference [rad], [rad/s]
-  double q_fb = 0;                ///< measured joint angle [rad]
-  double qm_fb = 0, qdm_fb = 0;   ///< measured motor angle [rad] and speed [rad/s]
-  double i_fb = 0;                ///< measured motor current [A]
-  double ratio = 1;               ///< gear ratio N used to scale references
-  double v_limit = 0;             ///< supply voltage [V] (Cascade002 anti-windup)
+  double q_set = 0, qd_set = 0;  ///< joint-side reference [rad], [rad/s]
+  double q_fb = 0;               ///< measured joint angle [rad]
+  double qm_fb = 0, qdm_fb = 0;  ///< measured motor angle [rad] and speed [rad/s]
+  double i_fb = 0;               ///< measured motor current [A]
+  double ratio = 1;              ///< gear ratio N used to scale references
+  double v_limit = 0;            ///< supply voltage [V] (Cascade002 anti-windup)
 };
 
 struct ControllerOutputs {

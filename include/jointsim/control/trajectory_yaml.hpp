@@ -31,8 +31,8 @@
 #include <memory>
 #include <string>
 
-#include "jointsim/io/yaml.hpp"
 #include "jointsim/control/trajectory.hpp"
+#include "jointsim/io/yaml.hpp"
 
 namespace jointsim::control {
 

@@ -10,12 +10,12 @@
 namespace jointsim::drive {
 
 struct DcMotorParams {
-  double R = 0.30;          ///< armature resistance R [Ω], > 0
-  double L = 0.83e-3;       ///< armature inductance L [H], > 0
-  double kt = 0.1350;       ///< torque constant k_t [N·m/A], > 0
-  double ke = 0.1350;       ///< back-EMF constant k_e [V·s/rad], > 0 ([Raviola2023] uses k_e = k_t; may differ)
-  double J_M = 1.877e-4;    ///< rotor inertia J_M [kg·m²], > 0
-  double V_supply = 48.0;   ///< supply (network) voltage V_net [V], > 0: |V_sup| ≤ V_supply
+  double R = 0.30;         ///< armature resistance R [Ω], > 0
+  double L = 0.83e-3;      ///< armature inductance L [H], > 0
+  double kt = 0.1350;      ///< torque constant k_t [N·m/A], > 0
+  double ke = 0.1350;      ///< back-EMF constant k_e [V·s/rad], > 0 ([Raviola2023] uses k_e = k_t; may differ)
+  double J_M = 1.877e-4;   ///< rotor inertia J_M [kg·m²], > 0
+  double V_supply = 48.0;  ///< supply (network) voltage V_net [V], > 0: |V_sup| ≤ V_supply
 
   /// Throws InputError naming the field, the value and the rule.
   void validate() const;

@@ -275,14 +275,16 @@ class LuGreFriction : public Friction {
 /// exponent are the values of [Raviola2023]; f_c, f_v and k_q are not given by [Raviola2023] and default to
 /// NaN so that validate() rejects a model where they were not set (k_q = 1 is a sensible start).
 struct LuGreUr5Params {
-  double sigma0 = 5e6;                ///< σ0: bristle stiffness [N·m/rad], > 0
-  double sigma1 = 100.0;              ///< σ1: bristle damping [N·m·s/rad], > 0
-  double qd_s = 0.5;                  ///< q̇_s: sliding-speed threshold (Stribeck) [rad/s], > 0
-  double k_static = 0.3;              ///< K_static: static increment over Coulomb [-], >= 0 (break-away (1 + K_static)·f_c)
-  double viscous_exponent = 2.0 / 3;  ///< exponent on |q̇| in the viscous term [-], > 0
+  double sigma0 = 5e6;    ///< σ0: bristle stiffness [N·m/rad], > 0
+  double sigma1 = 100.0;  ///< σ1: bristle damping [N·m·s/rad], > 0
+  double qd_s = 0.5;      ///< q̇_s: sliding-speed threshold (Stribeck) [rad/s], > 0
+  double k_static = 0.3;  ///< K_static: static increment over Coulomb [-], >= 0 (break-away (1 + K_static)·f_c)
+  double viscous_exponent = 2.0 / 3;                      ///< exponent on |q̇| in the viscous term [-], > 0
   double f_c = std::numeric_limits<double>::quiet_NaN();  ///< f_c: Coulomb coefficient [N·m], > 0, required
-  double f_v = std::numeric_limits<double>::quiet_NaN();  ///< f_v: viscous coefficient [N·m·(s/rad)^exponent], >= 0, required
-  double k_q = std::numeric_limits<double>::quiet_NaN();  ///< k_q (k_l in eq. 7): Stribeck shape factor [-], >= 0, required
+  double f_v =
+      std::numeric_limits<double>::quiet_NaN();  ///< f_v: viscous coefficient [N·m·(s/rad)^exponent], >= 0, required
+  double k_q =
+      std::numeric_limits<double>::quiet_NaN();  ///< k_q (k_l in eq. 7): Stribeck shape factor [-], >= 0, required
   /// \throws InputError naming the field, its value and the rule (also for an unset f_c, f_v, k_q).
   void validate() const;
 };

@@ -25,15 +25,15 @@
 namespace jointsim::drive {
 
 struct OpAmpMotorParams {
-  double J = 0.0013;       ///< rotor inertia J [kg·m²], > 0 (MSL axis-model default)
-  double k = 1.1616;       ///< EMF / torque constant k [N·m/A = V·s/rad], > 0
-  double w = 4590.0;       ///< natural frequency of the current loop w [rad/s], > 0 (MSL calls it "time constant")
-  double D = 0.6;          ///< damping ratio of the current loop D [-], > 0
-  double Ri = 10.0;        ///< integrator input resistor Ri [Ω], > 0
-  double Ra = 250.0;       ///< armature resistance Ra [Ω], > 0
-  double amp_gain = 5.0;   ///< power-amplifier gain 1 + Rp1/Rp2 = 1 + 200/50 [-], > 0
-  double w_max = 315.0;    ///< maximum speed [rad/s], > 0. Unused by any equation (as in MSL: no limiter)
-  double i_max = 9.0;      ///< maximum current [A], > 0. Unused by any equation (as in MSL: no saturation)
+  double J = 0.0013;      ///< rotor inertia J [kg·m²], > 0 (MSL axis-model default)
+  double k = 1.1616;      ///< EMF / torque constant k [N·m/A = V·s/rad], > 0
+  double w = 4590.0;      ///< natural frequency of the current loop w [rad/s], > 0 (MSL calls it "time constant")
+  double D = 0.6;         ///< damping ratio of the current loop D [-], > 0
+  double Ri = 10.0;       ///< integrator input resistor Ri [Ω], > 0
+  double Ra = 250.0;      ///< armature resistance Ra [Ω], > 0
+  double amp_gain = 5.0;  ///< power-amplifier gain 1 + Rp1/Rp2 = 1 + 200/50 [-], > 0
+  double w_max = 315.0;   ///< maximum speed [rad/s], > 0. Unused by any equation (as in MSL: no limiter)
+  double i_max = 9.0;     ///< maximum current [A], > 0. Unused by any equation (as in MSL: no saturation)
 
   /// Integrator capacitance C = 0.004·D/w [F] (MSL formula; gives the loop its natural frequency w
   /// together with Ri = 10 Ω, Ra = 250 Ω and gain 5).

@@ -86,17 +86,17 @@ enum class DampingMode {
 
 /// Parameters of the strain wave gear ([Raviola2023, Table 3]). Defaults are size A (UR5 joints 1–3).
 struct StrainWaveGearParams {
-  double r_g = 30.65e-3;                    ///< primitive radius = undeformed FS radius [m], > 0
-  double alpha_t = 0.52359877559829887;     ///< tooth pressure angle α_t [rad], in (0, π/2) (30°)
-  double tau = 101.0;                       ///< reduction ratio τ = Z_CS/(Z_CS − Z_FS) [-] (eq. 2), > 1
-  double K_WG = 1.92e5;                     ///< motor shaft – WG torsional stiffness [N·m/rad], > 0
-  double K_b = 1.9e8;                       ///< WG bearing – FS radial contact stiffness [N/m], > 0
-  double K_FS = 3.99e5;                     ///< FS torsional stiffness to the case [N·m/rad], > 0
-  double K_m = 5.70e8;                      ///< FS – CS mesh contact stiffness [N/m], > 0
-  double K_CS = 1.98e7;                     ///< CS – output flange torsional stiffness [N·m/rad], > 0
-  double J_WG = 2.60e-5;                    ///< WG inertia [kg·m²], > 0
-  double J_FS = 2.65e-4;                    ///< FS inertia [kg·m²], > 0 (equivalent mass J_FS/r_g² [kg])
-  double J_CS = 2.43e-4;                    ///< CS inertia [kg·m²], > 0
+  double r_g = 30.65e-3;                 ///< primitive radius = undeformed FS radius [m], > 0
+  double alpha_t = 0.52359877559829887;  ///< tooth pressure angle α_t [rad], in (0, π/2) (30°)
+  double tau = 101.0;                    ///< reduction ratio τ = Z_CS/(Z_CS − Z_FS) [-] (eq. 2), > 1
+  double K_WG = 1.92e5;                  ///< motor shaft – WG torsional stiffness [N·m/rad], > 0
+  double K_b = 1.9e8;                    ///< WG bearing – FS radial contact stiffness [N/m], > 0
+  double K_FS = 3.99e5;                  ///< FS torsional stiffness to the case [N·m/rad], > 0
+  double K_m = 5.70e8;                   ///< FS – CS mesh contact stiffness [N/m], > 0
+  double K_CS = 1.98e7;                  ///< CS – output flange torsional stiffness [N·m/rad], > 0
+  double J_WG = 2.60e-5;                 ///< WG inertia [kg·m²], > 0
+  double J_FS = 2.65e-4;                 ///< FS inertia [kg·m²], > 0 (equivalent mass J_FS/r_g² [kg])
+  double J_CS = 2.43e-4;                 ///< CS inertia [kg·m²], > 0
   /// Damping of the motor shaft – WG element, >= 0: [N·m·s/rad] (Coefficient) or ζ [-] (DampingRatio).
   double c_WG = 0.1;
   /// Damping of the WG bearing – FS radial contact, >= 0: [N·s/m] (Coefficient) or ζ [-] (DampingRatio).
@@ -157,14 +157,14 @@ class StrainWaveGear : public Transmission {
   static constexpr int kStateSize = 8;
   /// Indices into the internal state vector (see the file comment).
   enum StateIndex : int {
-    kTwistWG = 0,      ///< φ_WG = q_in − q_WG [rad]
-    kVelWG = 1,        ///< q̇_WG [rad/s]
-    kBearing = 2,      ///< Δ_b = x_WG − x_FS [m]
-    kVelFSx = 3,       ///< ẋ_FS [m/s]
-    kFSy = 4,          ///< y_FS [m]
-    kVelFSy = 5,       ///< ẏ_FS [m/s]
-    kTwistCS = 6,      ///< φ_CS = q_CS − q_out [rad]
-    kVelCS = 7,        ///< q̇_CS [rad/s]
+    kTwistWG = 0,  ///< φ_WG = q_in − q_WG [rad]
+    kVelWG = 1,    ///< q̇_WG [rad/s]
+    kBearing = 2,  ///< Δ_b = x_WG − x_FS [m]
+    kVelFSx = 3,   ///< ẋ_FS [m/s]
+    kFSy = 4,      ///< y_FS [m]
+    kVelFSy = 5,   ///< ẏ_FS [m/s]
+    kTwistCS = 6,  ///< φ_CS = q_CS − q_out [rad]
+    kVelCS = 7,    ///< q̇_CS [rad/s]
   };
 
   /// Validates the parameters (InputError) and precomputes the constant coefficients.

@@ -34,9 +34,9 @@ class RigidGear : public Transmission {
 };
 
 struct ElasticGearParams {
-  double ratio = 1.0;        ///< N = q_in / q_out [-], > 0
-  double stiffness = 1.0;    ///< c [N·m/rad] on `side`, > 0
-  double damping = 0.0;      ///< d [N·m·s/rad] on `side`, >= 0
+  double ratio = 1.0;      ///< N = q_in / q_out [-], > 0
+  double stiffness = 1.0;  ///< c [N·m/rad] on `side`, > 0
+  double damping = 0.0;    ///< d [N·m·s/rad] on `side`, >= 0
   ComplianceSide side = ComplianceSide::Motor;
   void validate() const;
 };
@@ -57,10 +57,10 @@ class ElasticGear : public Transmission {
 };
 
 struct ElastoBacklashParams {
-  double ratio = 1.0;        ///< N = q_in / q_out [-], > 0
-  double stiffness = 1.0;    ///< c [N·m/rad] on `side`, > 0
-  double damping = 0.0;      ///< d [N·m·s/rad] on `side`, >= 0
-  double backlash = 0.0;     ///< total backlash b [rad] on `side`, >= 0 (gap ±b/2 around zero deflection)
+  double ratio = 1.0;      ///< N = q_in / q_out [-], > 0
+  double stiffness = 1.0;  ///< c [N·m/rad] on `side`, > 0
+  double damping = 0.0;    ///< d [N·m·s/rad] on `side`, >= 0
+  double backlash = 0.0;   ///< total backlash b [rad] on `side`, >= 0 (gap ±b/2 around zero deflection)
   ComplianceSide side = ComplianceSide::Motor;
   void validate() const;
 };

@@ -23,7 +23,7 @@ struct BatchRun {
   std::string name;                    ///< unique; also the run's folder name
   std::vector<std::string> overrides;  ///< "key.path=value", the sweep's common overrides first
   std::vector<systems::Fault> faults;
-  std::string describe() const;        ///< overrides and faults joined by "; "
+  std::string describe() const;  ///< overrides and faults joined by "; "
 };
 
 struct Sweep {
@@ -38,11 +38,11 @@ struct Sweep {
 Sweep loadSweep(const std::string& path);
 
 struct BatchOptions {
-  std::string output_dir;   ///< empty: out/<sweep name>/
-  int jobs = 1;             ///< runs executed at the same time (>= 1)
-  int shard_index = 0;      ///< this shard, 0 <= index < count
+  std::string output_dir;  ///< empty: out/<sweep name>/
+  int jobs = 1;            ///< runs executed at the same time (>= 1)
+  int shard_index = 0;     ///< this shard, 0 <= index < count
   int shard_count = 1;
-  bool progress = false;    ///< "runs done/failed/total" on stderr
+  bool progress = false;  ///< "runs done/failed/total" on stderr
 };
 
 struct BatchRecord {
@@ -50,8 +50,8 @@ struct BatchRecord {
   double wall_time_s = 0.0, sim_time_s = 0.0, real_time_factor = 0.0;
   std::string output_dir, overrides;
   std::string jointsim_version, git_commit, started_utc;  ///< from the run's summary.json
-  std::string inputs;       ///< "path=hash;..." of every input file the run read
-  bool skipped = false;     ///< finished in an earlier invocation
+  std::string inputs;                                     ///< "path=hash;..." of every input file the run read
+  bool skipped = false;                                   ///< finished in an earlier invocation
 };
 
 struct BatchResult {

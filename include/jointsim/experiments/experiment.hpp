@@ -106,10 +106,10 @@ struct RunReport {
 
 /// The outcome of a run in memory.
 struct ExperimentResult {
-  sim::SignalTable log;             ///< the log (the CSV's content)
-  std::vector<ExtraTable> extras;   ///< extra tables (e.g. clamping curves)
-  sim::SimulationResult result;     ///< statistics
-  std::string summary_json;         ///< summary.json's content (status "ok")
+  sim::SignalTable log;            ///< the log (the CSV's content)
+  std::vector<ExtraTable> extras;  ///< extra tables (e.g. clamping curves)
+  sim::SimulationResult result;    ///< statistics
+  std::string summary_json;        ///< summary.json's content (status "ok")
 };
 
 /// Loads an experiment file: parses it, applies `overrides` ("key.path=value"; InputError for a key the file

@@ -22,8 +22,8 @@ namespace jointsim::experiments {
 /// summary (summary.json) for parameters.
 struct RunData {
   std::string experiment, type, status;
-  std::vector<std::string> names, units;  ///< per log column: base name and unit ("time", "s")
-  Eigen::MatrixXd data;                   ///< rows × columns of the log
+  std::vector<std::string> names, units;                  ///< per log column: base name and unit ("time", "s")
+  Eigen::MatrixXd data;                                   ///< rows × columns of the log
   std::shared_ptr<const nlohmann::ordered_json> summary;  ///< may be null
 
   /// Column index of the base name `name` (exact), -1 if absent.
@@ -48,8 +48,8 @@ enum class LineStyle {
   Emphasis,  ///< thick black line (a norm drawn over its components)
   Steps,     ///< staircase (discrete values)
   ThickSteps,
-  Samples,   ///< small grey dots (every sample of a scatter)
-  Markers,   ///< large red dots (a few computed points)
+  Samples,  ///< small grey dots (every sample of a scatter)
+  Markers,  ///< large red dots (a few computed points)
 };
 
 /// One curve: y = ((log[y] − log[y_minus]) − offset) · factor against log[x] (x = −1: the time column), or the
@@ -58,10 +58,10 @@ struct Series {
   int x = -1, y = -1, y_minus = -1;
   double factor = 1.0, offset = 0.0;
   std::vector<std::array<double, 2>> points;
-  std::string title;          ///< legend entry (empty: none)
+  std::string title;  ///< legend entry (empty: none)
   LineStyle style = LineStyle::Line;
-  bool y2 = false;            ///< on the right axis
-  double magnitude = 0.0;     ///< max |y|, for the automatic right axis
+  bool y2 = false;         ///< on the right axis
+  double magnitude = 0.0;  ///< max |y|, for the automatic right axis
 };
 
 enum class Key { automatic, top_left, top_right, bottom_right, outside, none };
@@ -72,12 +72,12 @@ struct PanelLayout {
   bool time_axis = true;  ///< x is time: no padding at the ends
   bool auto_y2 = false;   ///< series much smaller than the largest go to a right axis of the same unit
   Key key = Key::automatic;
-  double y2_step = 0;     ///< right-axis tic step (0: about five tics over the left axis' span)
+  double y2_step = 0;  ///< right-axis tic step (0: about five tics over the left axis' span)
 };
 
 struct Panel : PanelLayout {
   std::vector<Series> series;
-  double y_step = 0;      ///< left-axis tic step (0: automatic)
+  double y_step = 0;                                        ///< left-axis tic step (0: automatic)
   double y_min = std::numeric_limits<double>::quiet_NaN();  ///< fixed left-axis range when both are set
   double y_max = std::numeric_limits<double>::quiet_NaN();
 };
@@ -112,7 +112,8 @@ struct Scaled {
 };
 Scaled readableUnit(const std::string& unit, double max_abs);
 /// y = column c (times `factor`) against time.
-Series timeSeries(const RunData& run, int c, const std::string& title, double factor = 1, LineStyle style = LineStyle::Line);
+Series timeSeries(const RunData& run, int c, const std::string& title, double factor = 1,
+                  LineStyle style = LineStyle::Line);
 /// y = column c against column x.
 Series xySeries(const RunData& run, int x, int c, const std::string& title, LineStyle style = LineStyle::Line);
 /// A time panel of the given columns (legend: `legend(name)` or the names); y label from `quantity` and the

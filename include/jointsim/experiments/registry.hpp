@@ -18,20 +18,21 @@ namespace jointsim::experiments {
 
 /// What a loader gets besides the document.
 struct LoadContext {
-  std::string name;                     ///< experiment.name (validated: a non-empty name without path separators)
-  std::string file;                     ///< the experiment file
-  std::vector<systems::Fault> faults;   ///< faults to inject (only types with accepts_faults get any)
+  std::string name;                    ///< experiment.name (validated: a non-empty name without path separators)
+  std::string file;                    ///< the experiment file
+  std::vector<systems::Fault> faults;  ///< faults to inject (only types with accepts_faults get any)
 };
 
 /// Loads the document (with --set overrides applied; `root` is the whole file) into a runnable experiment.
 /// Throws InputError naming the file, line and key path.
-using ExperimentLoader = std::function<std::unique_ptr<Experiment>(const io::YamlValue& root, const LoadContext& context)>;
+using ExperimentLoader =
+    std::function<std::unique_ptr<Experiment>(const io::YamlValue& root, const LoadContext& context)>;
 
 struct ExperimentType {
   std::string name;         ///< the `experiment.type` value, e.g. "joint_rig"
   std::string description;  ///< one line for the CLI help
   ExperimentLoader load;
-  FigureFunction figures;   ///< optional: without it (or when it returns none) every column against time
+  FigureFunction figures;        ///< optional: without it (or when it returns none) every column against time
   KeySignalFunction key_signal;  ///< optional: the signal overlaid across a sweep's runs
   bool accepts_faults = false;   ///< drive faults (systems/faults.hpp) apply to this type
 };

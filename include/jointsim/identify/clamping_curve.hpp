@@ -24,11 +24,11 @@ namespace jointsim::identify {
 
 /// One clamping log, motor side.
 struct ClampingData {
-  std::string source;        ///< file name (for messages), may be empty
-  Eigen::VectorXd time;      ///< sample times [s], strictly increasing
-  Eigen::VectorXd angle;     ///< motor angle [rad] (zero arbitrary)
-  Eigen::VectorXd torque;    ///< motor-side torque [N·m]
-  std::vector<int> lines;    ///< 1-based file line of each sample (empty when not read from a file)
+  std::string source;      ///< file name (for messages), may be empty
+  Eigen::VectorXd time;    ///< sample times [s], strictly increasing
+  Eigen::VectorXd angle;   ///< motor angle [rad] (zero arbitrary)
+  Eigen::VectorXd torque;  ///< motor-side torque [N·m]
+  std::vector<int> lines;  ///< 1-based file line of each sample (empty when not read from a file)
   /// Throws InputError if the sizes differ, a value is not finite, the time is not strictly increasing
   /// (naming the file line when known) or there are fewer than `min_rows` samples.
   void validate(int min_rows = 20) const;
@@ -102,14 +102,14 @@ struct ClampingCurveOptions {
 
 /// One half-cycle: a run of one direction of motion.
 struct HalfCycle {
-  int first = 0, last = 0;       ///< sample range [first, last] in the data
-  int direction = 0;             ///< +1 (angle increasing: loading, upper curve) or −1
-  std::vector<int> kept;         ///< indices of the cleaned points (empty if dropped in step 2)
-  double slope = 0.0;            ///< LS slope of the cleaned points [N·m/rad]
-  double rep_torque = 0.0;       ///< the line at the mean position of all data [N·m]
-  bool upper = false;            ///< classified upper (step 4)
-  bool rejected = false;         ///< dropped in steps 2, 3 or 5
-  std::string reason;            ///< why it was dropped
+  int first = 0, last = 0;  ///< sample range [first, last] in the data
+  int direction = 0;        ///< +1 (angle increasing: loading, upper curve) or −1
+  std::vector<int> kept;    ///< indices of the cleaned points (empty if dropped in step 2)
+  double slope = 0.0;       ///< LS slope of the cleaned points [N·m/rad]
+  double rep_torque = 0.0;  ///< the line at the mean position of all data [N·m]
+  bool upper = false;       ///< classified upper (step 4)
+  bool rejected = false;    ///< dropped in steps 2, 3 or 5
+  std::string reason;       ///< why it was dropped
 };
 
 /// A curve sampled on an evenly spaced grid.
@@ -123,18 +123,18 @@ struct GridCurve {
 
 /// Algorithm II results and diagnostics.
 struct ClampingCurves {
-  std::vector<HalfCycle> half_cycles;   ///< every half-cycle found (step 1), with its fate
-  int used_upper = 0, used_lower = 0;   ///< half-cycles kept per curve
-  int rejected = 0;                     ///< half-cycles dropped
-  GridCurve upper, lower;               ///< merged curves (step 6)
-  GridCurve merged;                     ///< aligned and merged single curve (step 9), upper-curve level
-  GridCurve folded;                     ///< fold F[j] vs distance from the middle (step 10) [rad, N·m]
-  double mean_position = 0.0;           ///< mean angle of all data [rad]
-  double torque_half_span = 0.0;        ///< (max τ − min τ)/2 of all data [N·m]
-  bool crosses_zero = false;            ///< the mid-line crosses zero torque: backlash observable
-  double backlash_upper = 0.0;          ///< length of the upper curve's low-slope interval [rad] (0: none)
-  double backlash_lower = 0.0;          ///< same for the lower curve [rad]
-  double fold_flat = 0.0;               ///< flat length of the folded curve = half the backlash [rad]
+  std::vector<HalfCycle> half_cycles;  ///< every half-cycle found (step 1), with its fate
+  int used_upper = 0, used_lower = 0;  ///< half-cycles kept per curve
+  int rejected = 0;                    ///< half-cycles dropped
+  GridCurve upper, lower;              ///< merged curves (step 6)
+  GridCurve merged;                    ///< aligned and merged single curve (step 9), upper-curve level
+  GridCurve folded;                    ///< fold F[j] vs distance from the middle (step 10) [rad, N·m]
+  double mean_position = 0.0;          ///< mean angle of all data [rad]
+  double torque_half_span = 0.0;       ///< (max τ − min τ)/2 of all data [N·m]
+  bool crosses_zero = false;           ///< the mid-line crosses zero torque: backlash observable
+  double backlash_upper = 0.0;         ///< length of the upper curve's low-slope interval [rad] (0: none)
+  double backlash_lower = 0.0;         ///< same for the lower curve [rad]
+  double fold_flat = 0.0;              ///< flat length of the folded curve = half the backlash [rad]
   /// Initial estimates: c [N·m/rad], total backlash b = 2 × fold_flat [rad], friction F = half the mean
   /// distance of the curves [N·m], centre of the gap φ0 [rad] (angle of the fold's middle).
   double stiffness = 0.0, backlash = 0.0, friction = 0.0, center = 0.0;

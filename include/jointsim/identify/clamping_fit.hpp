@@ -22,48 +22,48 @@
 namespace jointsim::identify {
 
 struct ClampingFitOptions {
-  ClampingCurveOptions curve;           ///< Algorithm II settings
+  ClampingCurveOptions curve;  ///< Algorithm II settings
   /// Known total backlash [rad], >= 0: b is held fixed (for data that never cross zero torque, where the
   /// backlash is unobservable). Empty: b is fitted.
   std::optional<double> fixed_backlash;
-  bool fit_viscous = false;             ///< also fit a viscous friction k_v [N·m·s/rad] (acts everywhere)
-  bool fit_damping = false;             ///< also fit the transmission damper d [N·m·s/rad] (acts in contact)
+  bool fit_viscous = false;  ///< also fit a viscous friction k_v [N·m·s/rad] (acts everywhere)
+  bool fit_damping = false;  ///< also fit the transmission damper d [N·m·s/rad] (acts in contact)
   /// Half-width of the central difference that estimates φ̇ for the optional terms [samples], >= 1.
   int velocity_half_window = 2;
-  int max_iterations = 100;             ///< Ceres iterations [-]
+  int max_iterations = 100;  ///< Ceres iterations [-]
   /// An optional velocity term (viscous, damping) is reported unidentifiable when its standard error times
   /// the RMS speed exceeds this fraction of the fitted friction F [-].
   double max_relative_std_error = 0.5;
   // --- validation simulation (simulate_validation)
-  bool simulate_validation = false;     ///< simulate the dynamic model driven by the measured torque
-  double rotor_inertia = 0.01;          ///< J [kg·m²] for the validation ([KR300Thesis] does not give it), > 0
-  double validation_damping = 0.5;      ///< EB damper d [N·m·s/rad] if not fitted ([KR300Thesis]: "small"), >= 0
+  bool simulate_validation = false;  ///< simulate the dynamic model driven by the measured torque
+  double rotor_inertia = 0.01;       ///< J [kg·m²] for the validation ([KR300Thesis] does not give it), > 0
+  double validation_damping = 0.5;   ///< EB damper d [N·m·s/rad] if not fitted ([KR300Thesis]: "small"), >= 0
   /// Throws InputError naming the first invalid field.
   void validate() const;
 };
 
 /// One identified parameter.
 struct FittedParameter {
-  double value = 0.0;       ///< in `unit`
-  double std_error = 0.0;   ///< standard error [unit]; 0 when fixed
-  bool fitted = false;      ///< false: held at a given value
-  double initial = 0.0;     ///< Algorithm II estimate (start value) [unit]
+  double value = 0.0;      ///< in `unit`
+  double std_error = 0.0;  ///< standard error [unit]; 0 when fixed
+  bool fitted = false;     ///< false: held at a given value
+  double initial = 0.0;    ///< Algorithm II estimate (start value) [unit]
 };
 
 struct ClampingFitResult {
-  FittedParameter stiffness;        ///< c [N·m/rad]
-  FittedParameter backlash;         ///< total backlash b [rad]
-  FittedParameter friction;         ///< Coulomb friction F [N·m]
-  FittedParameter center;           ///< gap centre φ0 in the log's angle [rad] (nuisance)
+  FittedParameter stiffness;               ///< c [N·m/rad]
+  FittedParameter backlash;                ///< total backlash b [rad]
+  FittedParameter friction;                ///< Coulomb friction F [N·m]
+  FittedParameter center;                  ///< gap centre φ0 in the log's angle [rad] (nuisance)
   std::optional<FittedParameter> viscous;  ///< k_v [N·m·s/rad] (fit_viscous)
   std::optional<FittedParameter> damping;  ///< d [N·m·s/rad] (fit_damping)
-  double rms_residual = 0.0;        ///< RMS torque residual of the fit [N·m]
-  int points = 0;                   ///< residuals used
-  int iterations = 0;               ///< Ceres iterations
-  std::string solver_summary;       ///< Ceres one-line report
+  double rms_residual = 0.0;               ///< RMS torque residual of the fit [N·m]
+  int points = 0;                          ///< residuals used
+  int iterations = 0;                      ///< Ceres iterations
+  std::string solver_summary;              ///< Ceres one-line report
   /// Validation simulation: RMS of simulated − measured angle over all samples [rad] (if run).
   std::optional<double> validation_angle_rms;
-  ClampingCurves curves;            ///< Algorithm II results and diagnostics
+  ClampingCurves curves;  ///< Algorithm II results and diagnostics
 };
 
 /// Algorithm II + Ceres fit. Throws UnidentifiableError (naming the parameter and why) when the data

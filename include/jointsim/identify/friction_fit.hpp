@@ -37,11 +37,11 @@ enum class FitLoss { None, Huber, Cauchy };
 
 /// Options of fitFrictionMap().
 struct FrictionFitOptions {
-  double delta = 2.0;        ///< δ: form factor [-] (start value when fit_delta), > 0; 2 = LuGre (eq. 4.17)
-  bool fit_delta = false;    ///< fit one δ shared by both directions (default: fixed at `delta`)
-  int min_points = 8;        ///< minimum number of points per direction [-], >= 6
+  double delta = 2.0;            ///< δ: form factor [-] (start value when fit_delta), > 0; 2 = LuGre (eq. 4.17)
+  bool fit_delta = false;        ///< fit one δ shared by both directions (default: fixed at `delta`)
+  int min_points = 8;            ///< minimum number of points per direction [-], >= 6
   FitLoss loss = FitLoss::None;  ///< robust loss on the residuals
-  double loss_scale = 0.1;   ///< residual scale of the robust loss [N·m], > 0
+  double loss_scale = 0.1;       ///< residual scale of the robust loss [N·m], > 0
   /// Largest accepted relative standard error of α0, α1 and v_S [-]; above it the direction is unidentifiable.
   double max_relative_std_error = 0.5;
   int max_iterations = 200;  ///< Levenberg–Marquardt iteration limit [-]
@@ -58,16 +58,16 @@ struct ParameterEstimate {
 
 /// Fit of one direction of motion. All values are magnitudes (the map of v < 0 is −F(|v|)).
 struct DirectionFit {
-  std::string direction;     ///< "positive" (v > 0) or "negative" (v < 0)
-  ParameterEstimate alpha0;  ///< α0: Coulomb friction [N·m]
-  ParameterEstimate alpha1;  ///< α1: additional stiction, static friction α0 + α1 [N·m]
-  ParameterEstimate alpha2;  ///< α2: viscous coefficient [N·m·s/rad]
-  ParameterEstimate v_s;     ///< v_S: Stribeck velocity [rad/s]
-  int points = 0;            ///< number of points used [-]
-  double min_speed = 0.0;    ///< smallest |v| of the direction [rad/s]
-  double max_speed = 0.0;    ///< largest |v| of the direction [rad/s]
-  double rms_residual = 0.0; ///< root mean square of the torque residuals, sqrt(SSR/m) [N·m]
-  double sigma = 0.0;        ///< residual standard deviation sqrt(SSR/(m − p)) used for the std errors [N·m]
+  std::string direction;      ///< "positive" (v > 0) or "negative" (v < 0)
+  ParameterEstimate alpha0;   ///< α0: Coulomb friction [N·m]
+  ParameterEstimate alpha1;   ///< α1: additional stiction, static friction α0 + α1 [N·m]
+  ParameterEstimate alpha2;   ///< α2: viscous coefficient [N·m·s/rad]
+  ParameterEstimate v_s;      ///< v_S: Stribeck velocity [rad/s]
+  int points = 0;             ///< number of points used [-]
+  double min_speed = 0.0;     ///< smallest |v| of the direction [rad/s]
+  double max_speed = 0.0;     ///< largest |v| of the direction [rad/s]
+  double rms_residual = 0.0;  ///< root mean square of the torque residuals, sqrt(SSR/m) [N·m]
+  double sigma = 0.0;         ///< residual standard deviation sqrt(SSR/(m − p)) used for the std errors [N·m]
   /// The estimates as a drive::StribeckBranch (α0, α1, α2, v_S).
   drive::StribeckBranch branch() const;
   /// Fitted static map (magnitude) at speed w >= 0 with form factor delta: α0 + α1·e^{−(w/v_S)^δ} + α2·w [N·m].
@@ -76,13 +76,13 @@ struct DirectionFit {
 
 /// Result of fitFrictionMap().
 struct FrictionFit {
-  DirectionFit positive;            ///< parameters for v > 0
-  DirectionFit negative;            ///< parameters for v < 0 (magnitudes)
-  ParameterEstimate delta;          ///< δ [-] (std_error 0 when fixed)
-  bool delta_fitted = false;        ///< whether δ was a free parameter
-  int dropped_zero = 0;             ///< points with v = 0, belonging to neither direction [-]
-  int iterations = 0;               ///< Ceres iterations [-]
-  double solve_time_s = 0.0;        ///< wall time of the fit including the covariance [s]
+  DirectionFit positive;      ///< parameters for v > 0
+  DirectionFit negative;      ///< parameters for v < 0 (magnitudes)
+  ParameterEstimate delta;    ///< δ [-] (std_error 0 when fixed)
+  bool delta_fitted = false;  ///< whether δ was a free parameter
+  int dropped_zero = 0;       ///< points with v = 0, belonging to neither direction [-]
+  int iterations = 0;         ///< Ceres iterations [-]
+  double solve_time_s = 0.0;  ///< wall time of the fit including the covariance [s]
   /// Steady-state friction of the fitted map at velocity v [rad/s] (0 at v = 0) [N·m].
   double map(double v) const;
 };
@@ -109,12 +109,12 @@ FrictionMapData readFrictionMap(const std::string& path);
 
 /// Options of frictionFitYaml().
 struct FrictionYamlOptions {
-  std::string source;            ///< name of the map file, written as fit.source (may be empty)
-  bool lugre = false;            ///< write `type: lugre` with sigma0/sigma1 instead of `type: stribeck`
-  double sigma0 = 259.0;         ///< σ0 for `lugre` [N·m/rad] ([Hauschild2003, §4.5.4]), > 0
-  double sigma1 = 10.0;          ///< σ1 for `lugre` [N·m·s/rad] ([Hauschild2003, §4.5.4]), > 0
-  double k_s = 300.0;            ///< slope-limiter factor of `stribeck` ([Hauschild2003, eq. 4.24]) [s/rad], > 0
-  double wall_time_s = -1.0;     ///< identification wall time written as fit.wall_time_s when >= 0 [s]
+  std::string source;         ///< name of the map file, written as fit.source (may be empty)
+  bool lugre = false;         ///< write `type: lugre` with sigma0/sigma1 instead of `type: stribeck`
+  double sigma0 = 259.0;      ///< σ0 for `lugre` [N·m/rad] ([Hauschild2003, §4.5.4]), > 0
+  double sigma1 = 10.0;       ///< σ1 for `lugre` [N·m·s/rad] ([Hauschild2003, §4.5.4]), > 0
+  double k_s = 300.0;         ///< slope-limiter factor of `stribeck` ([Hauschild2003, eq. 4.24]) [s/rad], > 0
+  double wall_time_s = -1.0;  ///< identification wall time written as fit.wall_time_s when >= 0 [s]
 };
 
 /// YAML text with a top-level `friction:` mapping, directly readable by the friction-model YAML reader

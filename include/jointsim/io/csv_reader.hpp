@@ -22,10 +22,10 @@ struct CsvText {
 
 /// A numeric table.
 struct CsvTable {
-  std::string path;                  ///< file it was read from (for messages)
-  std::vector<std::string> header;   ///< column names as written (trimmed)
-  Eigen::MatrixXd data;              ///< rows × columns
-  std::vector<int> lines;            ///< 1-based file line of each data row
+  std::string path;                 ///< file it was read from (for messages)
+  std::vector<std::string> header;  ///< column names as written (trimmed)
+  Eigen::MatrixXd data;             ///< rows × columns
+  std::vector<int> lines;           ///< 1-based file line of each data row
 
   /// Index of the column called `name`: an exact header match, or a header `name[unit]` (any unit).
   /// -1 when absent.

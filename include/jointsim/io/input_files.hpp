@@ -12,8 +12,8 @@ namespace jointsim::io {
 
 /// One file read by readInputFile.
 struct InputFile {
-  std::string path;  ///< absolute, normalised path
-  std::string hash;  ///< content hash, "xxh3:" + 16 hex digits (XXH3 64-bit of the bytes)
+  std::string path;        ///< absolute, normalised path
+  std::string hash;        ///< content hash, "xxh3:" + 16 hex digits (XXH3 64-bit of the bytes)
   std::uint64_t size = 0;  ///< bytes
 };
 

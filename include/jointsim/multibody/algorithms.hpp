@@ -21,29 +21,27 @@ void updateFramePlacements(const Model& model, Data& data);
 
 /// Recursive Newton–Euler inverse dynamics: τ = M(q) q̈ + C(q, q̇) q̇ + g(q) − Σ J_iᵀ fext_i.
 /// Includes the armature term armature_i q̈_i. Result in data.tau.
-const Eigen::VectorXd& rnea(const Model& model, Data& data, const VecRef& q, const VecRef& qd,
-                            const VecRef& qdd, const Matrix6Xd* fext = nullptr);
+const Eigen::VectorXd& rnea(const Model& model, Data& data, const VecRef& q, const VecRef& qd, const VecRef& qdd,
+                            const Matrix6Xd* fext = nullptr);
 
 /// Gravity torques g(q) (the torques that hold the robot still). Result in data.g.
 const Eigen::VectorXd& gravityTorques(const Model& model, Data& data, const VecRef& q);
 
 /// Bias torques C(q, q̇) q̇ + g(q). Result in data.nle.
-const Eigen::VectorXd& nonLinearEffects(const Model& model, Data& data, const VecRef& q,
-                                        const VecRef& qd);
+const Eigen::VectorXd& nonLinearEffects(const Model& model, Data& data, const VecRef& q, const VecRef& qd);
 
 /// Composite-rigid-body algorithm: joint-space inertia M(q) including armature on the diagonal.
 /// Result in data.M (both triangles filled).
 const Eigen::MatrixXd& crba(const Model& model, Data& data, const VecRef& q);
 
 /// Articulated-body algorithm: q̈ = FD(q, q̇, τ, fext). Result in data.ddq.
-const Eigen::VectorXd& aba(const Model& model, Data& data, const VecRef& q, const VecRef& qd,
-                           const VecRef& tau, const Matrix6Xd* fext = nullptr);
+const Eigen::VectorXd& aba(const Model& model, Data& data, const VecRef& q, const VecRef& qd, const VecRef& tau,
+                           const Matrix6Xd* fext = nullptr);
 
 /// Forward dynamics by CRBA + Cholesky (independent cross-check of aba): q̈ = M⁻¹(τ − C q̇ − g + Jᵀfext).
 /// Result in data.ddq; data.M and data.llt hold the factorised inertia.
-const Eigen::VectorXd& forwardDynamicsCrba(const Model& model, Data& data, const VecRef& q,
-                                           const VecRef& qd, const VecRef& tau,
-                                           const Matrix6Xd* fext = nullptr);
+const Eigen::VectorXd& forwardDynamicsCrba(const Model& model, Data& data, const VecRef& q, const VecRef& qd,
+                                           const VecRef& tau, const Matrix6Xd* fext = nullptr);
 
 /// Geometric Jacobian of a frame at q, "world aligned": rows 0–2 map q̇ to the linear velocity of the
 /// frame origin, rows 3–5 to the angular velocity, both resolved in the base frame. Result in data.J.

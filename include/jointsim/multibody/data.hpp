@@ -38,14 +38,14 @@ struct Data {
   std::vector<Eigen::Matrix3d> Yc_I;
 
   // Results.
-  Eigen::VectorXd tau;    ///< (nq) inverse-dynamics torques (rnea)
-  Eigen::VectorXd g;      ///< (nq) gravity torques (gravityTorques)
-  Eigen::VectorXd nle;    ///< (nq) bias torques C(q,q̇)q̇ + g(q) (nonLinearEffects)
-  Eigen::VectorXd ddq;    ///< (nq) accelerations (aba / forwardDynamicsCrba)
-  Eigen::MatrixXd M;      ///< (nq×nq) joint-space inertia (crba), full symmetric
+  Eigen::VectorXd tau;              ///< (nq) inverse-dynamics torques (rnea)
+  Eigen::VectorXd g;                ///< (nq) gravity torques (gravityTorques)
+  Eigen::VectorXd nle;              ///< (nq) bias torques C(q,q̇)q̇ + g(q) (nonLinearEffects)
+  Eigen::VectorXd ddq;              ///< (nq) accelerations (aba / forwardDynamicsCrba)
+  Eigen::MatrixXd M;                ///< (nq×nq) joint-space inertia (crba), full symmetric
   Eigen::LLT<Eigen::MatrixXd> llt;  ///< Cholesky factor of M (forwardDynamicsCrba)
-  Matrix6Xd J;            ///< (6×nq) frame Jacobian (frameJacobian)
-  Eigen::VectorXd zeros;  ///< (nq) zero vector used internally
+  Matrix6Xd J;                      ///< (6×nq) frame Jacobian (frameJacobian)
+  Eigen::VectorXd zeros;            ///< (nq) zero vector used internally
 };
 
 }  // namespace jointsim::multibody

@@ -20,9 +20,9 @@ const char* toString(JointType type);
 
 /// Inertial parameters of a rigid body, expressed in the body (link) frame.
 struct BodyInertia {
-  double mass = 0.0;                                     ///< m [kg], >= 0
-  Eigen::Vector3d com = Eigen::Vector3d::Zero();         ///< centre of mass in the link frame [m]
-  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();     ///< inertia about the CoM, link-frame axes [kg·m²]
+  double mass = 0.0;                                  ///< m [kg], >= 0
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();      ///< centre of mass in the link frame [m]
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  ///< inertia about the CoM, link-frame axes [kg·m²]
 
   /// Returns an empty string when the parameters are physical, otherwise the reason: negative or
   /// non-finite mass, non-symmetric inertia, inertia not positive definite or violating the triangle
@@ -36,17 +36,17 @@ struct BodyInertia {
 
 /// Joint limits (informative for now: no algorithm enforces them). SI units.
 struct JointLimits {
-  double lower = -std::numeric_limits<double>::infinity();  ///< [rad] or [m]
-  double upper = std::numeric_limits<double>::infinity();   ///< [rad] or [m]
-  double velocity = std::numeric_limits<double>::infinity(); ///< [rad/s] or [m/s]
-  double effort = std::numeric_limits<double>::infinity();   ///< [N·m] or [N]
+  double lower = -std::numeric_limits<double>::infinity();    ///< [rad] or [m]
+  double upper = std::numeric_limits<double>::infinity();     ///< [rad] or [m]
+  double velocity = std::numeric_limits<double>::infinity();  ///< [rad/s] or [m/s]
+  double effort = std::numeric_limits<double>::infinity();    ///< [N·m] or [N]
 };
 
 /// A named frame rigidly attached to a body (or to the base when joint == -1).
 struct Frame {
   std::string name;
-  int joint = -1;          ///< index of the movable joint whose body carries the frame; -1 = base
-  Placement placement;     ///< pose of the frame in that body's joint frame [m, rad]
+  int joint = -1;       ///< index of the movable joint whose body carries the frame; -1 = base
+  Placement placement;  ///< pose of the frame in that body's joint frame [m, rad]
 };
 
 /// Constant description of a kinematic tree with nq single-degree-of-freedom joints (revolute about an
@@ -71,10 +71,10 @@ struct Model {
 
   // Derived from `inertias` by ModelBuilder (cached for the algorithms): spatial inertia about the
   // joint-frame origin as (m, h = m·c, I_O = I_c - m [c]²).
-  std::vector<double> mass;                   ///< (nq) [kg]
-  std::vector<Eigen::Vector3d> first_moment;  ///< (nq) h = m c [kg·m]
-  std::vector<Eigen::Matrix3d> inertia_origin;///< (nq) I_O [kg·m²]
-  std::vector<int> axis_kind;                 ///< (nq) 0, 1, 2: axis is +x, +y, +z exactly; 3: other
+  std::vector<double> mass;                     ///< (nq) [kg]
+  std::vector<Eigen::Vector3d> first_moment;    ///< (nq) h = m c [kg·m]
+  std::vector<Eigen::Matrix3d> inertia_origin;  ///< (nq) I_O [kg·m²]
+  std::vector<int> axis_kind;                   ///< (nq) 0, 1, 2: axis is +x, +y, +z exactly; 3: other
 
   /// Index of the joint with this name; throws InputError naming the known joints if absent.
   int jointIndex(const std::string& name) const;
@@ -90,9 +90,9 @@ struct Model {
 struct JointSpec {
   std::string name;
   JointType type = JointType::Revolute;
-  Placement origin;                                   ///< joint frame in the parent link frame at q = 0
-  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();    ///< axis in the joint frame (normalised on build)
-  double armature = 0.0;                              ///< reflected rotor inertia [kg·m² or kg], >= 0
+  Placement origin;                                 ///< joint frame in the parent link frame at q = 0
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< axis in the joint frame (normalised on build)
+  double armature = 0.0;                            ///< reflected rotor inertia [kg·m² or kg], >= 0
   JointLimits limits;
 };
 
@@ -106,8 +106,8 @@ class ModelBuilder {
   /// Adds link `child_name` with inertia `inertia`, attached to the existing link `parent_link` by
   /// `joint`. The child link frame coincides with the joint frame. Throws InputError on a duplicate
   /// name, an unknown parent, a zero axis, a negative armature or an unphysical inertia.
-  ModelBuilder& addLink(const std::string& parent_link, const JointSpec& joint,
-                        const std::string& child_name, const BodyInertia& inertia);
+  ModelBuilder& addLink(const std::string& parent_link, const JointSpec& joint, const std::string& child_name,
+                        const BodyInertia& inertia);
   /// Adds an extra named frame rigidly attached to an existing link.
   ModelBuilder& addFrame(const std::string& name, const std::string& link, const Placement& placement);
   ModelBuilder& setGravity(const Eigen::Vector3d& gravity);

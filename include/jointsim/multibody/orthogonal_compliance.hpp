@@ -19,4 +19,3 @@ namespace jointsim::multibody {
 Model withOrthogonalCompliance(const Model& model, const std::vector<std::string>& joints);
 
 }  // namespace jointsim::multibody
-

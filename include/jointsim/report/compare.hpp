@@ -33,8 +33,8 @@ using io::CsvTable;
 
 /// Options of compareTables().
 struct CompareOptions {
-  double rtol = 1e-6;   ///< relative tolerance, times the column's peak magnitude
-  double atol = 1e-12;  ///< absolute tolerance, in the column's unit
+  double rtol = 1e-6;           ///< relative tolerance, times the column's peak magnitude
+  double atol = 1e-12;          ///< absolute tolerance, in the column's unit
   double time_tolerance = 0.0;  ///< δ [s] of the tube (0: compare at the same time only)
   /// Columns to compare, by name with or without `[unit]`; empty: every column of A except time. A named
   /// column must exist in both files.
@@ -46,29 +46,29 @@ struct CompareOptions {
 
 /// Verdict on one column.
 struct ColumnComparison {
-  std::string name;           ///< header of the column in A
-  int column_a = -1;          ///< column index in A
-  int column_b = -1;          ///< column index in B
-  double peak = 0.0;          ///< S: peak magnitude of the column over the compared samples
-  double tolerance = 0.0;     ///< atol + rtol · S
-  double max_deviation = 0.0; ///< largest |a − b| (distance to B's band with a time tolerance); +inf on NaN mismatch
-  double time = 0.0;          ///< time of A's sample where it occurs [s]
-  double value_a = 0.0;       ///< A's value there
-  double value_b = 0.0;       ///< B's value there (exact, interpolated, or the nearest band edge)
-  int line_a = 0;             ///< 1-based line of that sample in A's file
-  bool pass = true;           ///< max_deviation ≤ tolerance
+  std::string name;            ///< header of the column in A
+  int column_a = -1;           ///< column index in A
+  int column_b = -1;           ///< column index in B
+  double peak = 0.0;           ///< S: peak magnitude of the column over the compared samples
+  double tolerance = 0.0;      ///< atol + rtol · S
+  double max_deviation = 0.0;  ///< largest |a − b| (distance to B's band with a time tolerance); +inf on NaN mismatch
+  double time = 0.0;           ///< time of A's sample where it occurs [s]
+  double value_a = 0.0;        ///< A's value there
+  double value_b = 0.0;        ///< B's value there (exact, interpolated, or the nearest band edge)
+  int line_a = 0;              ///< 1-based line of that sample in A's file
+  bool pass = true;            ///< max_deviation ≤ tolerance
 };
 
 /// Result of a comparison.
 struct CompareResult {
   std::string path_a, path_b;
-  std::string time_column;              ///< header of A's time column
-  Eigen::Index rows_compared = 0;       ///< rows of A inside B's time range
-  Eigen::Index rows_interpolated = 0;   ///< of which B had no sample at the same time
-  double t_begin = 0.0, t_end = 0.0;    ///< time range of the compared rows [s]
+  std::string time_column;             ///< header of A's time column
+  Eigen::Index rows_compared = 0;      ///< rows of A inside B's time range
+  Eigen::Index rows_interpolated = 0;  ///< of which B had no sample at the same time
+  double t_begin = 0.0, t_end = 0.0;   ///< time range of the compared rows [s]
   std::vector<ColumnComparison> columns;
-  std::vector<std::string> only_in_b;   ///< columns of B that were not compared (not in A)
-  CompareOptions options;               ///< the options used (time_range_tolerance resolved)
+  std::vector<std::string> only_in_b;  ///< columns of B that were not compared (not in A)
+  CompareOptions options;              ///< the options used (time_range_tolerance resolved)
 
   /// Number of columns out of tolerance.
   int failed() const;
@@ -83,8 +83,7 @@ CompareResult compareTables(const CsvTable& a, const CsvTable& b, const CompareO
 
 /// Reads both files (readCsv, non-finite values allowed) and compares them. Throws InputError on an
 /// unreadable file or incompatible files.
-CompareResult compareCsvFiles(const std::string& path_a, const std::string& path_b,
-                              const CompareOptions& options = {});
+CompareResult compareCsvFiles(const std::string& path_a, const std::string& path_b, const CompareOptions& options = {});
 
 /// Human-readable report: header lines (files, rows, tolerances), one line per column (name, max |a − b|,
 /// tolerance, their ratio, time, a, b there, ok/FAIL; only the failing columns when `failures_only`), and a

@@ -12,8 +12,8 @@
 namespace jointsim::report {
 
 struct PlotOptions {
-  bool svg = false;          ///< also write an SVG of every figure (same name, .svg)
-  int width = 1400;          ///< size of every PNG [pixels] (an SVG gets the same size in points)
+  bool svg = false;  ///< also write an SVG of every figure (same name, .svg)
+  int width = 1400;  ///< size of every PNG [pixels] (an SVG gets the same size in points)
   int height = 900;
   std::string gnuplot;       ///< gnuplot executable (a path or a name looked up on PATH); empty = "gnuplot"
   bool keep_script = false;  ///< also write FIG_DIR/<name>_plots.gp, a standalone script to tweak the figures

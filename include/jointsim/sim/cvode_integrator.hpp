@@ -105,15 +105,16 @@ struct SolverStats {
 /// Right-hand side ydot = f(t, y). `ydot` has size n and must be filled completely; it must not be
 /// resized. May throw (preferably jointsim::ComponentError): the integrator stops and raises a
 /// SolverError. Called in a hot loop: avoid allocating.
-using RhsFunction = std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                                       Eigen::Ref<Eigen::VectorXd> ydot)>;
+using RhsFunction =
+    std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot)>;
 
 /// Dense Jacobian J = df/dy (n x n, column-major; J(i, j) = d ydot_i / d y_j) at (t, y), with
 /// `ydot` = f(t, y) already evaluated. J is zero on entry, so only non-zeros need to be written.
 /// May throw like RhsFunction.
 /// Root (event) functions g(t, y) (size n_roots): CVODE locates sign changes of each component to its
 /// tolerance and stops there. Must be pure like the right-hand side.
-using RootFunction = std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g)>;
+using RootFunction =
+    std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g)>;
 
 using JacobianFunction =
     std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y,

@@ -27,10 +27,10 @@
 namespace jointsim::sim {
 
 struct SimulateOptions {
-  double t_end = 1.0;             ///< end of the run [s], > 0
-  double output_rate = 0.0;       ///< output grid as a rate [Hz] (> 0), or
-  double output_interval = 0.0;   ///< output grid as an interval [s] (> 0); exactly one of the two is set
-  CvodeOptions solver;            ///< integrator settings (component defaults to plant.name())
+  double t_end = 1.0;            ///< end of the run [s], > 0
+  double output_rate = 0.0;      ///< output grid as a rate [Hz] (> 0), or
+  double output_interval = 0.0;  ///< output grid as an interval [s] (> 0); exactly one of the two is set
+  CvodeOptions solver;           ///< integrator settings (component defaults to plant.name())
   /// Stop exactly at t_end (a stop time there). False lets the last internal step overshoot t_end and the
   /// last outputs be interpolated, which is fine for a smooth right-hand side that is valid beyond t_end.
   bool stop_at_end = true;
@@ -48,12 +48,12 @@ struct SimulateOptions {
 };
 
 struct SimulationResult {
-  SolverStats stats;        ///< CVODE counters, cumulative over all restarts
-  double sim_time_s = 0.0;  ///< simulated time reached [s]
-  double wall_time_s = 0.0; ///< wall-clock time of the run [s]
-  long events = 0;          ///< root and time events handled
-  long samples = 0;         ///< updates of the sampled part (including the one at t = 0)
-  long outputs = 0;         ///< rows handed to the sink (including t = 0)
+  SolverStats stats;         ///< CVODE counters, cumulative over all restarts
+  double sim_time_s = 0.0;   ///< simulated time reached [s]
+  double wall_time_s = 0.0;  ///< wall-clock time of the run [s]
+  long events = 0;           ///< root and time events handled
+  long samples = 0;          ///< updates of the sampled part (including the one at t = 0)
+  long outputs = 0;          ///< rows handed to the sink (including t = 0)
   double realTimeFactor() const { return wall_time_s > 0.0 ? sim_time_s / wall_time_s : 0.0; }
 };
 

@@ -35,8 +35,8 @@
 #include <Eigen/Core>
 
 #include "jointsim/control/clamping_path.hpp"
-#include "jointsim/drive/transmissions.hpp"
 #include "jointsim/drive/msl_friction.hpp"
+#include "jointsim/drive/transmissions.hpp"
 #include "jointsim/multibody/data.hpp"
 #include "jointsim/multibody/model.hpp"
 #include "jointsim/sim/plant.hpp"
@@ -47,26 +47,26 @@ namespace jointsim::systems {
 using drive::FrictionMode;
 
 struct ClampingAxisParams {
-  std::string joint;               ///< joint this axis drives (through G for a coupled wrist)
-  double ratio = 1.0;              ///< gear ratio r = φ_motor / φ_out [-], != 0 (wrist axes in [Olsson2017]: 1)
-  double inertia = 0.01;           ///< motor (rotor) inertia J [kg·m²], > 0
-  double c = 50.0;                 ///< ElastoBacklash stiffness, motor side [N·m/rad], > 0
-  double d = 10.0;                 ///< ElastoBacklash damping, motor side [N·m·s/rad], >= 0
-  double b = 0.001;                ///< total backlash, motor side [rad], >= 0
+  std::string joint;      ///< joint this axis drives (through G for a coupled wrist)
+  double ratio = 1.0;     ///< gear ratio r = φ_motor / φ_out [-], != 0 (wrist axes in [Olsson2017]: 1)
+  double inertia = 0.01;  ///< motor (rotor) inertia J [kg·m²], > 0
+  double c = 50.0;        ///< ElastoBacklash stiffness, motor side [N·m/rad], > 0
+  double d = 10.0;        ///< ElastoBacklash damping, motor side [N·m·s/rad], >= 0
+  double b = 0.001;       ///< total backlash, motor side [rad], >= 0
   std::vector<std::array<double, 2>> tau_pos{{0.0, 1.0}, {1.0, 1.1}};  ///< friction table rows [rad/s, N·m]
-  double peak = 1.0;               ///< stiction factor (breakaway = peak · tau_pos(0)) [-], >= 1
-  double c_orth = 0.0;             ///< orthogonal (bending) stiffness [N·m/rad]; 0 = rigid
-  double d_orth = 30.0;            ///< orthogonal damping [N·m·s/rad], >= 0 ([Olsson2017] default 30)
-  double kp = 10.0;                ///< position gain [1/s]
-  double ks = 1.0;                 ///< speed PI gain [N·m·s/rad]
-  double Ts = 0.01;                ///< PI time constant [s], > 0
-  double controller_ratio = 1.0;   ///< r_c scaling the arm-side reference to the motor [-]
+  double peak = 1.0;                      ///< stiction factor (breakaway = peak · tau_pos(0)) [-], >= 1
+  double c_orth = 0.0;                    ///< orthogonal (bending) stiffness [N·m/rad]; 0 = rigid
+  double d_orth = 30.0;                   ///< orthogonal damping [N·m·s/rad], >= 0 ([Olsson2017] default 30)
+  double kp = 10.0;                       ///< position gain [1/s]
+  double ks = 1.0;                        ///< speed PI gain [N·m·s/rad]
+  double Ts = 0.01;                       ///< PI time constant [s], > 0
+  double controller_ratio = 1.0;          ///< r_c scaling the arm-side reference to the motor [-]
   control::ClampingPathParams path{0.0};  ///< reference swing (q_pos = 0: hold the start angle)
-  void validate() const;           ///< throws InputError naming the axis
+  void validate() const;                  ///< throws InputError naming the axis
 };
 
 struct ClampSpec {
-  std::string frame;                                      ///< clamped frame (empty: the model's tip frame)
+  std::string frame;                                             ///< clamped frame (empty: the model's tip frame)
   Eigen::Matrix3d c_lin = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N/m] ([Olsson2017, A.11] default)
   Eigen::Matrix3d d_lin = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N·s/m]
   Eigen::Matrix3d c_rot = 9001.0 * Eigen::Matrix3d::Identity();  ///< [N·m/rad]
@@ -82,9 +82,9 @@ struct ClampingSetup {
   Eigen::MatrixXd coupling;
   std::vector<std::string> coupled_joints;
   ClampSpec clamp;
-  Eigen::VectorXd q0;                    ///< start posture [rad] (empty: zeros); the clamp holds this pose
-  double duration = 15.0;                ///< [s]
-  double log_interval = 0.001;           ///< [s]
+  Eigen::VectorXd q0;           ///< start posture [rad] (empty: zeros); the clamp holds this pose
+  double duration = 15.0;       ///< [s]
+  double log_interval = 0.001;  ///< [s]
   sim::CvodeOptions solver = defaultSolver();
   /// BDF capped at order 2 (lightly damped clamp/bending modes, docs/design.md), rtol 1e-6, atol 1e-9.
   static sim::CvodeOptions defaultSolver();
@@ -117,7 +117,8 @@ class ClampedRobot : public sim::Plant {
   void start(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override { updateModes(t, y, {}); }
   /// Sets the friction modes consistently with state y at time t (MSL event iteration).
   void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> ydot) const override;
   int rootCount() const override { return 2 * n_; }
   void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
   /// Time events of the references (segment slots, phase switches) [s].
@@ -137,7 +138,7 @@ class ClampedRobot : public sim::Plant {
   std::vector<std::array<int, 2>> orth_;
   std::vector<drive::ElastoBacklash> eb_;
   std::vector<control::ClampingPath> paths_;
-  Eigen::MatrixXd Gfull_, GfullInv_;    // over the axes, in axis order: q_axis = G φ_out
+  Eigen::MatrixXd Gfull_, GfullInv_;  // over the axes, in axis order: q_axis = G φ_out
   bool coupled_ = false;
   Eigen::VectorXd phi_m0_;
   Eigen::Vector3d p0_;
@@ -146,7 +147,8 @@ class ClampedRobot : public sim::Plant {
   std::vector<std::string> signals_;
   mutable multibody::Data data_;
   mutable multibody::Matrix6Xd fext_;
-  mutable Eigen::VectorXd tau_, tau_out_, qa_, qda_, phi_out_, phid_out_, tau_s_, tau_m_, tau_f_, stuck_, wdot_, u_, ref_;
+  mutable Eigen::VectorXd tau_, tau_out_, qa_, qda_, phi_out_, phid_out_, tau_s_, tau_m_, tau_f_, stuck_, wdot_, u_,
+      ref_;
   mutable Eigen::Vector3d dp_, theta_, f_w_, m_w_;
 };
 

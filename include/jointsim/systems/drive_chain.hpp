@@ -50,12 +50,12 @@ struct ChainElement {
   double d = 0.0;         ///< damping [N·m·s/rad]
   double backlash = 0.0;  ///< total backlash b [rad]
   // Clutch / Brake: fn = fn_max · normalized(t); sliding torque cgeo·fn·μ(|w|); τ0 = cgeo·fn·μ(0)
-  double fn_max = 0.0;                                   ///< maximum normal force [N]
+  double fn_max = 0.0;                                            ///< maximum normal force [N]
   control::Profile normalized = control::Profile::constant(1.0);  ///< normalised normal force [-]
-  double cgeo = 1.0;                                     ///< geometry constant [m]
+  double cgeo = 1.0;                                              ///< geometry constant [m]
   // BearingFriction: sliding torque f(v) from the table directly [N·m]
   std::vector<std::array<double, 2>> table{{{0.0, 0.5}}};  ///< μ(v) [-] (clutch, brake) or f(v) [N·m] (bearing)
-  double peak = 1.0;                                     ///< stiction factor, τ0max = peak·τ0, >= 1
+  double peak = 1.0;                                       ///< stiction factor, τ0max = peak·τ0, >= 1
   // TorqueSource
   control::Profile torque = control::Profile::constant(0.0);  ///< [N·m]
   // Gear: ideal, lossless, φ_a = ratio·φ_b; its torque is the constraint torque on the input flange [N·m]
@@ -93,7 +93,8 @@ class DriveChain : public sim::Plant {
   /// Event iteration at time t: `fired[k]` marks root functions that crossed.
   void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
   /// ẏ for the current modes (pure given the modes; no heap allocation).
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> ydot) const override;
   int rootCount() const override { return 2 * static_cast<int>(s_.elements.size()); }
   void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
   std::vector<double> timeEvents(double t_end) const override;

@@ -19,12 +19,18 @@
 #include <string>
 #include <vector>
 
-
 namespace jointsim::systems {
 
 struct DriveSpec;  // robot_system.hpp
 
-enum class FaultType { GearStiffnessScale, BacklashAdd, CoulombFrictionScale, Sigma0Scale, TorqueConstantScale, SensorBias };
+enum class FaultType {
+  GearStiffnessScale,
+  BacklashAdd,
+  CoulombFrictionScale,
+  Sigma0Scale,
+  TorqueConstantScale,
+  SensorBias
+};
 
 struct Fault {
   FaultType type = FaultType::GearStiffnessScale;

@@ -36,30 +36,30 @@ enum class Side { Motor, Output };
 /// Velocity PI loop (the friction-map measurement of [Hauschild2003, §4.5.4]): u = kp e + ki ∫e,
 /// e = ω_ref − ω_measured, clamped to ±limit with conditional integration (anti-windup).
 struct VelocityPi {
-  double kp = 1.0;            ///< proportional gain [N·m·s/rad] (torque output) or [V·s/rad] (voltage output)
-  double ki = 10.0;           ///< integral gain [N·m/rad] or [V/rad]
-  double limit = 1e9;         ///< output saturation [N·m] or [V], > 0
-  bool voltage_output = false;///< false: u is the motor torque; true: u is the voltage command
-  Side measure = Side::Motor; ///< which shaft's velocity is controlled
+  double kp = 1.0;              ///< proportional gain [N·m·s/rad] (torque output) or [V·s/rad] (voltage output)
+  double ki = 10.0;             ///< integral gain [N·m/rad] or [V/rad]
+  double limit = 1e9;           ///< output saturation [N·m] or [V], > 0
+  bool voltage_output = false;  ///< false: u is the motor torque; true: u is the voltage command
+  Side measure = Side::Motor;   ///< which shaft's velocity is controlled
 };
 
 struct JointRigSetup {
   std::string name = "joint_rig";
-  std::optional<drive::DcMotorParams> motor;     ///< electrics (needed for voltage input / voltage PI)
-  double rotor_inertia = 1e-3;                   ///< J_m [kg·m²] when `motor` is absent (else motor->J_M)
+  std::optional<drive::DcMotorParams> motor;  ///< electrics (needed for voltage input / voltage PI)
+  double rotor_inertia = 1e-3;                ///< J_m [kg·m²] when `motor` is absent (else motor->J_M)
   std::shared_ptr<const drive::Transmission> transmission;
   std::shared_ptr<const drive::Friction> friction;  ///< may be null
   Side friction_side = Side::Motor;
-  bool clamped = false;                          ///< output held at q_l = 0
-  double load_inertia = 1.0;                     ///< J_l [kg·m²], > 0 unless clamped
-  double load_damping = 0.0;                     ///< viscous load b_l [N·m·s/rad], >= 0
+  bool clamped = false;       ///< output held at q_l = 0
+  double load_inertia = 1.0;  ///< J_l [kg·m²], > 0 unless clamped
+  double load_damping = 0.0;  ///< viscous load b_l [N·m·s/rad], >= 0
   RigInput input = RigInput::MotorTorque;
   control::Profile profile = control::Profile::constant(0.0);  ///< torque [N·m], voltage [V] or ω_ref [rad/s]
   VelocityPi pi;
-  double q_m0 = 0.0, qd_m0 = 0.0;                ///< initial motor angle [rad] and velocity [rad/s]
-  double q_l0 = 0.0, qd_l0 = 0.0;                ///< initial output angle/velocity (free compliant load)
-  double duration = 1.0;                         ///< [s]
-  double log_rate = 1000.0;                      ///< [Hz]
+  double q_m0 = 0.0, qd_m0 = 0.0;  ///< initial motor angle [rad] and velocity [rad/s]
+  double q_l0 = 0.0, qd_l0 = 0.0;  ///< initial output angle/velocity (free compliant load)
+  double duration = 1.0;           ///< [s]
+  double log_rate = 1000.0;        ///< [Hz]
   /// Integrator settings. max_step = 0 means one log interval (1/log_rate): the solver never steps over
   /// more than one logged sample, so it cannot skip a slip phase between two "stuck" states.
   sim::CvodeOptions solver = defaultSolver();
@@ -87,7 +87,8 @@ class JointRig : public sim::Plant {
   int stateSize() const override { return n_; }
   Eigen::VectorXd initialState() const override;
   /// ẏ = f(t, y). Pure; no allocation.
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> ydot) const override;
   std::vector<double> timeEvents(double t_end) const override;
   const std::vector<std::string>& signalNames() const override { return signals_; }
   void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override;

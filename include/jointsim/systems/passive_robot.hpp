@@ -15,12 +15,12 @@
 namespace jointsim::systems {
 
 struct PassiveRobotParams {
-  std::string name = "passive_robot";  ///< experiment name (output file names)
-  Eigen::VectorXd q0;                  ///< (nq) initial joint positions [rad or m]; empty = zeros
-  Eigen::VectorXd qd0;                 ///< (nq) initial joint velocities [rad/s or m/s]; empty = zeros
-  Eigen::VectorXd damping;             ///< (nq) viscous joint damping [N·m·s/rad or N·s/m]; empty = zeros
-  double duration = 1.0;               ///< simulated time [s], > 0
-  double log_rate = 1000.0;            ///< log samples per second [Hz], > 0
+  std::string name = "passive_robot";          ///< experiment name (output file names)
+  Eigen::VectorXd q0;                          ///< (nq) initial joint positions [rad or m]; empty = zeros
+  Eigen::VectorXd qd0;                         ///< (nq) initial joint velocities [rad/s or m/s]; empty = zeros
+  Eigen::VectorXd damping;                     ///< (nq) viscous joint damping [N·m·s/rad or N·s/m]; empty = zeros
+  double duration = 1.0;                       ///< simulated time [s], > 0
+  double log_rate = 1000.0;                    ///< log samples per second [Hz], > 0
   sim::CvodeOptions solver = defaultSolver();  ///< integrator settings
 
   /// Adams (non-stiff: a rigid robot has no fast modes) with tight tolerances.
@@ -42,7 +42,8 @@ class PassiveRobot : public sim::Plant {
   std::string name() const override;
   int stateSize() const override { return 2 * model_.nq; }
   Eigen::VectorXd initialState() const override;
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> ydot) const override;
   /// q_i, qd_i per joint (joint names), kinetic, potential and total energy [J], tip frame position [m].
   const std::vector<std::string>& signalNames() const override { return signals_; }
   void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override;

@@ -35,23 +35,23 @@ namespace jointsim::systems {
 /// Sensor imperfections. Quantisation and noise are used only with sampled (discrete-time) control; the
 /// joint-angle bias (a fault, systems/faults.hpp) applies in both modes.
 struct SensorSpec {
-  double joint_bias = 0.0;             ///< constant offset of the measured joint angle [rad]
-  double joint_quantum = 0.0;          ///< joint encoder resolution [rad] (0: none)
-  double motor_quantum = 0.0;          ///< motor encoder resolution [rad]; > 0: speed = Δ(quantised angle)/T_s
-  double current_quantum = 0.0;        ///< current sensor resolution [A]
-  double joint_noise = 0.0;            ///< std of additive Gaussian noise on the joint angle [rad]
-  double motor_velocity_noise = 0.0;   ///< std on the motor speed [rad/s]
-  double current_noise = 0.0;          ///< std on the current [A]
+  double joint_bias = 0.0;            ///< constant offset of the measured joint angle [rad]
+  double joint_quantum = 0.0;         ///< joint encoder resolution [rad] (0: none)
+  double motor_quantum = 0.0;         ///< motor encoder resolution [rad]; > 0: speed = Δ(quantised angle)/T_s
+  double current_quantum = 0.0;       ///< current sensor resolution [A]
+  double joint_noise = 0.0;           ///< std of additive Gaussian noise on the joint angle [rad]
+  double motor_velocity_noise = 0.0;  ///< std on the motor speed [rad/s]
+  double current_noise = 0.0;         ///< std on the current [A]
 };
 
 struct DriveSpec {
-  std::string joint;                                      ///< name of the joint this drive moves
-  drive::DcMotorParams motor;                             ///< motor (J_M always used; electrics if `electrics`)
-  bool electrics = true;                                  ///< false: torque-controlled motor, no current state
+  std::string joint;           ///< name of the joint this drive moves
+  drive::DcMotorParams motor;  ///< motor (J_M always used; electrics if `electrics`)
+  bool electrics = true;       ///< false: torque-controlled motor, no current state
   std::shared_ptr<const drive::Transmission> transmission;
-  std::shared_ptr<const drive::Friction> friction;        ///< on the gear output shaft; may be null
+  std::shared_ptr<const drive::Friction> friction;  ///< on the gear output shaft; may be null
   control::JointControllerParams controller;
-  SensorSpec sensors;                                     ///< used with sampled control only
+  SensorSpec sensors;  ///< used with sampled control only
 };
 
 /// Joint-space reference at time t (writes q_set, q̇_set, q̈_set of size n).
@@ -67,16 +67,16 @@ using WrenchFunction = std::function<void(double t, const multibody::Model& mode
 /// Signals of one evaluation, per joint (size n each).
 struct RobotSignals {
   Eigen::VectorXd q_set, qd_set, qdd_set;
-  Eigen::VectorXd q_fb;           ///< measured joint angle [rad]
-  Eigen::VectorXd qm, qdm;        ///< motor angle [rad] and speed [rad/s]
-  Eigen::VectorXd current, i_ref; ///< motor current and its reference [A]
-  Eigen::VectorXd u;              ///< controller output: voltage command [V] or motor torque command [N·m]
-  Eigen::VectorXd voltage;        ///< supply voltage [V]
-  Eigen::VectorXd tau_motor;      ///< electromagnetic motor torque [N·m]
-  Eigen::VectorXd tau_gear;       ///< gear output torque [N·m] (before friction, output shaft)
-  Eigen::VectorXd tau_friction;   ///< friction torque on the output shaft [N·m]
-  Eigen::VectorXd tau_joint;      ///< torque applied to the joints by the drives [N·m]
-  Eigen::VectorXd qdd;            ///< joint accelerations [rad/s²]
+  Eigen::VectorXd q_fb;            ///< measured joint angle [rad]
+  Eigen::VectorXd qm, qdm;         ///< motor angle [rad] and speed [rad/s]
+  Eigen::VectorXd current, i_ref;  ///< motor current and its reference [A]
+  Eigen::VectorXd u;               ///< controller output: voltage command [V] or motor torque command [N·m]
+  Eigen::VectorXd voltage;         ///< supply voltage [V]
+  Eigen::VectorXd tau_motor;       ///< electromagnetic motor torque [N·m]
+  Eigen::VectorXd tau_gear;        ///< gear output torque [N·m] (before friction, output shaft)
+  Eigen::VectorXd tau_friction;    ///< friction torque on the output shaft [N·m]
+  Eigen::VectorXd tau_joint;       ///< torque applied to the joints by the drives [N·m]
+  Eigen::VectorXd qdd;             ///< joint accelerations [rad/s²]
   void resize(int n);
 };
 
@@ -132,7 +132,8 @@ class RobotSystem : public sim::Plant {
   /// initialState(q0) with the positions of setInitialPositions().
   Eigen::VectorXd initialState() const override;
   /// ẏ = f(t, y): pure apart from the workspace; no heap allocation.
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> ydot) const override;
   /// The trajectory's breakpoints under continuous control (sampled control restarts at every sample).
   std::vector<double> timeEvents(double t_end) const override;
   /// Sampled control: the controllers' first sample at t0.
@@ -167,8 +168,8 @@ class RobotSystem : public sim::Plant {
   std::vector<DriveLayout> layout_;
   Eigen::MatrixXd G_, Ginv_;
   bool coupled_ = false;
-  bool crba_path_ = false;          // coupled rigid drives: non-diagonal reflected inertia
-  Eigen::MatrixXd reflected_;       // G⁻ᵀ diag(N² J_M rigid) G⁻¹ (crba path)
+  bool crba_path_ = false;     // coupled rigid drives: non-diagonal reflected inertia
+  Eigen::MatrixXd reflected_;  // G⁻ᵀ diag(N² J_M rigid) G⁻¹ (crba path)
   int n_states_ = 0;
   SetpointFunction setpoints_;
   std::vector<double> setpoint_breaks_;

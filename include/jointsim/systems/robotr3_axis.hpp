@@ -24,23 +24,23 @@ namespace jointsim::systems {
 
 struct RobotR3AxisSetup {
   std::string name = "one_axis";
-  std::string prefix = "axis";          ///< prefix of the reference column names ("axis" for OneAxis)
+  std::string prefix = "axis";  ///< prefix of the reference column names ("axis" for OneAxis)
   drive::OpAmpMotorParams motor = drive::OpAmpMotorParams::oneAxis();
-  double ratio = 210.0;                 ///< gear ratio motor/joint [-] (sign allowed)
-  double c = 8.0;                       ///< spring, motor side [N·m/rad]
-  double d = 0.01;                      ///< damper, motor side [N·m·s/rad]
-  double Rv0 = 0.5;                     ///< friction at zero speed [N·m]
-  double Rv1 = 0.1 / 130.0;             ///< viscous friction slope [N·m·s/rad]
-  double peak = 1.0;                    ///< stiction factor (type 1 ignores the gear's peak: 1)
-  double kp = 5.0, ks = 0.5, Ts = 0.05; ///< controller gains [1/s], [A·s/rad], [s]
-  double load_inertia = 19.5;           ///< J_load [kg·m²]
-  double q_begin = 0.0, q_end = 2.0943951023931953;   ///< path [rad]
-  double qd_max = 3.0, qdd_max = 10.0;  ///< path limits [rad/s], [rad/s²]
-  double start_time = 0.0;              ///< path start [s]
-  double swing_time = 0.5;              ///< run ends at the first t >= path end + swing [s]
-  double stop_time = 1.6;               ///< requested stop time [s]
-  double sa0 = 0.0;                     ///< friction torque at t = 0 (undetermined in MSL; docs/validation.md) [N·m]
-  double log_interval = 0.00032;        ///< output interval [s]
+  double ratio = 210.0;                              ///< gear ratio motor/joint [-] (sign allowed)
+  double c = 8.0;                                    ///< spring, motor side [N·m/rad]
+  double d = 0.01;                                   ///< damper, motor side [N·m·s/rad]
+  double Rv0 = 0.5;                                  ///< friction at zero speed [N·m]
+  double Rv1 = 0.1 / 130.0;                          ///< viscous friction slope [N·m·s/rad]
+  double peak = 1.0;                                 ///< stiction factor (type 1 ignores the gear's peak: 1)
+  double kp = 5.0, ks = 0.5, Ts = 0.05;              ///< controller gains [1/s], [A·s/rad], [s]
+  double load_inertia = 19.5;                        ///< J_load [kg·m²]
+  double q_begin = 0.0, q_end = 2.0943951023931953;  ///< path [rad]
+  double qd_max = 3.0, qdd_max = 10.0;               ///< path limits [rad/s], [rad/s²]
+  double start_time = 0.0;                           ///< path start [s]
+  double swing_time = 0.5;                           ///< run ends at the first t >= path end + swing [s]
+  double stop_time = 1.6;                            ///< requested stop time [s]
+  double sa0 = 0.0;               ///< friction torque at t = 0 (undetermined in MSL; docs/validation.md) [N·m]
+  double log_interval = 0.00032;  ///< output interval [s]
   sim::CvodeOptions solver = DriveChainSetup::defaultSolver();
   void validate() const;
 };
@@ -60,7 +60,8 @@ class RobotR3Axis : public sim::Plant {
   std::string name() const override;
   int stateSize() const override { return kStates; }
   Eigen::VectorXd initialState() const override;
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> ydot) const override;
   int rootCount() const override { return 2; }
   void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
   /// The path's segment switches.

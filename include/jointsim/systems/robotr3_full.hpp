@@ -16,19 +16,19 @@
 
 #include "jointsim/control/kinematic_ptp.hpp"
 #include "jointsim/drive/opamp_motor.hpp"
-#include "jointsim/systems/drive_chain.hpp"
 #include "jointsim/multibody/data.hpp"
 #include "jointsim/multibody/model.hpp"
+#include "jointsim/systems/drive_chain.hpp"
 
 namespace jointsim::systems {
 
 struct RobotR3AxisParams {
-  int type = 1;                     ///< 1: elastic gear, motor-side friction; 2: rigid gear, joint-side friction
-  double ratio = 1.0;               ///< motor angle / joint angle [-]
+  int type = 1;        ///< 1: elastic gear, motor-side friction; 2: rigid gear, joint-side friction
+  double ratio = 1.0;  ///< motor angle / joint angle [-]
   drive::OpAmpMotorParams motor;
-  double c = 0.0, d = 0.0;          ///< type 1 spring [N·m/rad] and damper [N·m·s/rad], motor side
-  double Rv0 = 0.0, Rv1 = 0.0;      ///< friction f(v) = Rv0 + Rv1 v [N·m, N·m·s/rad]
-  double peak = 1.0;                ///< stiction factor (type 1 uses 1, [MSL, RobotR3.Utilities.GearType1])
+  double c = 0.0, d = 0.0;      ///< type 1 spring [N·m/rad] and damper [N·m·s/rad], motor side
+  double Rv0 = 0.0, Rv1 = 0.0;  ///< friction f(v) = Rv0 + Rv1 v [N·m, N·m·s/rad]
+  double peak = 1.0;            ///< stiction factor (type 1 uses 1, [MSL, RobotR3.Utilities.GearType1])
   double kp = 5.0, ks = 0.5, Ts = 0.05;
   /// Axis j (1..6) of FullRobot (axis parameters of [MSL, RobotR3.FullRobot]).
   static RobotR3AxisParams fullRobot(int j);
@@ -36,11 +36,11 @@ struct RobotR3AxisParams {
 
 struct RobotR3FullSetup {
   std::string name = "robotr3_full_robot";
-  multibody::Model arm;                  ///< the Manutec r3 (config/robots/robotr3.yaml)
-  std::vector<RobotR3AxisParams> axes;   ///< one per joint, base to tip
-  Eigen::VectorXd q_begin, q_end, qd_max, qdd_max;  ///< path [rad, rad/s, rad/s²]
+  multibody::Model arm;                                        ///< the Manutec r3 (config/robots/robotr3.yaml)
+  std::vector<RobotR3AxisParams> axes;                         ///< one per joint, base to tip
+  Eigen::VectorXd q_begin, q_end, qd_max, qdd_max;             ///< path [rad, rad/s, rad/s²]
   double start_time = 0.0, swing_time = 0.5, stop_time = 2.0;  ///< [s]
-  double log_interval = 0.0004;          ///< [s]
+  double log_interval = 0.0004;                                ///< [s]
   sim::CvodeOptions solver = DriveChainSetup::defaultSolver();
   void validate() const;
 };
@@ -57,7 +57,8 @@ class RobotR3Full : public sim::Plant {
   std::string name() const override;
   int stateSize() const override { return n_states_; }
   Eigen::VectorXd initialState() const override;
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> ydot) const override;
   int rootCount() const override { return 2 * n_; }
   void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
   /// The path's segment switches.

@@ -31,7 +31,6 @@ Eigen::Matrix3d readMatrix3(const YamlValue& v, const std::string& unit) {
   return m;
 }
 
-
 // Reads the axis keys of `n` into `a` (used for `axis_defaults` and for each axis).
 void readAxis(const YamlValue& n, systems::ClampingAxisParams& a) {
   if (n.has("ratio")) a.ratio = n["ratio"].asDouble("gear ratio r = motor angle / gear output angle (-)");
@@ -105,7 +104,8 @@ ClampingExperimentSetup readClampingSetup(const YamlValue& root, const std::stri
     c.allowKeys({"frame", "c_lin", "d_lin", "c_rot", "d_rot"});
     if (c.has("frame")) {
       s.clamp.frame = c["frame"].asString("a frame name of the robot");
-      if (!s.arm.hasFrame(s.clamp.frame)) c["frame"].fail("no frame named '" + s.clamp.frame + "' in robot '" + s.arm.name + "'");
+      if (!s.arm.hasFrame(s.clamp.frame))
+        c["frame"].fail("no frame named '" + s.clamp.frame + "' in robot '" + s.arm.name + "'");
     }
     if (c.has("c_lin")) s.clamp.c_lin = readMatrix3(c["c_lin"], "N/m");
     if (c.has("d_lin")) s.clamp.d_lin = readMatrix3(c["d_lin"], "N·s/m");
@@ -174,7 +174,8 @@ ClampingExperimentSetup readClampingSetup(const YamlValue& root, const std::stri
     const YamlValue m = c.required("matrix", "irb140_wrist or a square matrix (rows), q_joint = G φ_gear_output");
     const auto n = static_cast<Eigen::Index>(s.coupled_joints.size());
     if (!m.isSequence()) {
-      if (m.asString("irb140_wrist or a list of rows") != "irb140_wrist") m.failExpected("irb140_wrist or a list of rows");
+      if (m.asString("irb140_wrist or a list of rows") != "irb140_wrist")
+        m.failExpected("irb140_wrist or a list of rows");
       if (n != 3) j.failExpected("3 joints for irb140_wrist");
       s.coupling = drive::CouplingMatrix::irb140Wrist();
     } else {
@@ -203,7 +204,6 @@ ClampingExperimentSetup readClampingSetup(const YamlValue& root, const std::stri
   root.validate([&] { s.validate(); });
   return out;
 }
-
 
 namespace {
 
@@ -271,8 +271,11 @@ std::vector<std::string> clampingAxes(const RunData& run) {
 
 std::vector<Figure> clampingFigures(const RunData& run) {
   std::vector<Figure> figs;
-  Figure curves{run.experiment + "_clamping_curves", run.experiment + ": clamping curves (motor torque against motor angle)",
-                1, 1, {}};
+  Figure curves{run.experiment + "_clamping_curves",
+                run.experiment + ": clamping curves (motor torque against motor angle)",
+                1,
+                1,
+                {}};
   Figure torques{run.experiment + "_axis_torques", run.experiment + ": torques per axis", 1, 1, {}};
   for (const auto& a : clampingAxes(run)) {
     const int ma = run.col(a + ".motor_angle"), mt = run.col(a + ".motor_torque");
@@ -289,7 +292,8 @@ std::vector<Figure> clampingFigures(const RunData& run) {
     std::vector<int> cols{mt};
     if (st >= 0) cols.push_back(st);
     if (ft >= 0) cols.push_back(ft);
-    torques.panels.push_back(timePanel(run, cols, a, "torque", [&](const std::string& n) { return stripPrefix(n, a + "."); }));
+    torques.panels.push_back(
+        timePanel(run, cols, a, "torque", [&](const std::string& n) { return stripPrefix(n, a + "."); }));
   }
   for (Figure* f : {&curves, &torques})
     if (!f->panels.empty()) {
@@ -312,7 +316,8 @@ std::vector<Figure> clampingFigures(const RunData& run) {
     p.ylabel = axisLabel(q, s.unit);
     for (int c : cols) {
       const bool norm = endsWith(run.name(c), "displacement") || endsWith(run.name(c), "rotation");
-      p.series.push_back(timeSeries(run, c, stripPrefix(run.name(c), "clamp."), s.factor, norm ? LineStyle::Emphasis : LineStyle::Line));
+      p.series.push_back(timeSeries(run, c, stripPrefix(run.name(c), "clamp."), s.factor,
+                                    norm ? LineStyle::Emphasis : LineStyle::Line));
     }
     clamp.panels.push_back(p);
   };

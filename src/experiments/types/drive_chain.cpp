@@ -62,7 +62,8 @@ systems::DriveChainSetup readDriveChainSetup(const YamlValue& root, const std::s
     el.expectMap("an element {name, type, ...}");
     systems::ChainElement e;
     e.name = el.required("name", "element name").asString("a name");
-    const YamlValue type = el.required("type", "spring_damper, elasto_backlash, clutch, brake, bearing_friction, gear or torque");
+    const YamlValue type =
+        el.required("type", "spring_damper, elasto_backlash, clutch, brake, bearing_friction, gear or torque");
     const std::string t = type.asString("an element type");
     if (t == "torque") {
       el.allowKeys({"name", "type", "on", "profile"});
@@ -73,9 +74,12 @@ systems::DriveChainSetup readDriveChainSetup(const YamlValue& root, const std::s
       e.a = node(el.required("from", "input flange: inertia name or ground"));
       e.b = node(el.required("to", "output flange: inertia name or ground"));
       if (t == "spring_damper" || t == "elasto_backlash") {
-        e.type = t == "spring_damper" ? systems::ChainElementType::SpringDamper : systems::ChainElementType::ElastoBacklash;
-        if (e.type == systems::ChainElementType::SpringDamper) el.allowKeys({"name", "type", "from", "to", "c", "d"});
-        else el.allowKeys({"name", "type", "from", "to", "c", "d", "backlash"});
+        e.type =
+            t == "spring_damper" ? systems::ChainElementType::SpringDamper : systems::ChainElementType::ElastoBacklash;
+        if (e.type == systems::ChainElementType::SpringDamper)
+          el.allowKeys({"name", "type", "from", "to", "c", "d"});
+        else
+          el.allowKeys({"name", "type", "from", "to", "c", "d", "backlash"});
         e.c = el.required("c", "stiffness in N·m/rad").asDouble("a stiffness in N·m/rad");
         e.d = el["d"].asDouble(0.0, "a damping in N·m·s/rad");
         if (e.type == systems::ChainElementType::ElastoBacklash)
@@ -95,7 +99,8 @@ systems::DriveChainSetup readDriveChainSetup(const YamlValue& root, const std::s
       } else if (t == "bearing_friction") {
         el.allowKeys({"name", "type", "from", "to", "tau_pos", "peak"});
         e.type = systems::ChainElementType::BearingFriction;
-        e.table = readTable(el.required("tau_pos", "table [[w rad/s, tau N·m], ...]"), "a table [[w rad/s, tau N·m], ...]");
+        e.table =
+            readTable(el.required("tau_pos", "table [[w rad/s, tau N·m], ...]"), "a table [[w rad/s, tau N·m], ...]");
         e.peak = el["peak"].asDouble(1.0, "a peak factor >= 1");
       } else {
         type.failExpected("spring_damper, elasto_backlash, clutch, brake, bearing_friction, gear or torque");
@@ -121,7 +126,6 @@ class DriveChainExperiment : public PlantExperiment<systems::DriveChain> {
     w["log_rate"] = s.log_rate;
     solverJson(w["solver"], s.solver);
   }
-
 };
 
 std::vector<Figure> driveChainFigures(const RunData& run) {

@@ -14,8 +14,8 @@ using systems::RigInput;
 using systems::Side;
 
 systems::JointRigSetup readJointRigSetup(const YamlValue& root, const std::string& name) {
-  root.allowKeys({"experiment", "motor", "rotor_inertia", "transmission", "friction", "load", "input",
-                  "initial_state", "duration", "log_rate", "solver"});
+  root.allowKeys({"experiment", "motor", "rotor_inertia", "transmission", "friction", "load", "input", "initial_state",
+                  "duration", "log_rate", "solver"});
   systems::JointRigSetup s;
   s.name = name;
   if (root.has("motor")) s.motor = drive::motorFromYaml(root["motor"]);
@@ -28,9 +28,12 @@ systems::JointRigSetup readJointRigSetup(const YamlValue& root, const std::strin
     f.expectMap("a friction mapping {side, model}");
     f.allowKeys({"side", "model"});
     const std::string side = f["side"].asString("motor", "motor or output");
-    if (side == "motor") s.friction_side = systems::Side::Motor;
-    else if (side == "output") s.friction_side = systems::Side::Output;
-    else f["side"].failExpected("motor or output");
+    if (side == "motor")
+      s.friction_side = systems::Side::Motor;
+    else if (side == "output")
+      s.friction_side = systems::Side::Output;
+    else
+      f["side"].failExpected("motor or output");
     s.friction = drive::frictionFromYaml(f.required("model", "friction model {type, ...}"));
   }
   if (const YamlValue load = root["load"]; load.defined()) {
@@ -122,7 +125,6 @@ class JointRigExperiment : public PlantExperiment<systems::JointRig> {
     w["log_rate"] = s.log_rate;
     solverJson(w["solver"], s.solver);
   }
-
 };
 
 /// Mean friction torque and velocity over the settled end (last 30 %) of each constant, non-zero plateau of

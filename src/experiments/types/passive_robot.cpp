@@ -55,7 +55,8 @@ std::vector<Figure> passiveRobotFigures(const RunData& run) {
   auto noPrefix = [](const std::string& p) { return [p](const std::string& n) { return stripPrefix(n, p); }; };
   if (!q.empty()) f.panels.push_back(timePanel(run, q, "joint angles", "joint angle", noPrefix("q_")));
   if (!qd.empty()) f.panels.push_back(timePanel(run, qd, "joint velocities", "joint velocity", noPrefix("qd_")));
-  if (!tip.empty()) f.panels.push_back(timePanel(run, tip, "tip position (world frame)", "tip position", noPrefix("tip_")));
+  if (!tip.empty())
+    f.panels.push_back(timePanel(run, tip, "tip position (world frame)", "tip position", noPrefix("tip_")));
   grid(f, f.panels.size(), 1);
   if (!f.panels.empty()) figs.push_back(f);
 

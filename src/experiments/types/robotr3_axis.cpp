@@ -23,10 +23,12 @@ systems::RobotR3AxisSetup readRobotR3AxisSetup(const YamlValue& root, const std:
     m.allowKeys({"preset", "J", "k", "w", "D"});
     if (m.has("preset")) {
       const std::string p = m["preset"].asString("one_axis or robotr3_axis1..6");
-      if (p == "one_axis") s.motor = drive::OpAmpMotorParams::oneAxis();
+      if (p == "one_axis")
+        s.motor = drive::OpAmpMotorParams::oneAxis();
       else if (p.size() == 13 && p.rfind("robotr3_axis", 0) == 0 && p[12] >= '1' && p[12] <= '6')
         s.motor = drive::OpAmpMotorParams::robotR3Axis(p[12] - '0');
-      else m["preset"].failExpected("one_axis or robotr3_axis1..6");
+      else
+        m["preset"].failExpected("one_axis or robotr3_axis1..6");
     }
     s.motor.J = num(m, "J", s.motor.J, "a rotor inertia in kg·m²");
     s.motor.k = num(m, "k", s.motor.k, "a motor constant in N·m/A");
@@ -120,7 +122,8 @@ std::vector<Figure> robotR3AxisFigures(const RunData& run) {
     f.panels.push_back(timePanel(run, {defl}, "gear spring deflection", "deflection φ_rel",
                                  [](const std::string&) { return "gear.spring.phi_rel"; }));
   if (tf >= 0) {
-    Panel p = timePanel(run, {tf}, "bearing friction", "friction torque", [](const std::string&) { return "friction torque"; });
+    Panel p = timePanel(run, {tf}, "bearing friction", "friction torque",
+                        [](const std::string&) { return "friction torque"; });
     if (mode >= 0) {
       p.series.push_back(timeSeries(run, mode, "mode (right axis)", 1, LineStyle::Steps));
       p.series.back().y2 = true;
@@ -133,8 +136,8 @@ std::vector<Figure> robotR3AxisFigures(const RunData& run) {
   if (!f.panels.empty()) figs.push_back(f);
   if (auto e = run.where([](const std::string& n) { return startsWith(n, "energy."); }); !e.empty()) {
     Figure ef{run.experiment + "_energy", run.experiment + ": energy bookkeeping", 1, 1, {}};
-    ef.panels.push_back(
-        timePanel(run, e, "integrated energies", "energy", [](const std::string& n) { return stripPrefix(n, "energy."); }));
+    ef.panels.push_back(timePanel(run, e, "integrated energies", "energy",
+                                  [](const std::string& n) { return stripPrefix(n, "energy."); }));
     figs.push_back(ef);
   }
   return figs;

@@ -27,14 +27,17 @@ systems::RobotR3FullSetup readRobotR3FullSetup(const YamlValue& root, const std:
     a.expectMap("an axis mapping {preset}");
     a.allowKeys({"preset"});
     const std::string p = a.required("preset", "robotr3_axis1..6").asString("robotr3_axis1..6");
-    if (p.size() != 13 || p.rfind("robotr3_axis", 0) != 0 || p[12] < '1' || p[12] > '6') a["preset"].failExpected("robotr3_axis1..6");
+    if (p.size() != 13 || p.rfind("robotr3_axis", 0) != 0 || p[12] < '1' || p[12] > '6')
+      a["preset"].failExpected("robotr3_axis1..6");
     s.axes.push_back(systems::RobotR3AxisParams::fullRobot(p[12] - '0'));
   }
-  const YamlValue path = root.required("path", "KinematicPTP2 path {q_begin, q_end, qd_max, qdd_max, start_time, swing_time}");
+  const YamlValue path =
+      root.required("path", "KinematicPTP2 path {q_begin, q_end, qd_max, qdd_max, start_time, swing_time}");
   path.expectMap("a path mapping");
   path.allowKeys({"q_begin", "q_end", "qd_max", "qdd_max", "start_time", "swing_time"});
   auto vec = [&](const char* key) {
-    const auto v = path.required(key, "one value per joint").asDoubles(static_cast<size_t>(s.arm.nq), "one value per joint");
+    const auto v =
+        path.required(key, "one value per joint").asDoubles(static_cast<size_t>(s.arm.nq), "one value per joint");
     return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
   };
   s.q_begin = vec("q_begin");

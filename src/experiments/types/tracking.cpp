@@ -15,10 +15,11 @@ namespace jointsim::experiments {
 
 using io::YamlValue;
 
-TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name, const std::vector<systems::Fault>& faults) {
+TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name,
+                                const std::vector<systems::Fault>& faults) {
   (void)name;
-  root.allowKeys({"experiment", "robot", "trajectory", "initial_state", "duration", "log_rate", "solver", "check_limits",
-                  "control"});
+  root.allowKeys({"experiment", "robot", "trajectory", "initial_state", "duration", "log_rate", "solver",
+                  "check_limits", "control"});
   TrackingSetup s;
   const std::string base_dir = std::filesystem::path(root.file()).parent_path().string();
   const YamlValue robot = root.required("robot", "robot-with-drives file, relative to this file");
