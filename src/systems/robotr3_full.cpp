@@ -267,7 +267,8 @@ void RobotR3Full::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>&
   }
 }
 
-void RobotR3Full::signals(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
+void RobotR3Full::signals(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y,
+                          Eigen::Ref<Eigen::VectorXd> row) const {
   Eigen::Index c = 0;
   for (int j = 0; j < n_; ++j) row[c++] = y[ctrl_[static_cast<size_t>(j)]];
   for (int j = 0; j < n_; ++j)

@@ -91,7 +91,9 @@ TEST(Layering, EveryLayerHasItsFolders) {
     EXPECT_TRUE(fs::is_directory(jointsim::test::sourcePath("include/jointsim/" + layer))) << layer;
   }
   for (const auto& entry : fs::directory_iterator(jointsim::test::sourcePath("src"))) {
-    if (entry.is_directory()) EXPECT_GE(rank(entry.path().filename().string()), 0) << entry.path();
+    if (entry.is_directory()) {
+      EXPECT_GE(rank(entry.path().filename().string()), 0) << entry.path();
+    }
   }
   // The same order as the build's layer list.
   std::ifstream cmake(jointsim::test::sourcePath("src/CMakeLists.txt"));
