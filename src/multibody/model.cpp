@@ -248,6 +248,10 @@ Data::Data(const Model& model)
       M(Eigen::MatrixXd::Zero(model.nq, model.nq)),
       llt(model.nq),
       J(Matrix6Xd::Zero(6, model.nq)),
-      zeros(Eigen::VectorXd::Zero(model.nq)) {}
+      zeros(Eigen::VectorXd::Zero(model.nq)) {
+  // A factorisation (of the identity) so that the LLT's status is defined before the first use: copying a
+  // Data copies it (reading an unset status is undefined behaviour).
+  llt.compute(Eigen::MatrixXd::Identity(model.nq, model.nq));
+}
 
 }  // namespace jointsim::multibody

@@ -117,6 +117,7 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
   fext_.setZero(6, n);
   M_.setZero(n, n);
   llt_ = Eigen::LLT<Eigen::MatrixXd>(n);
+  llt_.compute(Eigen::MatrixXd::Identity(n, n));  // a defined status before the first use (the object is copied)
 
   // The logged signals and the inverse-dynamics reference model (the rotor inertias of all drives as
   // armature; rigid ones are already in the system's armature).

@@ -224,5 +224,5 @@ TEST(CouplingMatrix, Irb140WristInverseAndPower) {
   const Eigen::Vector3d qd_m(100, -50, 30), tau_j(4, -2, 1);
   EXPECT_NEAR(G.jointAngles(qd_m).dot(tau_j), qd_m.dot(G.motorTorques(tau_j)), 1e-12);
   EXPECT_TRUE(jointsim::test::MatricesNear(G.jointTorques(G.motorTorques(tau_j)), tau_j, 1e-12));
-  EXPECT_THROW(CouplingMatrix(Eigen::Matrix2d::Zero()), jointsim::InputError);
+  EXPECT_THROW(CouplingMatrix{Eigen::Matrix2d::Zero()}, jointsim::InputError);
 }
