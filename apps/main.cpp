@@ -6,7 +6,14 @@
 
 #include "cli_common.hpp"
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/common/version.hpp"
+
+namespace {
+// One line per message, control bytes escaped, at most this many bytes of the message (a 10 MB bad CSV line is
+// not echoed whole).
+constexpr size_t kMaxMessage = 2000;
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"jointsim — high-fidelity robot joint and multibody simulator"};
@@ -29,19 +36,19 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "jointsim: " << e.what() << " (see jointsim --help)\n";
+    std::cerr << "jointsim: " << jointsim::printable(e.what(), kMaxMessage) << " (see jointsim --help)\n";
     return 2;
   } catch (const jointsim::InputError& e) {
-    std::cerr << "jointsim: error: " << e.what() << '\n';
+    std::cerr << "jointsim: error: " << jointsim::printable(e.what(), kMaxMessage) << '\n';
     return 2;
   } catch (const jointsim::UnidentifiableError& e) {
-    std::cerr << "jointsim: cannot identify: " << e.what() << '\n';
+    std::cerr << "jointsim: cannot identify: " << jointsim::printable(e.what(), kMaxMessage) << '\n';
     return 3;
   } catch (const jointsim::Error& e) {
-    std::cerr << "jointsim: failed: " << e.what() << '\n';
+    std::cerr << "jointsim: failed: " << jointsim::printable(e.what(), kMaxMessage) << '\n';
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "jointsim: internal error: " << e.what() << '\n';
+    std::cerr << "jointsim: internal error: " << jointsim::printable(e.what(), kMaxMessage) << '\n';
     return 1;
   }
   return 0;

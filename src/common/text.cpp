@@ -1,5 +1,6 @@
 #include "jointsim/common/text.hpp"
 
+#include <cctype>
 #include <cstdio>
 
 namespace jointsim {
@@ -29,6 +30,43 @@ std::pair<std::string, std::string> splitColumn(const std::string& column) {
       return {column.substr(0, open), column.substr(open + 1, column.size() - open - 2)};
   }
   return {column, ""};
+}
+
+bool isSafeName(const std::string& name) {
+  if (name.empty() || name.size() > 128 || name[0] == '.' || name[0] == '-') return false;
+  for (const char c : name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_')) return false;
+  return true;
+}
+
+std::string safeFileName(const std::string& name) {
+  std::string out;
+  for (const char c : name.substr(0, 128))
+    out += (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_') ? c : '_';
+  if (out.empty()) return "_";
+  if (out[0] == '.' || out[0] == '-') out[0] = '_';
+  return out;
+}
+
+std::string printable(const std::string& text, size_t max_length) {
+  std::string out;
+  size_t i = 0;
+  // Cut only at the start of a UTF-8 sequence (not before a continuation byte 10xxxxxx).
+  for (; i < text.size() && (out.size() < max_length || (static_cast<unsigned char>(text[i]) & 0xC0) == 0x80); ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == '\n') out += "\\n";
+    else if (c == '\t') out += "\\t";
+    else if (c == '\r') out += "\\r";
+    else if (c < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  if (i < text.size()) out += "... (" + std::to_string(text.size() - i) + " more bytes)";
+  return out;
 }
 
 std::string columnBaseName(const std::string& column) { return trim(splitColumn(trim(column)).first); }

@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/io/input_files.hpp"
 #include "jointsim/io/output.hpp"
@@ -31,11 +32,10 @@ namespace fs = std::filesystem;
 
 std::string scalarText(const YamlValue& v, const std::string& what) { return v.scalarText(what); }
 
-std::string sanitize(const std::string& s) {
-  std::string out;
-  for (char c : s) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_') ? c : '_';
-  return out;
-}
+// Run and sweep names name folders: safe names only (common/text.hpp).
+const char* const kNameRule =
+    "a name of 1 to 128 letters, digits, '.', '-', '_', not starting with '.' or '-' (it names a folder)";
+std::string sanitize(const std::string& s) { return safeFileName(s); }
 
 std::string number(double v) {
   char buf[32];

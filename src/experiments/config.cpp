@@ -166,15 +166,25 @@ void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& o
 }
 
 namespace {
-nlohmann::ordered_json nodeToJson(const YAML::Node& node) {
+
+/// Bounds on the copy of a document into the summary: YAML aliases can make a small file expand without
+/// bound (an "alias bomb"), and deep nesting would recurse deeply.
+constexpr long kMaxJsonValues = 200000;
+constexpr int kMaxJsonDepth = 64;
+
+nlohmann::ordered_json nodeToJson(const YAML::Node& node, const io::YamlValue& root, long& budget, int depth) {
+  if (--budget < 0 || depth > kMaxJsonDepth)
+    throw InputError(root.file() + ": the document is nested deeper than " + std::to_string(kMaxJsonDepth) +
+                     " levels or expands to more than " + std::to_string(kMaxJsonValues) +
+                     " values (YAML aliases?); expected an experiment description");
   if (node.IsMap()) {
     nlohmann::ordered_json out = nlohmann::ordered_json::object();
-    for (const auto& kv : node) out[kv.first.as<std::string>()] = nodeToJson(kv.second);
+    for (const auto& kv : node) out[io::keyText(kv.first, root)] = nodeToJson(kv.second, root, budget, depth + 1);
     return out;
   }
   if (node.IsSequence()) {
     nlohmann::ordered_json out = nlohmann::ordered_json::array();
-    for (const auto& item : node) out.push_back(nodeToJson(item));
+    for (const auto& item : node) out.push_back(nodeToJson(item, root, budget, depth + 1));
     return out;
   }
   if (node.IsScalar()) {
@@ -189,7 +199,10 @@ nlohmann::ordered_json nodeToJson(const YAML::Node& node) {
 }
 }  // namespace
 
-nlohmann::ordered_json yamlToJson(const io::YamlValue& value) { return nodeToJson(io::yamlNode(value)); }
+nlohmann::ordered_json yamlToJson(const io::YamlValue& value) {
+  long budget = kMaxJsonValues;
+  return nodeToJson(io::yamlNode(value), value, budget, 0);
+}
 
 nlohmann::ordered_json vectorJson(const Eigen::Ref<const Eigen::VectorXd>& v) {
   nlohmann::ordered_json out = nlohmann::ordered_json::array();

@@ -9,6 +9,7 @@
 
 #include "experiments/config_internal.hpp"
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/common/version.hpp"
 #include "jointsim/experiments/config.hpp"
 #include "jointsim/experiments/registry.hpp"
@@ -44,8 +45,9 @@ std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::v
   exp.expectMap("a mapping {name, type}");
   exp.allowKeys({"name", "type", "description"});
   const std::string name = exp.required("name", "experiment name").asString("a name");
-  if (name.empty() || name.find_first_of("/\\") != std::string::npos)
-    exp["name"].failExpected("a non-empty name without path separators");
+  if (!isSafeName(name))
+    exp["name"].failExpected("a name of 1 to 128 letters, digits, '.', '-', '_', not starting with '.' or '-' "
+                             "(it names the output files)");
   const YamlValue type_node = exp.required("type", "experiment type");
   const std::string t = type_node.asString("an experiment type");
   const ExperimentType* type = findExperimentType(t);

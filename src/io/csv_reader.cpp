@@ -108,8 +108,9 @@ CsvTable readCsv(const std::string& path, bool require_finite) {
       const std::string where = location(path, t.lines[r]) + ":" + std::to_string(c + 1) + ": column '" +
                                 t.header[static_cast<size_t>(c)] + "': ";
       if (cell.empty() || end == cell.c_str() || *end != '\0')
-        throw InputError(where + "expected a number, got '" + cell + "'");
-      if (require_finite && !std::isfinite(x)) throw InputError(where + "expected a finite number, got '" + cell + "'");
+        throw InputError(where + "expected a number, got '" + printable(cell, 80) + "'");
+      if (require_finite && !std::isfinite(x))
+        throw InputError(where + "expected a finite number, got '" + printable(cell, 80) + "'");
       t.data(static_cast<Eigen::Index>(r), c) = x;
     }
   }

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "io/yaml_node.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/io/input_files.hpp"
 
 namespace jointsim::io {
@@ -19,7 +20,7 @@ int lineOf(const YAML::Node& node, int fallback) {
 
 std::string describe(const YAML::Node& node) {
   if (!node.IsDefined() || node.IsNull()) return "nothing";
-  if (node.IsScalar()) return "'" + node.Scalar() + "'";
+  if (node.IsScalar()) return "'" + printable(node.Scalar(), 80) + "'";
   if (node.IsSequence()) return "a list of " + std::to_string(node.size()) + " items";
   if (node.IsMap()) return "a mapping";
   return "an unknown node";
@@ -78,6 +79,14 @@ std::string closestMatch(const std::string& word, const std::vector<std::string>
   return best;
 }
 
+std::string keyText(const YAML::Node& key, const YamlValue& where) {
+  if (!key.IsScalar())
+    throw InputError(where.file(), lineOf(key, where.line()), where.path().empty() ? "(document)" : where.path(),
+                     "expected mapping keys that are names, got a key that is " +
+                         std::string(key.IsMap() ? "a mapping" : key.IsSequence() ? "a list" : "empty"));
+  return key.Scalar();
+}
+
 YamlValue::YamlValue(std::shared_ptr<const Impl> impl) : impl_(std::move(impl)) {}
 
 YamlValue YamlValue::loadFile(const std::string& path) { return loadString(readInputFile(path), path); }
@@ -126,7 +135,7 @@ size_t YamlValue::size() const { return impl_->node.size(); }
 std::vector<std::string> YamlValue::keys() const {
   std::vector<std::string> out;
   if (!impl_->node.IsMap()) return out;
-  for (const auto& kv : impl_->node) out.push_back(kv.first.as<std::string>());
+  for (const auto& kv : impl_->node) out.push_back(keyText(kv.first, *this));
   return out;
 }
 
@@ -142,7 +151,7 @@ void YamlValue::allowKeys(std::initializer_list<const char*> allowed) const {
   if (!impl_->node.IsMap()) return;
   std::vector<std::string> names(allowed.begin(), allowed.end());
   for (const auto& kv : impl_->node) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = keyText(kv.first, *this);
     if (std::find(names.begin(), names.end(), key) != names.end()) continue;
     std::string msg = "unknown key '" + key + "'";
     if (const std::string near = closestMatch(key, names); !near.empty()) msg += " (did you mean '" + near + "'?)";

@@ -20,4 +20,8 @@ struct YamlValue::Impl {
 /// The node of a value (shares the document: changes are seen by every value of it).
 inline const YAML::Node& yamlNode(const YamlValue& v) { return v.impl().node; }
 
+/// The text of a mapping key; InputError at `where` (file:line: path) for a key that is not a scalar
+/// (`? [a, b]: 1` is valid YAML but no key jointsim knows).
+std::string keyText(const YAML::Node& key, const YamlValue& where);
+
 }  // namespace jointsim::io

@@ -93,6 +93,11 @@ LoadedRun loadRun(const std::string& run_dir) {
                      (candidates.empty() ? std::string("<experiment>.csv") : candidates.front().string()));
   }
   if (d.experiment.empty()) d.experiment = fs::path(run.csv).stem().string();
+  // The name becomes the stem of every figure file and part of gnuplot titles: a hand-edited summary must not
+  // steer outputs elsewhere.
+  if (!isSafeName(d.experiment))
+    throw InputError(summary_path + ": experiment: expected a name of letters, digits, '.', '-', '_' (it names the "
+                     "figure files), got '" + printable(d.experiment, 80) + "'");
   const io::CsvTable table = io::readCsv(run.csv, false);
   d.data = table.data;
   for (const auto& h : table.header) {
@@ -136,7 +141,11 @@ std::vector<ManifestRow> readManifest(const std::string& path) {
     return (s.empty() || *end != '\0') ? NAN : x;
   };
   std::vector<ManifestRow> rows;
-  for (const auto& cells : t.rows) {
+  for (size_t k = 0; k < t.rows.size(); ++k) {
+    const auto& cells = t.rows[k];
+    if (!isSafeName(cells[0]))
+      throw InputError(path + ":" + std::to_string(t.lines[k]) + ": run: expected a run name of letters, digits, '.', '-', "
+                       "'_', got '" + printable(cells[0], 80) + "'");
     ManifestRow r;
     r.run = cells[0];
     r.status = cells[1];

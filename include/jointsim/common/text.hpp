@@ -25,4 +25,15 @@ std::pair<std::string, std::string> splitColumn(const std::string& column);
 /// Text with leading and trailing blanks (space, tab, CR) removed.
 std::string trim(const std::string& text);
 
+/// A name that is safe as a file or folder name and inside a gnuplot string: 1 to 128 characters of letters,
+/// digits, '.', '-', '_', not starting with '.' or '-' (so never "." or ".."). Experiment, sweep and run names
+/// and the stems of output files must be safe names.
+bool isSafeName(const std::string& name);
+/// `name` with every character outside the safe set replaced by '_' (and a leading '.' or '-' too), cut to 128
+/// characters; "_" for an empty name.
+std::string safeFileName(const std::string& name);
+/// Text for a one-line message: control characters (newline, tab, ESC, ...) escaped as \n, \t, \xHH, and cut to
+/// `max_length` bytes (with "... (N more bytes)").
+std::string printable(const std::string& text, size_t max_length = 400);
+
 }  // namespace jointsim

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/drive/transmissions.hpp"
 #include "jointsim/experiments/config.hpp"
 #include "jointsim/experiments/types.hpp"
@@ -231,7 +232,7 @@ class ClampingExperiment : public PlantExperiment<systems::ClampedRobot> {
         curve_rows_.data(), rows, stride);
     for (int k = 0; k < n; ++k) {
       ExtraTable t;
-      t.suffix = plant_.setup().axes[static_cast<size_t>(k)].joint + "_curve";
+      t.suffix = safeFileName(plant_.setup().axes[static_cast<size_t>(k)].joint) + "_curve";
       t.table.columns = {"time[s]", "motor_angle[rad]", "motor_torque[N·m]"};
       t.table.values.resize(rows, 3);
       t.table.values.col(0) = all.col(0);
