@@ -7,6 +7,7 @@
 #include "cli_common.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/batch.hpp"
+#include "jointsim/sim/simulate.hpp"
 
 namespace jointsim::cli {
 
@@ -51,6 +52,11 @@ void addBatchCommand(CLI::App& app) {
                                   : "",
                 r.ok - r.skipped, r.failed, r.skipped, opt->collect ? " (collected)" : "", r.manifest_path.c_str());
     if (!opt->collect) std::printf("  wall time %.3g s with %d job(s)\n", r.wall_time_s, o.jobs);
+    if (r.interrupted)
+      throw sim::Interrupted(SolverError("batch interrupted (signal " + std::to_string(r.interrupted) +
+                                             "); the interrupted runs run again when the batch is resumed",
+                                         0.0, "INTERRUPTED"),
+                             sim::SimulationResult{}, r.interrupted);
     if (r.failed > 0) throw Error(std::to_string(r.failed) + " run(s) failed; see the manifest and <run>/run.log");
   });
 }

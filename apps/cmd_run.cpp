@@ -14,6 +14,8 @@ void addRunCommand(CLI::App& app) {
   struct Options {
     std::string config, output_dir;
     std::vector<std::string> overrides;
+    long max_steps = -1;
+    double max_wall_time = -1.0;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("run", "Run an experiment YAML file; writes DIR/<name>.csv and DIR/summary.json");
@@ -25,11 +27,16 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--set", opt->overrides, "Override a scalar of the experiment file: key.path=value (repeatable)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  cmd->add_option("--max-steps", opt->max_steps, "Budget of solver steps for the run (0: none; default: the file's limits.steps)");
+  cmd->add_option("--max-wall-time", opt->max_wall_time,
+                  "Budget of wall-clock time for the run [s] (0: none; default: the file's limits.wall_time)");
   cmd->callback([opt] {
     experiments::RunOptions options;
     options.output_dir = opt->output_dir;
     options.overrides = opt->overrides;
     options.progress = ::isatty(2) != 0;  // progress on stderr only when a person is watching
+    options.max_steps = opt->max_steps;
+    options.max_wall_time = opt->max_wall_time;
     const experiments::RunReport r = experiments::runExperimentFile(opt->config, options);
     std::printf("%s: %s\n  log:     %s\n  summary: %s\n  simulated %.6g s in %.3g s wall time: real-time factor %.4g\n"
                 "  solver: %ld steps, %ld RHS evaluations, %ld error-test failures\n",

@@ -1,18 +1,36 @@
 // jointsim command-line interface: parses arguments and dispatches to library calls.
 // Exit status: 0 success, 1 simulation/solver failure, 2 bad input (files, keys, values, options),
-// 3 data that cannot identify a requested parameter (jointsim identify).
+// 3 data that cannot identify a requested parameter (jointsim identify), 128 + N when stopped by signal N
+// (130 for SIGINT, 143 for SIGTERM: the run stops at its next step and leaves an "interrupted" summary).
+#include <csignal>
 #include <exception>
 #include <iostream>
 
 #include "cli_common.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
+#include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/version.hpp"
+#include "jointsim/sim/simulate.hpp"
 
 namespace {
 // One line per message, control bytes escaped, at most this many bytes of the message (a 10 MB bad CSV line is
 // not echoed whole).
 constexpr size_t kMaxMessage = 2000;
+
+extern "C" void onStopSignal(int sig) { jointsim::requestStop(sig); }
+
+/// SIGINT and SIGTERM ask the running simulation to stop (jointsim::requestStop) instead of killing the
+/// process, so temporary files are removed and the summary says "interrupted". No SA_RESTART: a blocking
+/// wait (jointsim batch) returns and forwards the signal to its runs.
+void installStopHandlers() {
+  struct sigaction sa {};
+  sa.sa_handler = onStopSignal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -27,6 +45,7 @@ int main(int argc, char** argv) {
   jointsim::cli::addBatchCommand(app);
   jointsim::cli::addCompareCommand(app);
   jointsim::cli::addPlotCommand(app);
+  installStopHandlers();
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -38,6 +57,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     std::cerr << "jointsim: " << jointsim::printable(e.what(), kMaxMessage) << " (see jointsim --help)\n";
     return 2;
+  } catch (const jointsim::sim::Interrupted& e) {
+    std::cerr << "jointsim: " << jointsim::printable(e.what(), kMaxMessage) << '\n';
+    return 128 + (e.signal() > 0 ? e.signal() : SIGINT);
   } catch (const jointsim::InputError& e) {
     std::cerr << "jointsim: error: " << jointsim::printable(e.what(), kMaxMessage) << '\n';
     return 2;

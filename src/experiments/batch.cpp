@@ -12,17 +12,22 @@
 #include <set>
 #include <sstream>
 
+#include <csignal>
+
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/io/input_files.hpp"
 #include "jointsim/io/output.hpp"
 #include "jointsim/io/yaml.hpp"
+#include "jointsim/sim/simulate.hpp"
 
 namespace jointsim::experiments {
 namespace {
@@ -182,6 +187,9 @@ BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     code = 2;
+  } catch (const sim::Interrupted& e) {
+    std::fprintf(stderr, "interrupted: %s\n", e.what());
+    code = 128 + (e.signal() > 0 ? e.signal() : SIGINT);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "failed: %s\n", e.what());
     code = 1;
@@ -351,16 +359,26 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
   std::map<pid_t, Active> active;
   size_t next = 0;
   progress(0);
-  while (next < queue.size() || !active.empty()) {
-    while (next < queue.size() && static_cast<int>(active.size()) < options.jobs) {
+  bool forwarded = false;
+  while ((next < queue.size() && !stopRequested()) || !active.empty()) {
+    // A stop request (SIGINT/SIGTERM to the batch): no new runs; the running ones get the signal and end with an
+    // "interrupted" summary, which resume treats as not done.
+    if (const int sig = stopRequested(); sig && !forwarded) {
+      for (const auto& [p, a] : active) ::kill(p, sig > 0 ? sig : SIGINT);
+      forwarded = true;
+    }
+    while (next < queue.size() && !stopRequested() && static_cast<int>(active.size()) < options.jobs) {
       const size_t k = queue[next++];
       const BatchRun& run = sweep.runs[mine[k]];
       const std::string folder = (fs::path(dir) / run.name).string();
       io::createDirectories(folder);
       // Stale results of an earlier attempt must not be mistaken for this one's.
       std::error_code ec;
-      for (const auto& e : fs::directory_iterator(folder, ec))
-        if (e.path().extension() == ".csv" || e.path().filename() == "summary.json") fs::remove(e.path(), ec);
+      for (const auto& e : fs::directory_iterator(folder, ec)) {
+        const std::string f = e.path().filename().string();
+        if (e.path().extension() == ".csv" || f == "summary.json" || f.find(".tmp.") != std::string::npos)
+          fs::remove(e.path(), ec);
+      }
       io::writeFileAtomically((fs::path(folder) / "run.settings").string(), settingsStamp(sweep, run));
       std::fflush(nullptr);
       const pid_t pid = ::fork();
@@ -397,7 +415,7 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
     if (WIFEXITED(status) && WEXITSTATUS(status) == 0 && r.status == "ok") {
       ++res.ok;
     } else {
-      if (r.status != "failed") r.status = "error";  // bad input, crash or signal: see run.log
+      if (r.status != "failed" && r.status != "interrupted") r.status = "error";  // bad input, crash: see run.log
       ++res.failed;
     }
     res.records[a.k] = r;
@@ -405,6 +423,7 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
   }
   progress(0);
   if (options.progress) std::fputc('\n', stderr);
+  res.interrupted = stopRequested();
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }

@@ -199,6 +199,11 @@ nlohmann::ordered_json nodeToJson(const YAML::Node& node, const io::YamlValue& r
 }
 }  // namespace
 
+void removeKey(const io::YamlValue& map, const std::string& key) {
+  YAML::Node node = io::yamlNode(map);
+  if (node.IsMap()) node.remove(key);
+}
+
 nlohmann::ordered_json yamlToJson(const io::YamlValue& value) {
   long budget = kMaxJsonValues;
   return nodeToJson(io::yamlNode(value), value, budget, 0);

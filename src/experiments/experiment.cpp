@@ -57,10 +57,29 @@ std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::v
                    ", ...) apply to experiments with a robot with drives "
                    "(type tracking), not to type '" +
                    t + "'");
+  // The run's budgets (common to every type): read, then taken out of the document the type's loader sees.
+  RunLimits limits;
+  const nlohmann::ordered_json config = detail::yamlToJson(root);
+  if (const YamlValue l = root["limits"]; l.defined()) {
+    l.expectMap("a mapping {steps, wall_time, log_rows} (0: no limit)");
+    l.allowKeys({"steps", "wall_time", "log_rows"});
+    auto count = [&](const char* key, long fallback) {
+      if (!l.has(key)) return fallback;
+      const long v = l[key].asInt("a whole number >= 0 (0: no limit)");
+      if (v < 0) l[key].failExpected("a whole number >= 0 (0: no limit)");
+      return v;
+    };
+    limits.steps = count("steps", limits.steps);
+    limits.log_rows = count("log_rows", limits.log_rows);
+    limits.wall_time = l["wall_time"].asDouble(limits.wall_time, "a time in s (0: no limit)");
+    if (limits.wall_time < 0) l["wall_time"].failExpected("a time >= 0 s (0: no limit)");
+    detail::removeKey(root, "limits");
+  }
   std::unique_ptr<Experiment> e = type->load(root, LoadContext{name, path, faults});
   e->setIdentity(name, t, path);
-  e->setConfig(detail::yamlToJson(root));
+  e->setConfig(config);
   e->setInputs(inputs.files());
+  e->setLimits(limits);
   return e;
 }
 
@@ -68,7 +87,10 @@ namespace {
 
 /// Runs the experiment, handing every row to `sink` and to the experiment's observer; progress on stderr.
 sim::SimulationResult execute(Experiment& e, const std::function<void(const Eigen::VectorXd&)>& sink, bool progress) {
-  const sim::SimulateOptions options = e.simulateOptions();
+  sim::SimulateOptions options = e.simulateOptions();
+  options.max_steps = e.limits().steps;
+  options.max_wall_time = e.limits().wall_time;
+  options.max_rows = e.limits().log_rows;
   // Progress (set by the CLI when stderr is a terminal): from 2 s of wall time on, at most 4 updates per second.
   const auto start = std::chrono::steady_clock::now();
   auto last = start;
@@ -145,43 +167,90 @@ ExperimentResult runInMemory(Experiment& experiment) {
   return out;
 }
 
+namespace {
+
+/// Removes the outputs an earlier run of `name` left in `dir` (and their temporary files), so that a failed run
+/// never stands beside the log of an earlier good one.
+void removeStaleOutputs(const std::string& dir, const std::string& name) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string f = entry.path().filename().string();
+    const bool ours = f == "summary.json" || f == name + ".csv" ||
+                      (f.rfind(name + "_", 0) == 0 && f.size() > 4 && f.compare(f.size() - 4, 4, ".csv") == 0);
+    const size_t tmp = f.find(".tmp.");
+    const bool our_tmp = tmp != std::string::npos &&
+                         (f.rfind("summary.json", 0) == 0 || f.rfind(name + ".csv", 0) == 0 || f.rfind(name + "_", 0) == 0);
+    if ((ours || our_tmp) && entry.is_regular_file(ec)) fs::remove(entry.path(), ec);
+  }
+}
+
+}  // namespace
+
 RunReport runAndRecord(Experiment& experiment, const RunOptions& options) {
   const std::string started = utcNow();
   const std::string& name = experiment.name();
+  RunLimits limits = experiment.limits();
+  if (options.max_steps >= 0) limits.steps = options.max_steps;
+  if (options.max_wall_time >= 0.0) limits.wall_time = options.max_wall_time;
+  experiment.setLimits(limits);
   RunReport report;
   report.experiment = name;
   const std::string dir = options.output_dir.empty() ? "out/" + name : options.output_dir;
   io::createDirectories(dir);
+  removeStaleOutputs(dir, name);
   const std::string csv_path = (fs::path(dir) / (name + ".csv")).string();
   report.summary_path = (fs::path(dir) / "summary.json").string();
 
-  io::CsvWriter csv(csv_path, sim::tableColumns(experiment.plant()));
-  sim::SimulationResult r;
   SummaryFields f;
+  sim::SimulationResult r;
   const auto wall_start = std::chrono::steady_clock::now();
-  try {
-    r = execute(
-        experiment, [&csv](const Eigen::VectorXd& row) { csv.writeRow(row); }, options.progress);
-  } catch (const SolverError& e) {
-    r.sim_time_s = e.time();
+  // Everything under temporary names first; renamed into place together at the end, the summary last. Any
+  // failure leaves only a summary saying why (the writers' destructors remove their temporary files).
+  auto failed = [&](const std::string& status, const std::string& reason, double at) {
     r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    f.status = report.status = "failed";
-    f.reason = e.what();
-    f.failed_at = e.time();
-    report.sim_time_s = e.time();
+    f = SummaryFields{};
+    f.status = report.status = status;
+    f.reason = reason;
+    f.failed_at = at;
+    report.sim_time_s = r.sim_time_s = at;
     report.wall_time_s = r.wall_time_s;
+    report.stats = r.stats;
     io::writeFileAtomically(report.summary_path, summaryJson(experiment, started, f, r));
-    throw;  // the CsvWriter's destructor removes the partial log
+  };
+  std::vector<std::unique_ptr<io::CsvWriter>> writers;
+  try {
+    writers.push_back(std::make_unique<io::CsvWriter>(csv_path, sim::tableColumns(experiment.plant())));
+    io::CsvWriter& csv = *writers.front();
+    r = execute(experiment, [&csv](const Eigen::VectorXd& row) { csv.writeRow(row); }, options.progress);
+    for (const ExtraTable& t : experiment.extraTables()) {
+      const std::string path = (fs::path(dir) / (name + "_" + t.suffix + ".csv")).string();
+      writers.push_back(std::make_unique<io::CsvWriter>(path, t.table.columns));
+      for (Eigen::Index k = 0; k < t.table.values.rows(); ++k) writers.back()->writeRow(t.table.values.row(k).transpose());
+      f.extra_files.push_back(path);
+    }
+    for (auto& w : writers) w->finish();
+    for (auto& w : writers) w->commit();
+  } catch (const sim::Interrupted& e) {
+    r = e.partial();
+    failed("interrupted", e.what(), e.time());
+    throw;
+  } catch (const sim::SimulationFailure& e) {
+    r = e.partial();
+    failed("failed", e.what(), e.time());
+    throw;
+  } catch (const SolverError& e) {
+    failed("failed", e.what(), e.time());
+    throw;
+  } catch (const InputError&) {
+    throw;  // bad input found while running (e.g. an output grid over its limit): nothing written
+  } catch (const std::exception& e) {
+    // Output errors after the simulation (a full disk): remove what was already renamed into place.
+    std::error_code ec;
+    for (auto& w : writers) fs::remove(w->path(), ec);
+    failed("failed", e.what(), r.sim_time_s);
+    throw;
   }
-  csv.commit();
   report.csv_path = f.csv = csv_path;
-  for (const ExtraTable& t : experiment.extraTables()) {
-    const std::string path = (fs::path(dir) / (name + "_" + t.suffix + ".csv")).string();
-    io::CsvWriter w(path, t.table.columns);
-    for (Eigen::Index k = 0; k < t.table.values.rows(); ++k) w.writeRow(t.table.values.row(k).transpose());
-    w.commit();
-    f.extra_files.push_back(path);
-  }
   f.status = report.status = "ok";
   report.stats = r.stats;
   report.sim_time_s = r.sim_time_s;

@@ -25,10 +25,8 @@ CsvWriter::CsvWriter(std::string path, const std::vector<std::string>& header)
 }
 
 CsvWriter::~CsvWriter() {
-  if (file_ != nullptr) {
-    std::fclose(file_);
-    std::remove(tmp_path_.c_str());
-  }
+  if (file_ != nullptr) std::fclose(file_);
+  if (!committed_) std::remove(tmp_path_.c_str());
 }
 
 void CsvWriter::writeRow(const Eigen::Ref<const Eigen::VectorXd>& row) {
@@ -39,20 +37,20 @@ void CsvWriter::writeRow(const Eigen::Ref<const Eigen::VectorXd>& row) {
   ++rows_;
 }
 
-void CsvWriter::commit() {
-  if (file_ == nullptr) throw Error(path_ + ": already committed");
+void CsvWriter::finish() {
+  if (file_ == nullptr) return;
   const bool ok = std::fflush(file_) == 0 && std::ferror(file_) == 0;
   const int close_rc = std::fclose(file_);
   file_ = nullptr;
-  if (!ok || close_rc != 0) {
-    std::remove(tmp_path_.c_str());
-    throw Error(path_ + ": writing failed: " + std::strerror(errno));
-  }
-  if (std::rename(tmp_path_.c_str(), path_.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp_path_.c_str());
-    throw Error(path_ + ": cannot move output into place: " + why);
-  }
+  if (!ok || close_rc != 0) throw Error(path_ + ": writing failed: " + std::strerror(errno));
+}
+
+void CsvWriter::commit() {
+  if (committed_) throw Error(path_ + ": already committed");
+  finish();
+  if (std::rename(tmp_path_.c_str(), path_.c_str()) != 0)
+    throw Error(path_ + ": cannot move output into place: " + std::strerror(errno));
+  committed_ = true;
 }
 
 void writeFileAtomically(const std::string& path, const std::string& content) {

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/text.hpp"
 
 namespace jointsim::sim {
@@ -23,6 +24,14 @@ void SimulateOptions::validate() const {
   if (rate == interval || !std::isfinite(output_rate) || !std::isfinite(output_interval))
     throw InputError("simulate: give exactly one output grid: output_rate > 0 Hz or output_interval > 0 s");
   if (max_events_per_output < 1) throw InputError("simulate: max_events_per_output: expected at least 1");
+  if (max_steps < 0 || max_rows < 0 || !(max_wall_time >= 0.0))
+    throw InputError("simulate: budgets (max_steps, max_wall_time, max_rows) must be >= 0 (0: none)");
+  // The number of rows, in floating point first: t_end·rate can be far beyond any integer type.
+  const double rows = output_rate > 0.0 ? std::ceil(t_end * output_rate - 1e-9) : std::ceil(t_end / output_interval);
+  if (!(rows < 9e15) || (max_rows > 0 && rows > static_cast<double>(max_rows)))
+    throw InputError("simulate: the output grid has " + formatNumber(rows, 6) + " rows over " + formatNumber(t_end) +
+                     " s, more than the limit of " + std::to_string(max_rows) +
+                     " rows (limits.log_rows; lower the log rate or raise the limit)");
 }
 
 SimulateOptions SimulateOptions::atRate(double t_end, double rate, const CvodeOptions& solver) {
@@ -57,15 +66,45 @@ std::vector<std::string> tableColumns(const Plant& plant) {
   return columns;
 }
 
+namespace {
+
+/// Thrown through CVODE from the right-hand side to stop the run (budget, interruption); simulate() reports the
+/// reason it recorded.
+struct StopRun {};
+
+}  // namespace
+
 SimulationResult simulate(Plant& plant, const SimulateOptions& options, const OutputSink& sink) {
   options.validate();
   CvodeOptions solver = options.solver;
   if (solver.component.empty()) solver.component = plant.name();
   const int n = plant.stateSize();
   const double t_end = options.t_end;
+  const auto wall_start = std::chrono::steady_clock::now();
+  auto wall = [&wall_start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(); };
+
+  // Why the run is being stopped from outside its physics: an interruption (requestStop) or the wall-clock
+  // budget. Checked after every advance() and, since one advance() may take many steps, in the right-hand side
+  // (the stop flag at every call, the clock every 256 calls).
+  std::string stop_flag, stop_message;
+  auto stopNow = [&]() {
+    if (const int sig = stopRequested()) {
+      stop_flag = "INTERRUPTED";
+      stop_message = "interrupted (signal " + std::to_string(sig) + ")";
+      return true;
+    }
+    if (options.max_wall_time > 0.0 && wall() > options.max_wall_time) {
+      stop_flag = "WALL_TIME_BUDGET";
+      stop_message = "more than its wall-clock budget of " + formatNumber(options.max_wall_time) + " s (limits.wall_time)";
+      return true;
+    }
+    return false;
+  };
+  long rhs_calls = 0;
   CvodeIntegrator integ(
       n,
-      [&plant](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+      [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+        if ((stopRequested() || (options.max_wall_time > 0.0 && (++rhs_calls & 255) == 0)) && stopNow()) throw StopRun{};
         plant.derivatives(t, y, yd);
       },
       solver);
@@ -89,7 +128,7 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
   auto sampleTime = [&](long k) { return Ts > 0.0 ? std::min(t_end, static_cast<double>(k) * Ts) : kInf; };
   double t_sample = sampleTime(sample_k);
 
-  // Output grid.
+  // Output grid (its row count is bounded by validate()).
   const bool by_rate = options.output_rate > 0.0;
   const long n_outputs = by_rate ? static_cast<long>(std::ceil(t_end * options.output_rate - 1e-9)) : 0;
   auto outputTime = [&](long k) {
@@ -114,56 +153,76 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
     const double stop = std::min(t_sample, breaks[next_break]);
     if (options.stop_at_end || stop < t_end) integ.setStopTime(stop);
   };
+  auto budgets = [&](double t) {
+    if (stopNow()) throw SolverError(solver.component + ": " + stop_message, t, stop_flag, solver.component);
+    if (options.max_steps > 0 && integ.stats().steps > options.max_steps)
+      throw SolverError(solver.component + ": more than " + std::to_string(options.max_steps) +
+                            " steps (limits.steps) at t = " + formatNumber(t) +
+                            " s; the run is too stiff or too long for its step budget",
+                        t, "STEP_BUDGET", solver.component);
+  };
 
-  const auto wall_start = std::chrono::steady_clock::now();
-  plant.start(0.0, y);
-  if (Ts > 0.0) ++result.samples;  // the plant's start includes the sample at t = 0
-  integ.initialize(0.0, y);
-  setStop();
-  emit(0.0);
   double t = 0.0;
-  for (long k = 1;; ++k) {
-    const double t_out = outputTime(k);
-    // An output due just after a sample (rounding of k / rate against k·T_s) is taken at the sample.
-    const double target = (t_out > t_sample && t_out <= t_sample + kSampleOutputTolerance) ? t_sample : t_out;
-    long events_here = 0;
-    while (t < target) {
-      t = integ.advance(std::min(target, std::min(t_sample, breaks[next_break])), y);
-      const bool root = integ.rootFound();
-      const bool at_break = t >= breaks[next_break] && next_break + 1 < breaks.size();
-      const bool at_sample = t >= t_sample && t < target && t_sample < t_end;
-      if (root || at_break) {
-        if (at_break) ++next_break;
-        plant.updateModes(t, y, root ? integ.rootDirections() : std::vector<int>{});
-        ++result.events;
-        if (++events_here > options.max_events_per_output)
-          throw SolverError(solver.component + ": more than " + std::to_string(options.max_events_per_output) +
-                                " events in one output interval (chattering) at t = " + std::to_string(t) + " s",
-                            t, "EVENT_CHATTERING", solver.component);
+  try {
+    plant.start(0.0, y);
+    if (Ts > 0.0) ++result.samples;  // the plant's start includes the sample at t = 0
+    integ.initialize(0.0, y);
+    setStop();
+    emit(0.0);
+    for (long k = 1;; ++k) {
+      const double t_out = outputTime(k);
+      // An output due just after a sample (rounding of k / rate against k·T_s) is taken at the sample.
+      const double target = (t_out > t_sample && t_out <= t_sample + kSampleOutputTolerance) ? t_sample : t_out;
+      long events_here = 0;
+      while (t < target) {
+        t = integ.advance(std::min(target, std::min(t_sample, breaks[next_break])), y);
+        budgets(t);
+        const bool root = integ.rootFound();
+        const bool at_break = t >= breaks[next_break] && next_break + 1 < breaks.size();
+        const bool at_sample = t >= t_sample && t < target && t_sample < t_end;
+        if (root || at_break) {
+          if (at_break) ++next_break;
+          plant.updateModes(t, y, root ? integ.rootDirections() : std::vector<int>{});
+          ++result.events;
+          if (++events_here > options.max_events_per_output)
+            throw SolverError(solver.component + ": more than " + std::to_string(options.max_events_per_output) +
+                                  " events in one output interval (chattering) at t = " + std::to_string(t) + " s",
+                              t, "EVENT_CHATTERING", solver.component);
+        }
+        if (at_sample) {
+          plant.sample(t, y);
+          ++result.samples;
+          t_sample = sampleTime(++sample_k);
+        }
+        if (root || at_break || at_sample) {
+          integ.initialize(t, y);
+          setStop();
+        }
       }
-      if (at_sample) {
+      emit(t);
+      const bool done = by_rate ? k >= n_outputs : t_out >= t_end;
+      if (done) break;
+      if (t >= t_sample && t_sample < t_end) {  // the output was due at a sample: update after it
         plant.sample(t, y);
         ++result.samples;
         t_sample = sampleTime(++sample_k);
-      }
-      if (root || at_break || at_sample) {
         integ.initialize(t, y);
         setStop();
       }
     }
-    emit(t);
-    const bool done = by_rate ? k >= n_outputs : t_out >= t_end;
-    if (done) break;
-    if (t >= t_sample && t_sample < t_end) {  // the output was due at a sample: update after it
-      plant.sample(t, y);
-      ++result.samples;
-      t_sample = sampleTime(++sample_k);
-      integ.initialize(t, y);
-      setStop();
-    }
+  } catch (const SolverError& e) {
+    // What the run had done; the reason of a stop from outside replaces CVODE's report of the aborted step.
+    result.stats = integ.stats();
+    result.sim_time_s = e.time();
+    result.wall_time_s = wall();
+    if (stop_flag.empty()) throw SimulationFailure(e, result);
+    const SolverError why(solver.component + ": " + stop_message + " at t = " + formatNumber(e.time()) + " s", e.time(),
+                          stop_flag, solver.component);
+    if (stop_flag == "INTERRUPTED") throw Interrupted(why, result, stopRequested());
+    throw SimulationFailure(why, result);
   }
   result.sim_time_s = t;
-  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  result.wall_time_s = wall();
   result.stats = integ.stats();
   return result;
 }

@@ -59,6 +59,7 @@ struct BatchResult {
   std::vector<BatchRecord> records;  ///< the runs of this shard, in sweep order
   int ok = 0, failed = 0, skipped = 0;
   double wall_time_s = 0.0;
+  int interrupted = 0;  ///< the signal that stopped the batch (SIGINT/SIGTERM, forwarded to its runs), 0 if none
 };
 
 /// Indices of the runs of shard `index` of `count`: index, index + count, ...

@@ -30,6 +30,14 @@
 
 namespace jointsim::experiments {
 
+/// Budgets of one run, from the experiment file's `limits: {steps, wall_time, log_rows}` block (0: none). A run
+/// over its step or wall-clock budget fails with a "failed" summary; a log grid over log_rows is an input error.
+struct RunLimits {
+  long steps = 50'000'000;     ///< internal solver steps over the whole run (~10–30 min of wall time)
+  double wall_time = 0.0;      ///< wall-clock time [s]
+  long log_rows = 10'000'000;  ///< rows of the log (~a few GB of CSV for a robot)
+};
+
 /// A table produced besides the log (e.g. one clamping curve per axis): written as `<name>_<suffix>.csv`.
 struct ExtraTable {
   std::string suffix;
@@ -57,6 +65,9 @@ class Experiment {
   const std::string& file() const { return file_; }  ///< the experiment file ("" when built in code)
   /// The experiment file's document as JSON (copied into the summary's parameters.config).
   const nlohmann::ordered_json& config() const;
+  /// Budgets of the run (from `limits:`; defaults otherwise).
+  const RunLimits& limits() const { return limits_; }
+  void setLimits(const RunLimits& limits) { limits_ = limits; }
   /// Every file read while loading (experiment, robot, drives, CSV inputs) with its content hash.
   const std::vector<io::InputFile>& inputs() const { return inputs_; }
   void setIdentity(std::string name, std::string type, std::string file);
@@ -67,6 +78,7 @@ class Experiment {
   std::string name_, type_, file_;
   std::shared_ptr<nlohmann::ordered_json> config_;
   std::vector<io::InputFile> inputs_;
+  RunLimits limits_;
 };
 
 /// An Experiment around one plant of type P that knows its own run settings (P::simulateOptions()).
@@ -91,11 +103,14 @@ struct RunOptions {
   /// Progress on stderr (simulated time, real-time factor, ETA) for runs longer than ~2 s; the CLI sets it
   /// when stderr is a terminal.
   bool progress = false;
+  /// Budgets that replace the file's (negative: keep the file's or the default).
+  long max_steps = -1;
+  double max_wall_time = -1.0;
 };
 
 struct RunReport {
   std::string experiment;         ///< experiment name
-  std::string status;             ///< "ok" or "failed"
+  std::string status;             ///< "ok", "failed" or "interrupted"
   std::string csv_path;           ///< log file written (empty when failed)
   std::string summary_path;       ///< summary.json written
   double sim_time_s = 0.0;        ///< simulated time [s]
@@ -120,8 +135,11 @@ std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::v
 /// Runs a loaded experiment in memory: nothing is written. SolverError on failure.
 ExperimentResult runInMemory(Experiment& experiment);
 /// Loads and runs an experiment file, writing the log, extra tables and summary.json (see the file comment).
-/// Bad input: InputError (nothing written). Solver failure: summary.json with status "failed" and the reason
-/// (no log), and the SolverError rethrown.
+/// Bad input: InputError (nothing written). Solver failure or a budget run out: summary.json with status
+/// "failed", the reason, the wall time and solver statistics so far (no log), and the sim::SimulationFailure
+/// rethrown. A stop request (SIGINT/SIGTERM): status "interrupted", sim::Interrupted rethrown. The run first
+/// removes its own earlier outputs from the folder (`<name>.csv`, `<name>_*.csv`, `summary.json` and temporary
+/// files of those), writes every output under a temporary name and renames them at the end, the summary last.
 RunReport runExperimentFile(const std::string& config_path, const RunOptions& options = {});
 /// Runs a loaded experiment and writes its outputs into `options.output_dir` (overrides and faults of
 /// `options` are ignored: they belong to loading).

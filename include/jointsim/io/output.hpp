@@ -22,7 +22,10 @@ class CsvWriter {
 
   /// Appends one row; its size must equal the number of columns.
   void writeRow(const Eigen::Ref<const Eigen::VectorXd>& row);
-  /// Flushes, closes and renames the temporary file to `path`. Throws jointsim::Error on I/O failure.
+  /// Flushes and closes the temporary file (it stays under its temporary name). Throws jointsim::Error on I/O
+  /// failure. Lets several outputs be complete before any of them is renamed into place.
+  void finish();
+  /// finish() if not done, then renames the temporary file to `path`. Throws jointsim::Error on I/O failure.
   void commit();
   size_t columns() const { return columns_; }
   size_t rows() const { return rows_; }
@@ -31,6 +34,7 @@ class CsvWriter {
  private:
   std::string path_, tmp_path_;
   std::FILE* file_ = nullptr;
+  bool committed_ = false;
   size_t columns_ = 0, rows_ = 0;
 };
 

@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 
+#include "jointsim/common/error.hpp"
 #include "jointsim/sim/cvode_integrator.hpp"
 #include "jointsim/sim/plant.hpp"
 
@@ -36,6 +37,11 @@ struct SimulateOptions {
   bool stop_at_end = true;
   /// More root/time events than this between two outputs is chattering: SolverError EVENT_CHATTERING.
   long max_events_per_output = 100000;
+  /// Budgets of one run (0: none): internal CVODE steps over all restarts (SolverError STEP_BUDGET), wall-clock
+  /// time [s] (WALL_TIME_BUDGET), output rows (InputError before the run starts: the grid is a setting).
+  long max_steps = 0;
+  double max_wall_time = 0.0;
+  long max_rows = 0;
   /// Throws InputError for a bad end time, grid or event budget.
   void validate() const;
 
@@ -57,12 +63,36 @@ struct SimulationResult {
   double realTimeFactor() const { return wall_time_s > 0.0 ? sim_time_s / wall_time_s : 0.0; }
 };
 
+/// A failed run: the SolverError (time, flag, component) plus what the run had done until then (statistics,
+/// wall time), so a failed summary can report them.
+class SimulationFailure : public SolverError {
+ public:
+  SimulationFailure(const SolverError& cause, const SimulationResult& partial)
+      : SolverError(cause.what(), cause.time(), cause.flag(), cause.component()), partial_(partial) {}
+  const SimulationResult& partial() const noexcept { return partial_; }
+
+ private:
+  SimulationResult partial_;
+};
+
+/// A run stopped by jointsim::requestStop (common/interrupt.hpp), e.g. on SIGINT or SIGTERM; flag "INTERRUPTED".
+class Interrupted : public SimulationFailure {
+ public:
+  Interrupted(const SolverError& cause, const SimulationResult& partial, int signal)
+      : SimulationFailure(cause, partial), signal_(signal) {}
+  int signal() const noexcept { return signal_; }  ///< the signal that asked for the stop (or -1)
+
+ private:
+  int signal_;
+};
+
 /// Receives one output row: [t, signals...] (size 1 + plant.signalNames().size()). May throw: the run stops.
 using OutputSink = std::function<void(const Eigen::VectorXd& row)>;
 
-/// Runs `plant` from its initialState() at t = 0 to options.t_end. Throws InputError for bad options,
-/// SolverError (with the simulated time, the CVODE flag and the plant's name) when the integration fails or
-/// events chatter.
+/// Runs `plant` from its initialState() at t = 0 to options.t_end. Throws InputError for bad options (also an
+/// output grid over max_rows), SimulationFailure (a SolverError with the simulated time, the flag and the plant's
+/// name, plus the statistics so far) when the integration fails, events chatter or a budget runs out, and
+/// Interrupted when jointsim::requestStop() was called.
 SimulationResult simulate(Plant& plant, const SimulateOptions& options, const OutputSink& sink);
 
 /// Time series of named signals, in memory (what `jointsim run` writes as CSV).
