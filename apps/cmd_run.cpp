@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include "cli_common.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/experiments/registry.hpp"
 
@@ -27,7 +28,8 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--set", opt->overrides, "Override a scalar of the experiment file: key.path=value (repeatable)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  cmd->add_option("--max-steps", opt->max_steps, "Budget of solver steps for the run (0: none; default: the file's limits.steps)");
+  cmd->add_option("--max-steps", opt->max_steps,
+                  "Budget of solver steps for the run (0: none; default: the file's limits.steps)");
   cmd->add_option("--max-wall-time", opt->max_wall_time,
                   "Budget of wall-clock time for the run [s] (0: none; default: the file's limits.wall_time)");
   cmd->callback([opt] {
@@ -42,6 +44,7 @@ void addRunCommand(CLI::App& app) {
                 "  solver: %ld steps, %ld RHS evaluations, %ld error-test failures\n",
                 r.experiment.c_str(), r.status.c_str(), r.csv_path.c_str(), r.summary_path.c_str(), r.sim_time_s,
                 r.wall_time_s, r.real_time_factor, r.stats.steps, r.stats.rhs_evals, r.stats.error_test_failures);
+    for (const auto& w : r.warnings) std::fprintf(stderr, "jointsim: warning: %s\n", printable(w, 2000).c_str());
   });
 }
 

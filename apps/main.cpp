@@ -4,12 +4,14 @@
 // (130 for SIGINT, 143 for SIGTERM: the run stops at its next step and leaves an "interrupted" summary).
 #include <csignal>
 #include <exception>
+#include <filesystem>
 #include <iostream>
+#include <new>
 
 #include "cli_common.hpp"
 #include "jointsim/common/error.hpp"
-#include "jointsim/common/text.hpp"
 #include "jointsim/common/interrupt.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/common/version.hpp"
 #include "jointsim/sim/simulate.hpp"
 
@@ -68,6 +70,16 @@ int main(int argc, char** argv) {
     return 3;
   } catch (const jointsim::Error& e) {
     std::cerr << "jointsim: failed: " << jointsim::printable(e.what(), kMaxMessage) << '\n';
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A path the user gave that the system refuses (too long, a file where a folder is expected, no permission).
+    std::cerr << "jointsim: error: " << jointsim::printable(e.path1().string(), kMaxMessage / 2) << ": "
+              << e.code().message()
+              << (e.path2().empty() ? std::string() : " (" + jointsim::printable(e.path2().string(), 200) + ")")
+              << '\n';
+    return 2;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "jointsim: failed: out of memory\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "jointsim: internal error: " << jointsim::printable(e.what(), kMaxMessage) << '\n';

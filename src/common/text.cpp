@@ -48,25 +48,43 @@ std::string safeFileName(const std::string& name) {
   return out;
 }
 
-std::string printable(const std::string& text, size_t max_length) {
-  std::string out;
-  size_t i = 0;
-  // Cut only at the start of a UTF-8 sequence (not before a continuation byte 10xxxxxx).
-  for (; i < text.size() && (out.size() < max_length || (static_cast<unsigned char>(text[i]) & 0xC0) == 0x80); ++i) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    if (c == '\n') out += "\\n";
-    else if (c == '\t') out += "\\t";
-    else if (c == '\r') out += "\\r";
-    else if (c < 0x20 || c == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02x", c);
-      out += buf;
-    } else {
-      out += static_cast<char>(c);
-    }
+namespace {
+void appendEscaped(std::string& out, unsigned char c) {
+  if (c == '\n')
+    out += "\\n";
+  else if (c == '\t')
+    out += "\\t";
+  else if (c == '\r')
+    out += "\\r";
+  else if (c < 0x20 || c == 0x7f) {
+    char buf[8];
+    std::snprintf(buf, sizeof buf, "\\x%02x", c);
+    out += buf;
+  } else {
+    out += static_cast<char>(c);
   }
-  if (i < text.size()) out += "... (" + std::to_string(text.size() - i) + " more bytes)";
-  return out;
+}
+bool continuationByte(char c) { return (static_cast<unsigned char>(c) & 0xC0) == 0x80; }
+}  // namespace
+
+std::string printable(const std::string& text, size_t max_length) {
+  // The head (two thirds of the budget) and the tail (one third): a message usually ends with its reason.
+  // Cuts fall only at the start of a UTF-8 sequence (not before a continuation byte 10xxxxxx).
+  const size_t head_budget = max_length - max_length / 3, tail_budget = max_length / 3;
+  std::string head;
+  size_t i = 0;
+  for (; i < text.size() && (head.size() < head_budget || continuationByte(text[i])); ++i)
+    appendEscaped(head, static_cast<unsigned char>(text[i]));
+  std::string tail_reversed;
+  size_t j = text.size();
+  for (; j > i && (tail_reversed.size() < tail_budget || continuationByte(text[j])); --j) {
+    std::string one;
+    appendEscaped(one, static_cast<unsigned char>(text[j - 1]));
+    tail_reversed.append(one.rbegin(), one.rend());
+  }
+  std::string tail(tail_reversed.rbegin(), tail_reversed.rend());
+  if (j == i) return head + tail;
+  return head + "... (" + std::to_string(j - i) + " bytes cut) ..." + tail;
 }
 
 std::string columnBaseName(const std::string& column) { return trim(splitColumn(trim(column)).first); }

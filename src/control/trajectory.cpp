@@ -44,6 +44,7 @@ void checkLimits(const JointTrajectory& trajectory, const std::vector<std::strin
                      std::to_string(joint_names.size()) + " joint names and " + std::to_string(limits.size()) +
                      " limits were given");
   const double T = std::max(0.0, trajectory.duration());
+  if (!std::isfinite(T)) throw InputError("the trajectory lasts " + num(T) + " s: expected a finite duration");
   const double step = std::max(1e-3, T / 1e7);
   std::vector<double> times;
   const auto count = static_cast<size_t>(std::floor(T / step));
@@ -98,6 +99,7 @@ PointToPointTrajectory::PointToPointTrajectory(Eigen::VectorXd start, std::vecto
     g.to = s.target;
     g.delta = g.to - g.from;
     const double D = g.delta.cwiseAbs().maxCoeff();
+    if (!std::isfinite(D)) throw InputError(where + "the move from the previous position is not a finite angle");
     if (s.duration > 0.0) {
       if (s.velocity != 0.0) throw InputError(where + "give either velocity (with acceleration) or duration, not both");
       const double T = s.duration;
@@ -132,6 +134,9 @@ PointToPointTrajectory::PointToPointTrajectory(Eigen::VectorXd start, std::vecto
       g.V = 1.0 / (g.ta + g.tc);
       g.A = g.V / g.ta;
     }
+    if (!std::isfinite(t + g.T + s.dwell) || !std::isfinite(g.V) || !std::isfinite(g.A))
+      throw InputError(where + "the move takes " + num(g.T) + " s with an acceleration phase of " + num(g.ta) +
+                       " s: velocity, acceleration or duration out of any usable range");
     t += g.T + s.dwell;
     from = g.to;
     starts_.push_back(g.t0);

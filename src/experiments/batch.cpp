@@ -72,13 +72,7 @@ systems::Fault readFault(const YamlValue& n) {
   return f;
 }
 
-std::string slurpFile(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  if (!in) return {};
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+std::string slurpFile(const fs::path& p) { return io::readBoundedFile(p.string()); }
 
 // What a run folder's summary.json says (read with nlohmann-json; a missing or unreadable one counts as absent).
 struct SummaryInfo {

@@ -42,6 +42,49 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   return o;
 }
 
+systems::JointLimitSettings readJointLimits(const YamlValue& node) {
+  systems::JointLimitSettings s;
+  if (!node.defined()) return s;
+  const char* const modes = "ignore, warn or stop";
+  const YamlValue mode = node.isMap() ? node["mode"] : node;
+  if (node.isMap()) {
+    node.allowKeys({"mode", "stiffness", "damping"});
+    if (!mode.defined()) node.fail(std::string("missing key 'mode' (") + modes + ")");
+  }
+  const std::string m = mode.asString(modes);
+  if (m == "ignore")
+    s.mode = systems::JointLimitMode::Ignore;
+  else if (m == "warn")
+    s.mode = systems::JointLimitMode::Warn;
+  else if (m == "stop")
+    s.mode = systems::JointLimitMode::Stop;
+  else
+    mode.failExpected(modes);
+  if (node.isMap()) {
+    s.stiffness = node["stiffness"].asDouble(s.stiffness, "an end-stop stiffness in N·m/rad");
+    s.damping = node["damping"].asDouble(s.damping, "an end-stop damping in N·m·s/rad");
+    if (!(s.stiffness > 0) || !std::isfinite(s.stiffness))
+      node["stiffness"].failExpected("a finite stiffness > 0 N·m/rad");
+    if (!(s.damping >= 0) || !std::isfinite(s.damping)) node["damping"].failExpected("a finite damping >= 0 N·m·s/rad");
+    if (s.mode != systems::JointLimitMode::Stop && (node["stiffness"].defined() || node["damping"].defined()))
+      node.fail("stiffness and damping belong to mode stop (the end stops)");
+  }
+  return s;
+}
+
+systems::JointLimitMonitor jointLimitMonitor(const multibody::Model& model, const sim::Plant& plant,
+                                             const systems::JointLimitSettings& settings) {
+  std::vector<int> columns;
+  const auto& names = plant.signalNames();
+  for (const auto& joint : model.joint_names) {
+    int column = -1;
+    for (size_t k = 0; k < names.size() && column < 0; ++k)
+      if (names[k].rfind("q_" + joint + "[", 0) == 0) column = static_cast<int>(k) + 1;  // time is column 0
+    columns.push_back(column);
+  }
+  return systems::JointLimitMonitor(model, std::move(columns), settings);
+}
+
 void readDurationAndLogRate(const YamlValue& root, double& duration, double& log_rate) {
   const YamlValue d = root.required("duration", "simulated time in s");
   duration = d.asDouble("a time in s");

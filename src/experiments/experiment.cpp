@@ -85,12 +85,25 @@ std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::v
 
 namespace {
 
-/// Runs the experiment, handing every row to `sink` and to the experiment's observer; progress on stderr.
-sim::SimulationResult execute(Experiment& e, const std::function<void(const Eigen::VectorXd&)>& sink, bool progress) {
+/// The run settings of an experiment with its budgets, checked; InputError naming the experiment file (an
+/// output grid beyond limits.log_rows, a bad budget).
+sim::SimulateOptions runOptions(Experiment& e) {
   sim::SimulateOptions options = e.simulateOptions();
   options.max_steps = e.limits().steps;
   options.max_wall_time = e.limits().wall_time;
   options.max_rows = e.limits().log_rows;
+  try {
+    options.validate();
+  } catch (const InputError& err) {
+    throw InputError((e.file().empty() ? "experiment '" + e.name() + "'" : e.file()) + ": " + err.what());
+  }
+  return options;
+}
+
+/// Runs the experiment, handing every row to `sink` and to the experiment's observer; progress on stderr.
+sim::SimulationResult execute(Experiment& e, const std::function<void(const Eigen::VectorXd&)>& sink, bool progress) {
+  const sim::SimulateOptions options = runOptions(e);
+  e.jointLimits().reset();
   // Progress (set by the CLI when stderr is a terminal): from 2 s of wall time on, at most 4 updates per second.
   const auto start = std::chrono::steady_clock::now();
   auto last = start;
@@ -98,6 +111,7 @@ sim::SimulationResult execute(Experiment& e, const std::function<void(const Eige
   const sim::SimulationResult r = sim::simulate(e.plant(), options, [&](const Eigen::VectorXd& row) {
     sink(row);
     e.observe(row);
+    e.jointLimits().observe(row);
     if (!progress) return;
     const auto now = std::chrono::steady_clock::now();
     const double wall = std::chrono::duration<double>(now - start).count();
@@ -139,6 +153,23 @@ std::string summaryJson(Experiment& e, const std::string& started, const Summary
   s["wall_time_s"] = r.wall_time_s;
   s["real_time_factor"] = r.realTimeFactor();
   solverStatsJson(s["solver_stats"], r.stats);
+  if (const systems::JointLimitMonitor& m = e.jointLimits(); m.enabled()) {
+    auto& j = s["joint_limits"] = nlohmann::ordered_json::object();
+    j["mode"] = systems::jointLimitModeName(m.settings().mode);
+    if (m.settings().mode == systems::JointLimitMode::Stop) {
+      j["stiffness"] = m.settings().stiffness;
+      j["damping"] = m.settings().damping;
+    }
+    auto& list = j["violations"] = nlohmann::ordered_json::array();
+    for (const auto& v : m.violations())
+      list.push_back({{"joint", v.joint},
+                      {"lower", v.lower},
+                      {"upper", v.upper},
+                      {"first_time_s", v.first_time},
+                      {"max_excursion", v.max_excursion},
+                      {"max_time_s", v.max_time},
+                      {"max_position", v.max_position}});
+  }
   s["csv"] = f.csv;
   if (!f.extra_files.empty()) s["extra_csv"] = f.extra_files;
   s["columns"] = sim::tableColumns(e.plant());
@@ -178,8 +209,8 @@ void removeStaleOutputs(const std::string& dir, const std::string& name) {
     const bool ours = f == "summary.json" || f == name + ".csv" ||
                       (f.rfind(name + "_", 0) == 0 && f.size() > 4 && f.compare(f.size() - 4, 4, ".csv") == 0);
     const size_t tmp = f.find(".tmp.");
-    const bool our_tmp = tmp != std::string::npos &&
-                         (f.rfind("summary.json", 0) == 0 || f.rfind(name + ".csv", 0) == 0 || f.rfind(name + "_", 0) == 0);
+    const bool our_tmp = tmp != std::string::npos && (f.rfind("summary.json", 0) == 0 ||
+                                                      f.rfind(name + ".csv", 0) == 0 || f.rfind(name + "_", 0) == 0);
     if ((ours || our_tmp) && entry.is_regular_file(ec)) fs::remove(entry.path(), ec);
   }
 }
@@ -193,6 +224,7 @@ RunReport runAndRecord(Experiment& experiment, const RunOptions& options) {
   if (options.max_steps >= 0) limits.steps = options.max_steps;
   if (options.max_wall_time >= 0.0) limits.wall_time = options.max_wall_time;
   experiment.setLimits(limits);
+  runOptions(experiment);  // bad settings: InputError before anything is touched
   RunReport report;
   report.experiment = name;
   const std::string dir = options.output_dir.empty() ? "out/" + name : options.output_dir;
@@ -221,11 +253,13 @@ RunReport runAndRecord(Experiment& experiment, const RunOptions& options) {
   try {
     writers.push_back(std::make_unique<io::CsvWriter>(csv_path, sim::tableColumns(experiment.plant())));
     io::CsvWriter& csv = *writers.front();
-    r = execute(experiment, [&csv](const Eigen::VectorXd& row) { csv.writeRow(row); }, options.progress);
+    r = execute(
+        experiment, [&csv](const Eigen::VectorXd& row) { csv.writeRow(row); }, options.progress);
     for (const ExtraTable& t : experiment.extraTables()) {
       const std::string path = (fs::path(dir) / (name + "_" + t.suffix + ".csv")).string();
       writers.push_back(std::make_unique<io::CsvWriter>(path, t.table.columns));
-      for (Eigen::Index k = 0; k < t.table.values.rows(); ++k) writers.back()->writeRow(t.table.values.row(k).transpose());
+      for (Eigen::Index k = 0; k < t.table.values.rows(); ++k)
+        writers.back()->writeRow(t.table.values.row(k).transpose());
       f.extra_files.push_back(path);
     }
     for (auto& w : writers) w->finish();
@@ -256,6 +290,8 @@ RunReport runAndRecord(Experiment& experiment, const RunOptions& options) {
   report.sim_time_s = r.sim_time_s;
   report.wall_time_s = r.wall_time_s;
   report.real_time_factor = r.realTimeFactor();
+  if (experiment.jointLimits().settings().mode == systems::JointLimitMode::Warn)
+    report.warnings = experiment.jointLimits().describe();
   io::writeFileAtomically(report.summary_path, summaryJson(experiment, started, f, r));
   return report;
 }

@@ -17,6 +17,7 @@
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/transmissions.hpp"
 #include "jointsim/systems/joint_rig.hpp"
+#include "quiet_ceres.hpp"
 
 namespace jointsim::identify {
 
@@ -113,6 +114,7 @@ void ClampingFitOptions::validate() const {
 }
 
 ClampingFitResult identifyClamping(const ClampingData& data, const ClampingFitOptions& o) {
+  const QuietCeres quiet;
   o.validate();
   ClampingFitResult r;
   r.curves = preprocessClampingCurve(data, o.curve);

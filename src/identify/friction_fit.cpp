@@ -15,6 +15,7 @@
 
 #include "jointsim/common/error.hpp"
 #include "jointsim/io/csv_reader.hpp"
+#include "quiet_ceres.hpp"
 
 namespace jointsim::identify {
 namespace {
@@ -322,6 +323,7 @@ double FrictionFit::map(double v) const {
 
 FrictionFit fitFrictionMap(const std::vector<double>& velocity, const std::vector<double>& torque,
                            const FrictionFitOptions& options) {
+  const QuietCeres quiet;
   const auto t0 = std::chrono::steady_clock::now();
   options.validate();
   if (velocity.size() != torque.size())

@@ -14,13 +14,23 @@ namespace jointsim::io {
 namespace {
 thread_local InputRecord* g_innermost = nullptr;
 
-bool readAll(const std::string& path, std::string& out) {
+/// Reads a regular file of at most kMaxInputFileBytes; "" on success, else why not. A FIFO, a device
+/// (/dev/zero, /dev/stdin) or a folder is refused: reading it could block or never end.
+std::string readAll(const std::string& path, std::string& out) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) return "cannot open";
+  if (!std::filesystem::is_regular_file(status)) return "not a regular file: cannot read";
   std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  out = ss.str();
-  return !in.bad();
+  if (!in) return "cannot open";
+  out.clear();
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    if (out.size() + static_cast<size_t>(in.gcount()) > kMaxInputFileBytes)
+      return "larger than " + std::to_string(kMaxInputFileBytes >> 20) + " MiB: cannot read";
+    out.append(buf, static_cast<size_t>(in.gcount()));
+  }
+  return in.bad() ? "cannot read" : "";
 }
 }  // namespace
 
@@ -31,16 +41,21 @@ std::string contentHash(const std::string& bytes) {
   return buf;
 }
 
+std::string readBoundedFile(const std::string& path) {
+  std::string bytes;
+  return readAll(path, bytes).empty() ? bytes : std::string();
+}
+
 std::string fileHash(const std::string& path) {
   std::string bytes;
-  return readAll(path, bytes) ? contentHash(bytes) : std::string();
+  return readAll(path, bytes).empty() ? contentHash(bytes) : std::string();
 }
 
 std::string readInputFile(const std::string& path, const std::string& what) {
   std::string bytes;
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec) || !readAll(path, bytes))
-    throw InputError(path + ": cannot open " + what + " for reading");
+  if (const std::string why = readAll(path, bytes); !why.empty())
+    throw InputError(path + ": " + why + " " + what + (why == "cannot open" ? " for reading" : ""));
   if (g_innermost) {
     InputFile f;
     f.path = std::filesystem::absolute(path, ec).lexically_normal().string();

@@ -71,7 +71,7 @@ void writeFileAtomically(const std::string& path, const std::string& content) {
 void createDirectories(const std::string& path) {
   std::error_code ec;
   std::filesystem::create_directories(path, ec);
-  if (ec) throw Error(path + ": cannot create output directory: " + ec.message());
+  if (ec) throw InputError(path + ": cannot create output directory: " + ec.message());
 }
 
 }  // namespace jointsim::io

@@ -144,6 +144,8 @@ const ModelBuilder::LinkRecord* ModelBuilder::findLink(const std::string& name) 
 ModelBuilder& ModelBuilder::addLink(const std::string& parent_link, const JointSpec& joint,
                                     const std::string& child_name, const BodyInertia& inertia) {
   const std::string where = "robot '" + model_.name + "', joint '" + joint.name + "'";
+  if (links_.size() >= kMaxLinks)
+    throw InputError(where + ": more than " + std::to_string(kMaxLinks) + " links: not a robot this library models");
   const LinkRecord* parent = findLink(parent_link);
   if (parent == nullptr) throw InputError(where + ": parent link '" + parent_link + "' is not defined (yet)");
   if (findLink(child_name) != nullptr || model_.hasFrame(child_name))
@@ -155,6 +157,10 @@ ModelBuilder& ModelBuilder::addLink(const std::string& parent_link, const JointS
   if (!(joint.armature >= 0.0) || !std::isfinite(joint.armature))
     throw InputError(where + ": armature must be a finite number >= 0");
   if (!joint.origin.R.allFinite() || !joint.origin.p.allFinite()) throw InputError(where + ": origin must be finite");
+  if (!(joint.limits.lower <= joint.limits.upper) || std::isnan(joint.limits.velocity) ||
+      std::isnan(joint.limits.effort))
+    throw InputError(where + ": limits: expected lower <= upper (got [" + std::to_string(joint.limits.lower) + ", " +
+                     std::to_string(joint.limits.upper) + "]) and no NaN");
 
   const Placement parent_placement = parent->placement;  // parent link in its joint frame
   const int parent_joint = parent->joint;

@@ -1,6 +1,9 @@
 #include "jointsim/multibody/robot_loader.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -57,8 +60,18 @@ BodyInertia fromUrdfInertial(const urdf::Link& link) {
   return I;
 }
 
-void addUrdfSubtree(const urdf::Link& link, const std::string& file, ModelBuilder& builder) {
-  for (const auto& joint : link.child_joints) {
+/// Adds the links below `top`, depth first in document order, with an explicit stack (a chain of links as
+/// long as ModelBuilder accepts must not exhaust the call stack).
+void addUrdfSubtree(const urdf::Link& top, const std::string& file, ModelBuilder& builder) {
+  std::vector<std::pair<const urdf::Link*, size_t>> stack{{&top, 0}};
+  while (!stack.empty()) {
+    auto& [link_ptr, next] = stack.back();
+    const urdf::Link& link = *link_ptr;
+    if (next == link.child_joints.size()) {
+      stack.pop_back();
+      continue;
+    }
+    const auto& joint = link.child_joints[next++];
     const std::string where = file + ": joint '" + joint->name + "'";
     JointSpec spec;
     spec.name = joint->name;
@@ -73,7 +86,8 @@ void addUrdfSubtree(const urdf::Link& link, const std::string& file, ModelBuilde
     spec.origin = fromUrdfPose(joint->parent_to_joint_origin_transform);
     spec.axis = {joint->axis.x, joint->axis.y, joint->axis.z};
     if (joint->limits) {
-      if (joint->type != urdf::Joint::CONTINUOUS) {
+      // lower == upper (both 0 when the attributes are left out) means no position limits, as in MuJoCo.
+      if (joint->type != urdf::Joint::CONTINUOUS && joint->limits->lower != joint->limits->upper) {
         spec.limits.lower = joint->limits->lower;
         spec.limits.upper = joint->limits->upper;
       }
@@ -92,8 +106,74 @@ void addUrdfSubtree(const urdf::Link& link, const std::string& file, ModelBuilde
     } catch (const InputError& e) {
       throw InputError(file + ": " + e.what());
     }
-    addUrdfSubtree(*child_link, file, builder);
+    stack.emplace_back(child_link.get(), 0);
   }
+}
+
+/// Rejects XML that would make a recursive parser (TinyXML, inside urdfdom) exhaust the stack or build an
+/// oversized tree: elements nested deeper than `kMaxDepth`, or more <link>/<joint> elements than a model
+/// may have. A plain scan of tags (comments, CDATA, processing instructions, declarations and quoted
+/// attribute values skipped); the XML parser reports every other error.
+void checkXmlShape(const std::string& xml, const std::string& name) {
+  constexpr int kMaxDepth = 100;
+  int depth = 0;
+  size_t links = 0, joints = 0, line = 1;
+  auto skipTo = [&](size_t from, const char* end) {
+    const size_t at = xml.find(end, from);
+    const size_t stop = at == std::string::npos ? xml.size() : at + std::strlen(end);
+    line += static_cast<size_t>(std::count(xml.begin() + static_cast<std::ptrdiff_t>(from),
+                                           xml.begin() + static_cast<std::ptrdiff_t>(stop), '\n'));
+    return stop;
+  };
+  for (size_t i = 0; i < xml.size();) {
+    if (xml[i] == '\n') ++line;
+    if (xml[i] != '<') {
+      ++i;
+      continue;
+    }
+    if (xml.compare(i, 4, "<!--") == 0) {
+      i = skipTo(i, "-->");
+    } else if (xml.compare(i, 9, "<![CDATA[") == 0) {
+      i = skipTo(i, "]]>");
+    } else if (xml.compare(i, 2, "<?") == 0) {
+      i = skipTo(i, "?>");
+    } else if (xml.compare(i, 2, "<!") == 0) {
+      i = skipTo(i, ">");
+    } else if (xml.compare(i, 2, "</") == 0) {
+      depth = std::max(0, depth - 1);
+      i = skipTo(i, ">");
+    } else {
+      size_t j = i + 1;
+      while (j < xml.size() && (std::isalnum(static_cast<unsigned char>(xml[j])) || xml[j] == '_' || xml[j] == ':' ||
+                                xml[j] == '-' || xml[j] == '.'))
+        ++j;
+      const std::string tag = xml.substr(i + 1, j - i - 1);
+      links += tag == "link";
+      joints += tag == "joint";
+      // The end of the tag: '>' outside quoted attribute values; "/>" closes an empty element.
+      char quote = 0;
+      bool empty = false;
+      for (; j < xml.size(); ++j) {
+        const char c = xml[j];
+        if (c == '\n') ++line;
+        if (quote != 0) {
+          if (c == quote) quote = 0;
+        } else if (c == '"' || c == '\'') {
+          quote = c;
+        } else if (c == '>') {
+          empty = xml[j - 1] == '/';
+          break;
+        }
+      }
+      i = j + 1;
+      if (!empty && ++depth > kMaxDepth)
+        throw InputError(name + ":" + std::to_string(line) + ": elements nested deeper than " +
+                         std::to_string(kMaxDepth) + " levels: not a URDF");
+    }
+  }
+  if (links > ModelBuilder::kMaxLinks || joints > ModelBuilder::kMaxLinks)
+    throw InputError(name + ": " + std::to_string(links) + " <link> and " + std::to_string(joints) +
+                     " <joint> elements: a robot has at most " + std::to_string(ModelBuilder::kMaxLinks) + " links");
 }
 
 // ----------------------------------------------------------------------------------------- YAML
@@ -333,6 +413,7 @@ bool endsWith(const std::string& s, const std::string& suffix) {
 }  // namespace
 
 Model loadUrdfString(const std::string& xml, const std::string& name) {
+  checkXmlShape(xml, name);
   ScopedOutputCapture capture;
   const urdf::ModelInterfaceSharedPtr urdf_model = urdf::parseURDF(xml);
   if (!urdf_model) {

@@ -21,6 +21,13 @@ std::string quote(const std::string& s) {
   return out + "'";
 }
 
+std::string comment(const std::string& s) {
+  std::string out = s;
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
+  return out;
+}
+
 std::string num(double x) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.10g", x);

@@ -37,6 +37,8 @@ struct Figure {
 /// gnuplot single-quoted string literal: '' for ', and every control character (newline included) as a blank,
 /// so no text from a file can end the string or the command.
 std::string quote(const std::string& s);
+/// Text for a `#` comment line: every control character as a blank, so the comment cannot end early.
+std::string comment(const std::string& s);
 /// A number for a script (%.10g).
 std::string num(double x);
 /// The smallest of 1, 2, 5 × 10^n that is at least x > 0.

@@ -30,6 +30,7 @@
 #include "jointsim/common/text.hpp"
 #include "jointsim/experiments/registry.hpp"
 #include "jointsim/io/csv_reader.hpp"
+#include "jointsim/io/input_files.hpp"
 #include "jointsim/io/output.hpp"
 #include "report/gnuplot.hpp"
 
@@ -45,12 +46,8 @@ using gp::Panel;
 using gp::quote;
 using gp::Series;
 
-std::string readTextFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+/// A regular file's bytes (bounded; empty when unreadable, e.g. a FIFO planted as summary.json).
+std::string readTextFile(const std::string& path) { return io::readBoundedFile(path); }
 
 // ------------------------------------------------------------------------------------------------ run folders
 
@@ -96,8 +93,10 @@ LoadedRun loadRun(const std::string& run_dir) {
   // The name becomes the stem of every figure file and part of gnuplot titles: a hand-edited summary must not
   // steer outputs elsewhere.
   if (!isSafeName(d.experiment))
-    throw InputError(summary_path + ": experiment: expected a name of letters, digits, '.', '-', '_' (it names the "
-                     "figure files), got '" + printable(d.experiment, 80) + "'");
+    throw InputError(summary_path +
+                     ": experiment: expected a name of letters, digits, '.', '-', '_' (it names the "
+                     "figure files), got '" +
+                     printable(d.experiment, 80) + "'");
   const io::CsvTable table = io::readCsv(run.csv, false);
   d.data = table.data;
   for (const auto& h : table.header) {
@@ -144,8 +143,10 @@ std::vector<ManifestRow> readManifest(const std::string& path) {
   for (size_t k = 0; k < t.rows.size(); ++k) {
     const auto& cells = t.rows[k];
     if (!isSafeName(cells[0]))
-      throw InputError(path + ":" + std::to_string(t.lines[k]) + ": run: expected a run name of letters, digits, '.', '-', "
-                       "'_', got '" + printable(cells[0], 80) + "'");
+      throw InputError(path + ":" + std::to_string(t.lines[k]) +
+                       ": run: expected a run name of letters, digits, '.', '-', "
+                       "'_', got '" +
+                       printable(cells[0], 80) + "'");
     ManifestRow r;
     r.run = cells[0];
     r.status = cells[1];
@@ -188,7 +189,7 @@ std::optional<experiments::KeySignal> keySignal(const experiments::RunData& run)
 /// Datablock-safe run name (the datablock is comma-separated).
 std::string cellText(std::string s) {
   for (char& c : s)
-    if (c == ',' || c == '"' || c == '\n') c = ' ';
+    if (c == ',' || c == '"' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
   return "\"" + s + "\"";
 }
 
@@ -354,7 +355,7 @@ std::string findGnuplot(const std::string& requested) {
                    (requested.empty() ? std::string() : " (looked for '" + requested + "')"));
 }
 
-std::vector<std::string> plotRun(const std::string& run_dir, const std::string& fig_dir, const PlotOptions& options) {
+PlotScript plotScript(const std::string& run_dir, const std::string& fig_dir, const PlotOptions& options) {
   if (options.width < 200 || options.height < 150 || options.width > 10000 || options.height > 10000)
     throw InputError("plot size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
                      " pixels: expected a width of 200 to 10000 and a height of 150 to 10000");
@@ -365,29 +366,28 @@ std::vector<std::string> plotRun(const std::string& run_dir, const std::string& 
   if (!is_run && !is_sweep)
     throw InputError(run_dir + ": neither a run folder (summary.json and the CSV log of `jointsim run`) nor a sweep "
                                "folder (manifest.csv of `jointsim batch`)");
-  const std::string gnuplot = findGnuplot(options.gnuplot);
 
   // What to draw.
   std::vector<Figure> figures;
   std::vector<LoadedRun> sources;
   std::map<std::string, std::string> blocks;
-  std::string name;
+  PlotScript result;
   if (is_run) {
     LoadedRun run = loadRun(dir.string());
     run.var = "csv";
     figures = runFigures(run, blocks);
-    name = run.data.experiment;
+    result.name = run.data.experiment;
     sources.push_back(std::move(run));
   } else {
     SweepPlan plan = sweepFigures(dir.string());
     figures = std::move(plan.figures);
     sources = std::move(plan.runs);
     blocks = std::move(plan.blocks);
-    name = "sweep";
+    result.name = "sweep";
   }
 
   const fs::path out_dir = fig_dir.empty() ? dir / "figures" : fs::absolute(fig_dir).lexically_normal();
-  io::createDirectories(out_dir.string());
+  result.fig_dir = out_dir.string();
 
   // The script: data paths and blocks, then every figure as PNG (and SVG).
   const double font_scale = std::max(0.7, std::min(options.width / 1400.0, options.height / 900.0));
@@ -397,23 +397,34 @@ std::vector<std::string> plotRun(const std::string& run_dir, const std::string& 
       "set terminal pngcairo " + size + " noenhanced " + font + " linewidth 1 background rgb 'white'";
   const std::string svg = "set terminal svg " + size + " noenhanced " + font + " linewidth 1 background rgb 'white'";
   std::ostringstream body;
-  body << "# Figures of " << dir.string() << ", written by `jointsim plot` (docs/plots.md).\n"
+  body << "# Figures of " << gp::comment(dir.string()) << ", written by `jointsim plot` (docs/plots.md).\n"
        << "# Rerun with: gnuplot THIS_FILE (figures are written to their final names)\n";
   for (const auto& r : sources) body << r.var << " = " << quote(r.csv) << "\n";
   for (const auto& [block_name, text] : blocks) body << block_name << " << EOD\n" << text << "EOD\n";
   body << gp::kLineTypes;
-  std::vector<std::string> finals;
   for (const auto& f : figures) {
     const std::string path = (out_dir / (f.stem + ".png")).string();
     body << gp::renderFigure(f, png, path, font_scale);
-    finals.push_back(path);
+    result.figures.push_back(path);
   }
   if (options.svg)
     for (const auto& f : figures) {
       const std::string path = (out_dir / (f.stem + ".svg")).string();
       body << gp::renderFigure(f, svg, path, font_scale);
-      finals.push_back(path);
+      result.figures.push_back(path);
     }
+  result.body = body.str();
+  return result;
+}
+
+std::vector<std::string> plotRun(const std::string& run_dir, const std::string& fig_dir, const PlotOptions& options) {
+  const std::string gnuplot = findGnuplot(options.gnuplot);
+  const PlotScript plan = plotScript(run_dir, fig_dir, options);
+  const fs::path out_dir = plan.fig_dir;
+  const std::string& dir = run_dir;
+  const std::vector<std::string>& finals = plan.figures;
+  const std::string& name = plan.name;
+  io::createDirectories(out_dir.string());
 
   // Run gnuplot on a temporary copy whose outputs carry a temporary suffix; rename them when it succeeded.
   const std::string suffix = ".tmp." + std::to_string(static_cast<long>(::getpid()));
@@ -422,14 +433,14 @@ std::vector<std::string> plotRun(const std::string& run_dir, const std::string& 
   Cleanup cleanup;
   cleanup.paths = {script, errors};
   for (const auto& f : finals) cleanup.paths.push_back(f + suffix);
-  io::writeFileAtomically(script, "outsuffix = " + quote(suffix) + "\n" + body.str());
+  io::writeFileAtomically(script, "outsuffix = " + quote(suffix) + "\n" + plan.body);
   const int status = runProcess(gnuplot, {script}, errors);
   if (status != 0) {
     std::string err = readTextFile(errors);
     while (!err.empty() && std::isspace(static_cast<unsigned char>(err.back()))) err.pop_back();
     if (err.size() > 4000) err = "..." + err.substr(err.size() - 4000);
     throw Error("gnuplot (" + gnuplot + ") failed with exit status " + std::to_string(status) +
-                " drawing the figures of " + dir.string() + (err.empty() ? std::string() : ":\n" + err));
+                " drawing the figures of " + dir + (err.empty() ? std::string() : ":\n" + err));
   }
   for (const auto& f : finals) {
     if (!fs::is_regular_file(f + suffix)) throw Error(f + ": gnuplot did not write this figure");
@@ -439,7 +450,7 @@ std::vector<std::string> plotRun(const std::string& run_dir, const std::string& 
   std::vector<std::string> written = finals;
   if (options.keep_script) {
     const std::string path = (out_dir / (name + "_plots.gp")).string();
-    io::writeFileAtomically(path, "outsuffix = ''\n" + body.str());
+    io::writeFileAtomically(path, "outsuffix = ''\n" + plan.body);
     written.push_back(path);
   }
   return written;

@@ -33,6 +33,7 @@ void PassiveRobotParams::validate(const Model& model) const {
     check::nonNegative(c, "joint_damping[" + std::to_string(i) + "]", damping[i], "N·m·s/rad");
   check::positive(c, "duration", duration, "s");
   check::positive(c, "log_rate", log_rate, "Hz");
+  joint_limits.validate();
 }
 
 PassiveRobot::PassiveRobot(Model model, PassiveRobotParams params)
@@ -41,6 +42,8 @@ PassiveRobot::PassiveRobot(Model model, PassiveRobotParams params)
   const Eigen::Index n = model_.nq;
   damping_ = p_.damping.size() ? p_.damping : Eigen::VectorXd::Zero(n);
   tau_.setZero(n);
+  tau_stop_.setZero(n);
+  stops_ = EndStops(model_, p_.joint_limits);
   tip_ = model_.frameIndex(model_.tip_frame);
   auto unit = [&](size_t i, const char* rev, const char* pri) {
     return model_.joint_types[i] == multibody::JointType::Revolute ? rev : pri;
@@ -51,6 +54,12 @@ PassiveRobot::PassiveRobot(Model model, PassiveRobotParams params)
     signals_.push_back("qd_" + model_.joint_names[i] + "[" + unit(i, "rad/s", "m/s") + "]");
   for (const char* c : {"kinetic_energy[J]", "potential_energy[J]", "total_energy[J]"}) signals_.emplace_back(c);
   for (const char* axis : {"x", "y", "z"}) signals_.push_back("tip_" + std::string(axis) + "[m]");
+  if (stops_.active()) {
+    signals_.emplace_back("end_stop_energy[J]");
+    for (int i : stops_.joints())
+      signals_.push_back("end_stop_torque_" + model_.joint_names[static_cast<size_t>(i)] + "[" +
+                         unit(static_cast<size_t>(i), "N·m", "N") + "]");
+  }
 }
 
 std::string PassiveRobot::name() const { return "multibody (" + model_.name + ")"; }
@@ -74,6 +83,10 @@ void PassiveRobot::derivatives(double, const Eigen::Ref<const Eigen::VectorXd>& 
                                Eigen::Ref<Eigen::VectorXd> ydot) const {
   const Eigen::Index n = model_.nq;
   tau_.noalias() = -damping_.cwiseProduct(y.tail(n));
+  if (stops_.active()) {
+    stops_.torques(y.head(n), y.tail(n), tau_stop_);
+    tau_ += tau_stop_;
+  }
   ydot.head(n) = y.tail(n);
   ydot.tail(n) = multibody::aba(model_, data_, y.head(n), y.tail(n), tau_);
 }
@@ -82,11 +95,22 @@ void PassiveRobot::signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, E
   const Eigen::Index n = model_.nq;
   const double T = multibody::kineticEnergy(model_, log_data_, y.head(n), y.tail(n));
   const double V = multibody::potentialEnergy(model_, log_data_, y.head(n));  // also updates oMf
+  const double E_stop = stops_.energy(y.head(n));
   out.head(2 * n) = y;
   out[2 * n] = T;
   out[2 * n + 1] = V;
-  out[2 * n + 2] = T + V;
-  out.tail(3) = log_data_.oMf[static_cast<size_t>(tip_)].p;
+  out[2 * n + 2] = T + V + E_stop;
+  out.segment(2 * n + 3, 3) = log_data_.oMf[static_cast<size_t>(tip_)].p;
+  if (stops_.active()) {
+    out[2 * n + 6] = E_stop;
+    stops_.torques(y.head(n), y.tail(n), tau_stop_);
+    Eigen::Index c = 2 * n + 7;
+    for (int i : stops_.joints()) out[c++] = tau_stop_[i];
+  }
+}
+
+void PassiveRobot::roots(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
+  stops_.roots(y.head(model_.nq), g.data());
 }
 
 }  // namespace jointsim::systems

@@ -23,7 +23,7 @@ double quantise(double x, double quantum) { return quantum > 0.0 ? quantum * std
 
 void RobotSignals::resize(int n) {
   for (Eigen::VectorXd* v : {&q_set, &qd_set, &qdd_set, &q_fb, &qm, &qdm, &current, &i_ref, &u, &voltage, &tau_motor,
-                             &tau_gear, &tau_friction, &tau_joint, &qdd})
+                             &tau_gear, &tau_friction, &tau_joint, &tau_stop, &qdd})
     v->setZero(n);
 }
 
@@ -136,6 +136,18 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
     for (const auto& c : per_joint) signal_names_.push_back(std::string(c[0]) + "_" + name + "[" + c[1] + "]");
   for (const char* c : {"tcp_x[m]", "tcp_y[m]", "tcp_z[m]", "tcp_roll[rad]", "tcp_pitch[rad]", "tcp_yaw[rad]"})
     signal_names_.emplace_back(c);
+}
+
+void RobotSystem::setJointLimits(const JointLimitSettings& settings) {
+  signal_names_.resize(signal_names_.size() - stops_.joints().size());  // the signals of earlier stops
+  stops_ = EndStops(model_, settings);
+  sig_.tau_stop.setZero();
+  for (int i : stops_.joints())
+    signal_names_.push_back("end_stop_torque_" + model_.joint_names[static_cast<size_t>(i)] + "[N·m]");
+}
+
+void RobotSystem::roots(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
+  stops_.roots(y.head(model_.nq), g.data());
 }
 
 void RobotSystem::setSetpoints(SetpointFunction f) {
@@ -417,6 +429,10 @@ void RobotSystem::multibodyStage(double t, const Eigen::Ref<const Eigen::VectorX
   const int n = model_.nq;
   const auto q = y.head(n);
   const auto qd = y.segment(n, n);
+  if (stops_.active()) {  // end stops act on the joints beside the drives
+    stops_.torques(q, qd, sig_.tau_stop);
+    tau_ += sig_.tau_stop;
+  }
   const multibody::Matrix6Xd* fext = nullptr;
   if (wrenches_) {
     multibody::forwardKinematics(model_, data_, q);
@@ -508,6 +524,7 @@ void RobotSystem::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, 
   out[c++] = roll;
   out[c++] = pitch;
   out[c++] = yaw;
+  for (int i : stops_.joints()) out[c++] = s.tau_stop[i];
 }
 
 double RobotSystem::mechanicalEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) const {
@@ -516,6 +533,7 @@ double RobotSystem::mechanicalEnergy(const Eigen::Ref<const Eigen::VectorXd>& y)
   const auto qd = y.segment(n, n);
   double E = multibody::kineticEnergy(model_, data_, q, qd) + multibody::potentialEnergy(model_, data_, q);
   if (crba_path_) E += 0.5 * qd.dot(reflected_ * qd);
+  E += stops_.energy(q);
   const Eigen::VectorXd phi = Ginv_ * q, phid = Ginv_ * qd;
   for (int k = 0; k < n; ++k) {
     const DriveLayout& L = layout_[static_cast<size_t>(k)];

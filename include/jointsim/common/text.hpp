@@ -32,8 +32,9 @@ bool isSafeName(const std::string& name);
 /// `name` with every character outside the safe set replaced by '_' (and a leading '.' or '-' too), cut to 128
 /// characters; "_" for an empty name.
 std::string safeFileName(const std::string& name);
-/// Text for a one-line message: control characters (newline, tab, ESC, ...) escaped as \n, \t, \xHH, and cut to
-/// `max_length` bytes (with "... (N more bytes)").
+/// Text for a one-line message: control characters (newline, tab, ESC, ...) escaped as \n, \t, \xHH, and, when
+/// longer than about `max_length` bytes, cut in the middle ("... (N bytes cut) ...") keeping the head and the
+/// tail (where a message gives its reason).
 std::string printable(const std::string& text, size_t max_length = 400);
 
 }  // namespace jointsim

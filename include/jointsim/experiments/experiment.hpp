@@ -27,6 +27,7 @@
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/sim/simulate.hpp"
 #include "jointsim/systems/faults.hpp"
+#include "jointsim/systems/joint_limits.hpp"
 
 namespace jointsim::experiments {
 
@@ -68,6 +69,11 @@ class Experiment {
   /// Budgets of the run (from `limits:`; defaults otherwise).
   const RunLimits& limits() const { return limits_; }
   void setLimits(const RunLimits& limits) { limits_ = limits; }
+  /// The joint-limit monitor (joint_limits: warn or stop) of experiment types with a robot; disabled for the
+  /// others. Fed with every output row of a run; its violations go into the summary ("joint_limits").
+  systems::JointLimitMonitor& jointLimits() { return joint_limits_; }
+  const systems::JointLimitMonitor& jointLimits() const { return joint_limits_; }
+  void setJointLimits(systems::JointLimitMonitor monitor) { joint_limits_ = std::move(monitor); }
   /// Every file read while loading (experiment, robot, drives, CSV inputs) with its content hash.
   const std::vector<io::InputFile>& inputs() const { return inputs_; }
   void setIdentity(std::string name, std::string type, std::string file);
@@ -79,6 +85,7 @@ class Experiment {
   std::shared_ptr<nlohmann::ordered_json> config_;
   std::vector<io::InputFile> inputs_;
   RunLimits limits_;
+  systems::JointLimitMonitor joint_limits_;
 };
 
 /// An Experiment around one plant of type P that knows its own run settings (P::simulateOptions()).
@@ -117,6 +124,7 @@ struct RunReport {
   double wall_time_s = 0.0;       ///< wall-clock time [s]
   double real_time_factor = 0.0;  ///< sim_time_s / wall_time_s
   sim::SolverStats stats;
+  std::vector<std::string> warnings;  ///< e.g. joints that left their range (joint_limits: warn), one line each
 };
 
 /// The outcome of a run in memory.

@@ -62,6 +62,7 @@ struct TrackingSetup {
   double log_rate = 500.0;    ///< [Hz]
   double control_rate = 0.0;  ///< [Hz]; 0: continuous control
   sim::CvodeOptions solver;
+  systems::JointLimitSettings joint_limits;  ///< also set on `robot` (end stops in mode stop)
 };
 TrackingSetup readTrackingSetup(const io::YamlValue& root, const std::string& name,
                                 const std::vector<systems::Fault>& faults = {});

@@ -17,8 +17,13 @@ struct InputFile {
   std::uint64_t size = 0;  ///< bytes
 };
 
-/// The whole file `path` as bytes. Throws InputError "PATH: cannot open WHAT for reading". While an
-/// InputRecord is alive on this thread, the file is added to it (once per path).
+/// Largest file any reader accepts [bytes] (512 MiB).
+constexpr std::uint64_t kMaxInputFileBytes = std::uint64_t{512} << 20;
+
+/// The whole file `path` as bytes. Throws InputError "PATH: cannot open WHAT for reading" (also for a folder),
+/// "PATH: not a regular file: cannot read WHAT" (a FIFO or a device such as /dev/zero or /dev/stdin, which
+/// could block or never end) or "PATH: larger than 512 MiB: cannot read WHAT". While an InputRecord is alive on
+/// this thread, the file is added to it (once per path).
 std::string readInputFile(const std::string& path, const std::string& what = "file");
 
 /// Collects the files read by readInputFile on this thread during its lifetime (records nest: a file goes to
@@ -39,6 +44,8 @@ class InputRecord {
 
 /// "xxh3:" + the XXH3 64-bit hash of `bytes` in hex.
 std::string contentHash(const std::string& bytes);
+/// The bytes of a regular file of at most kMaxInputFileBytes; empty when it cannot be read (no record kept).
+std::string readBoundedFile(const std::string& path);
 /// contentHash of the file's bytes; empty when the file cannot be read.
 std::string fileHash(const std::string& path);
 

@@ -41,7 +41,8 @@ class CsvWriter {
 /// Writes `content` to `path` through a temporary file and a rename.
 void writeFileAtomically(const std::string& path, const std::string& content);
 
-/// Creates a directory and its parents (no error if it exists); throws jointsim::Error on failure.
+/// Creates a directory and its parents (no error if it exists); throws InputError when it cannot (a path too
+/// long, a file in the way, no permission: the folder the user asked for is not usable).
 void createDirectories(const std::string& path);
 
 }  // namespace jointsim::io

@@ -101,11 +101,16 @@ struct JointSpec {
 /// is the base, which is fixed to the world) and its frame is kept as a named Frame.
 class ModelBuilder {
  public:
+  /// Most links (base and fixed-joint links included) a model may have: far beyond any robot, small
+  /// enough that the O(n²) mass matrix of a hostile input stays a few MB.
+  static constexpr size_t kMaxLinks = 1000;
+
   explicit ModelBuilder(std::string robot_name, std::string base_link = "base");
 
   /// Adds link `child_name` with inertia `inertia`, attached to the existing link `parent_link` by
   /// `joint`. The child link frame coincides with the joint frame. Throws InputError on a duplicate
-  /// name, an unknown parent, a zero axis, a negative armature or an unphysical inertia.
+  /// name, an unknown parent, a zero axis, a negative armature, an unphysical inertia or more than
+  /// kMaxLinks links.
   ModelBuilder& addLink(const std::string& parent_link, const JointSpec& joint, const std::string& child_name,
                         const BodyInertia& inertia);
   /// Adds an extra named frame rigidly attached to an existing link.

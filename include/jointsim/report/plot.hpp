@@ -19,6 +19,20 @@ struct PlotOptions {
   bool keep_script = false;  ///< also write FIG_DIR/<name>_plots.gp, a standalone script to tweak the figures
 };
 
+/// The gnuplot script of a run or sweep folder, built without running gnuplot or writing anything.
+struct PlotScript {
+  std::string name;                  ///< experiment name (run folder) or "sweep"
+  std::string fig_dir;               ///< absolute folder the figures go to
+  std::vector<std::string> figures;  ///< final paths of the figures, in the order drawn
+  /// Script text: data paths, datablocks and one block per figure. Every figure is written to its final
+  /// path followed by the value of the gnuplot variable `outsuffix`, which the caller defines first.
+  std::string body;
+};
+
+/// Reads the run folder `run_dir` as plotRun does and returns its script; throws as plotRun does for the
+/// folder and its files (not for gnuplot, which it does not need).
+PlotScript plotScript(const std::string& run_dir, const std::string& fig_dir = {}, const PlotOptions& options = {});
+
 /// Writes the figures of the run folder `run_dir` (a `jointsim run` output with summary.json and the CSV
 /// log, or a sweep folder with manifest.csv) into `fig_dir` (created; empty = run_dir/figures) and
 /// returns the paths written (PNGs, then SVGs, then the script if requested), in a stable order.

@@ -1,8 +1,9 @@
 #pragma once
 /// \file
 /// Passive robot: a rigid robot moving under gravity with no actuation (optionally with viscous joint
-/// damping). The main demo job ("the UR5 falling") and the energy-conservation check of the multibody core
-/// with CVODE. State y = [q, q̇]; ẏ = [q̇, ABA(q, q̇, −b q̇)].
+/// damping and end stops at the joint limits, systems/joint_limits.hpp). The main demo job ("the UR5 falling")
+/// and the energy-conservation check of the multibody core with CVODE. State y = [q, q̇];
+/// ẏ = [q̇, ABA(q, q̇, −b q̇ + τ_stop(q, q̇))].
 
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include "jointsim/multibody/model.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/sim/simulate.hpp"
+#include "jointsim/systems/joint_limits.hpp"
 
 namespace jointsim::systems {
 
@@ -22,6 +24,7 @@ struct PassiveRobotParams {
   double duration = 1.0;                       ///< simulated time [s], > 0
   double log_rate = 1000.0;                    ///< log samples per second [Hz], > 0
   sim::CvodeOptions solver = defaultSolver();  ///< integrator settings
+  JointLimitSettings joint_limits;             ///< ignore, warn (default) or stop (end stops)
 
   /// Adams (non-stiff: a rigid robot has no fast modes) with tight tolerances.
   static sim::CvodeOptions defaultSolver();
@@ -44,7 +47,13 @@ class PassiveRobot : public sim::Plant {
   Eigen::VectorXd initialState() const override;
   void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) const override;
-  /// q_i, qd_i per joint (joint names), kinetic, potential and total energy [J], tip frame position [m].
+  /// End stops (mode stop): q − q_upper and q_lower − q per limited joint.
+  int rootCount() const override { return stops_.rootCount(); }
+  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
+  const EndStops& endStops() const { return stops_; }
+  /// q_i, qd_i per joint (joint names), kinetic, potential and total energy [J], tip frame position [m]; with
+  /// end stops also the energy stored in them (end_stop_energy [J], included in total_energy) and the torque
+  /// of each stop (end_stop_torque_<joint> [N·m or N]).
   const std::vector<std::string>& signalNames() const override { return signals_; }
   void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override;
 
@@ -52,10 +61,11 @@ class PassiveRobot : public sim::Plant {
   multibody::Model model_;
   PassiveRobotParams p_;
   Eigen::VectorXd damping_;
+  EndStops stops_;
   int tip_ = 0;
   std::vector<std::string> signals_;
   mutable multibody::Data data_, log_data_;
-  mutable Eigen::VectorXd tau_;
+  mutable Eigen::VectorXd tau_, tau_stop_;
 };
 
 }  // namespace jointsim::systems

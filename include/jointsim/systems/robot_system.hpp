@@ -29,6 +29,7 @@
 #include "jointsim/multibody/data.hpp"
 #include "jointsim/multibody/model.hpp"
 #include "jointsim/sim/plant.hpp"
+#include "jointsim/systems/joint_limits.hpp"
 
 namespace jointsim::systems {
 
@@ -76,6 +77,7 @@ struct RobotSignals {
   Eigen::VectorXd tau_gear;        ///< gear output torque [N·m] (before friction, output shaft)
   Eigen::VectorXd tau_friction;    ///< friction torque on the output shaft [N·m]
   Eigen::VectorXd tau_joint;       ///< torque applied to the joints by the drives [N·m]
+  Eigen::VectorXd tau_stop;        ///< torque of the end stops on the joints [N·m] (zero without stops)
   Eigen::VectorXd qdd;             ///< joint accelerations [rad/s²]
   void resize(int n);
 };
@@ -96,6 +98,11 @@ class RobotSystem : public sim::Plant {
   /// Reference from a trajectory (its breakpoints become time events under continuous control).
   void setTrajectory(std::shared_ptr<const control::JointTrajectory> trajectory);
   void setExternalWrenches(WrenchFunction f) { wrenches_ = std::move(f); }
+  /// Joint limits: with mode stop, an end stop at every finite joint limit (systems/joint_limits.hpp) acts on
+  /// the joint, its instants of contact become root functions and end_stop_torque_<joint> [N·m] signals are
+  /// appended; other modes leave the system unchanged (the monitor of warn lives in the experiment).
+  void setJointLimits(const JointLimitSettings& settings);
+  const EndStops& endStops() const { return stops_; }
   /// Joint positions [rad] at t = 0 for initialState() (default: the reference at t = 0, or zeros).
   void setInitialPositions(const Eigen::VectorXd& q0);
 
@@ -115,7 +122,8 @@ class RobotSystem : public sim::Plant {
   Eigen::VectorXd initialState(const Eigen::VectorXd& q0, double t0 = 0.0) const;
   /// All drive signals at (t, y) (evaluates the right-hand side).
   const RobotSignals& driveSignals(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
-  /// Mechanical energy: multibody kinetic + potential, motor rotor kinetic, stored transmission energy [J].
+  /// Mechanical energy: multibody kinetic + potential, motor rotor kinetic, stored transmission and end-stop
+  /// energy [J].
   double mechanicalEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) const;
   /// Index of the first state of drive k's parts (-1 if absent).
   struct DriveLayout {
@@ -134,6 +142,9 @@ class RobotSystem : public sim::Plant {
   /// ẏ = f(t, y): pure apart from the workspace; no heap allocation.
   void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) const override;
+  /// End stops (mode stop): q − q_upper and q_lower − q per limited joint.
+  int rootCount() const override { return stops_.rootCount(); }
+  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
   /// The trajectory's breakpoints under continuous control (sampled control restarts at every sample).
   std::vector<double> timeEvents(double t_end) const override;
   /// Sampled control: the controllers' first sample at t0.
@@ -174,6 +185,7 @@ class RobotSystem : public sim::Plant {
   SetpointFunction setpoints_;
   std::vector<double> setpoint_breaks_;
   WrenchFunction wrenches_;
+  EndStops stops_;
   Eigen::VectorXd q0_;
   // Sampled control: discrete controller states, held outputs and sensor memory (not ODE states).
   double sample_rate_ = 0.0;

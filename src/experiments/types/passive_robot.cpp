@@ -21,7 +21,9 @@ Eigen::VectorXd readVector(const YamlValue& v, const std::string& what) {
 class PassiveRobotExperiment : public PlantExperiment<systems::PassiveRobot> {
  public:
   explicit PassiveRobotExperiment(PassiveRobotSetup s)
-      : PlantExperiment(std::move(s.model), std::move(s.params)), robot_file_(std::move(s.robot_file)) {}
+      : PlantExperiment(std::move(s.model), std::move(s.params)), robot_file_(std::move(s.robot_file)) {
+    setJointLimits(jointLimitMonitor(plant_.model(), plant_, plant_.params().joint_limits));
+  }
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult&) const override {
     const auto& model = plant_.model();
     const auto& p = plant_.params();
@@ -87,7 +89,8 @@ std::vector<Figure> passiveRobotFigures(const RunData& run) {
 }  // namespace
 
 PassiveRobotSetup readPassiveRobotSetup(const YamlValue& root, const std::string& name) {
-  root.allowKeys({"experiment", "robot", "initial_state", "joint_damping", "duration", "log_rate", "solver"});
+  root.allowKeys(
+      {"experiment", "robot", "initial_state", "joint_damping", "joint_limits", "duration", "log_rate", "solver"});
   PassiveRobotSetup s;
   const YamlValue robot_node = root.required("robot", "robot description file, relative to this file");
   s.robot_file = robot_node.asPath();
@@ -112,6 +115,7 @@ PassiveRobotSetup readPassiveRobotSetup(const YamlValue& root, const std::string
   p.damping = readVector(root["joint_damping"], "a list of damping coefficients in N·m·s/rad");
   if (p.damping.size() && (p.damping.size() != model.nq || p.damping.minCoeff() < 0))
     root["joint_damping"].failExpected(std::to_string(model.nq) + " damping coefficients >= 0 N·m·s/rad");
+  p.joint_limits = readJointLimits(root["joint_limits"]);
   readDurationAndLogRate(root, p.duration, p.log_rate);
   p.solver = readSolver(root["solver"], p.solver);
   root.validate([&] { p.validate(model); });

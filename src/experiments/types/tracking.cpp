@@ -19,7 +19,7 @@ TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name,
                                 const std::vector<systems::Fault>& faults) {
   (void)name;
   root.allowKeys({"experiment", "robot", "trajectory", "initial_state", "duration", "log_rate", "solver",
-                  "check_limits", "control"});
+                  "check_limits", "joint_limits", "control"});
   TrackingSetup s;
   const std::string base_dir = std::filesystem::path(root.file()).parent_path().string();
   const YamlValue robot = root.required("robot", "robot-with-drives file, relative to this file");
@@ -31,6 +31,8 @@ TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name,
   }
   systems::RobotSystem& sys = *s.robot;
   const int n = sys.dof();
+  s.joint_limits = readJointLimits(root["joint_limits"]);
+  sys.setJointLimits(s.joint_limits);
   if (const YamlValue c = root["control"]; c.defined()) {
     c.expectMap("a mapping {rate: Hz, seed}");
     c.allowKeys({"rate", "seed"});
@@ -74,7 +76,9 @@ namespace {
 
 class TrackingExperiment : public Experiment {
  public:
-  explicit TrackingExperiment(TrackingSetup s) : s_(std::move(s)), max_err_(Eigen::VectorXd::Zero(s_.robot->dof())) {}
+  explicit TrackingExperiment(TrackingSetup s) : s_(std::move(s)), max_err_(Eigen::VectorXd::Zero(s_.robot->dof())) {
+    setJointLimits(jointLimitMonitor(s_.robot->model(), *s_.robot, s_.joint_limits));
+  }
   sim::Plant& plant() override { return *s_.robot; }
   sim::SimulateOptions simulateOptions() const override {
     return sim::SimulateOptions::atRate(s_.duration, s_.log_rate, s_.solver);

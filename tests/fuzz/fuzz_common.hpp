@@ -1,0 +1,54 @@
+#pragma once
+// Shared by the libFuzzer targets (tests/fuzz/README.md): a private copy of config/ per process, so that
+// inputs can name the shipped robot and data files by the same relative paths as the shipped experiments,
+// and the one oracle of every target — an input may only end in a jointsim::Error (input error, solver
+// failure, budget run out); any other exception escapes LLVMFuzzerTestOneInput and libFuzzer reports it as a
+// crash, as it does for every sanitizer report, leak or timeout.
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <unistd.h>
+
+namespace jointsim::fuzz {
+
+/// The process's workspace: a copy of the source tree's config/ (experiments/, robots/, sweeps/) in a fresh
+/// temporary folder, removed at exit.
+inline const std::filesystem::path& workspace() {
+  static const std::filesystem::path dir = [] {
+    namespace fs = std::filesystem;
+    const fs::path d = fs::temp_directory_path() / ("jointsim_fuzz_" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    fs::create_directories(d);
+    fs::copy(fs::path(JOINTSIM_SOURCE_DIR) / "config", d / "config", fs::copy_options::recursive);
+    static const std::string keep = d.string();
+    std::atexit([] {
+      std::error_code ec;
+      fs::remove_all(keep, ec);
+    });
+    return d;
+  }();
+  return dir;
+}
+
+/// Writes the input to `relative` (inside the workspace) and returns its path.
+inline std::string writeInput(const std::string& relative, const uint8_t* data, size_t size) {
+  const std::filesystem::path p = workspace() / relative;
+  std::filesystem::create_directories(p.parent_path());
+  std::ofstream(p, std::ios::binary | std::ios::trunc)
+      .write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  return p.string();
+}
+
+/// With JOINTSIM_FUZZ_VERBOSE set, prints the error an input ended in (to see what a corpus reaches).
+inline void note(const std::exception& e) {
+  static const bool verbose = std::getenv("JOINTSIM_FUZZ_VERBOSE") != nullptr;
+  if (verbose) std::fprintf(stderr, "  -> %s\n", e.what());
+}
+
+}  // namespace jointsim::fuzz
