@@ -10,9 +10,11 @@
 
 #include <Eigen/Geometry>
 #include <console_bridge/console.h>
+#include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/io/input_files.hpp"
 #include "jointsim/io/yaml.hpp"
 
@@ -410,10 +412,66 @@ bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
+/// Rejects a joint graph that is not a tree before urdfdom sees it: a link that is the child of two joints,
+/// or a cycle of joints. urdfdom links parents and children by shared_ptr both ways, so either builds a
+/// reference cycle it never frees (and a cycle with no root fails inside urdfdom after building it); it
+/// also keeps only the last parent of a link, silently cutting the links of the cycle off the robot.
+/// Parsed with TinyXML, urdfdom's own XML parser (after checkXmlShape has bounded the nesting); XML
+/// errors and missing elements are left to urdfdom's messages.
+void checkJointGraph(const std::string& xml, const std::string& name) {
+  TiXmlDocument doc;
+  doc.Parse(xml.c_str());
+  if (doc.Error()) return;
+  const TiXmlElement* robot = doc.FirstChildElement("robot");
+  if (robot == nullptr) return;
+  struct Edge {
+    std::string parent, joint;
+    int line;
+  };
+  std::map<std::string, Edge> parent_of;  // child link -> its joint
+  for (const TiXmlElement* j = robot->FirstChildElement("joint"); j != nullptr; j = j->NextSiblingElement("joint")) {
+    const TiXmlElement* p = j->FirstChildElement("parent");
+    const TiXmlElement* c = j->FirstChildElement("child");
+    const char* parent = p != nullptr ? p->Attribute("link") : nullptr;
+    const char* child = c != nullptr ? c->Attribute("link") : nullptr;
+    if (parent == nullptr || child == nullptr) continue;
+    const char* joint = j->Attribute("name");
+    const Edge edge{parent, joint != nullptr ? joint : "", j->Row()};
+    const auto [it, fresh] = parent_of.emplace(child, edge);
+    if (!fresh)
+      throw InputError(name + ":" + std::to_string(edge.line) + ": joint '" + printable(edge.joint) + "': link '" +
+                       printable(child) + "' is already the child of joint '" + printable(it->second.joint) +
+                       "' (line " + std::to_string(it->second.line) + "); a link has at most one parent joint");
+  }
+  // Follow each link's parents; meeting a link of the current walk again closes a cycle.
+  std::map<std::string, int> state;  // 1: on the current walk, 2: leads to a root
+  for (const auto& start : parent_of) {
+    std::vector<const std::string*> walk;
+    const std::string* link = &start.first;
+    while (true) {
+      const int st = state[*link];
+      if (st == 2) break;
+      if (st == 1) {
+        const Edge& e = parent_of.at(*link);
+        throw InputError(name + ":" + std::to_string(e.line) + ": joint '" + printable(e.joint) +
+                         "' closes a cycle of joints through link '" + printable(*link) +
+                         "'; a URDF describes a tree (closed chains are not supported)");
+      }
+      state[*link] = 1;
+      walk.push_back(link);
+      const auto up = parent_of.find(*link);
+      if (up == parent_of.end()) break;
+      link = &up->second.parent;
+    }
+    for (const std::string* l : walk) state[*l] = 2;
+  }
+}
+
 }  // namespace
 
 Model loadUrdfString(const std::string& xml, const std::string& name) {
   checkXmlShape(xml, name);
+  checkJointGraph(xml, name);
   ScopedOutputCapture capture;
   const urdf::ModelInterfaceSharedPtr urdf_model = urdf::parseURDF(xml);
   if (!urdf_model) {

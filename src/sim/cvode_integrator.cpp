@@ -130,6 +130,8 @@ struct CvodeIntegrator::Impl {
   bool cvode_tstop_touched = false;  // CVodeSetStopTime was ever called (must be neutralised on clear)
 
   SolverStats base;  // counters accumulated from earlier segments
+  long step_limit = 0;     // setStepLimit(): steps over all segments (0: none)
+  long mxstep_set = 0;     // the value last given to CVodeSetMaxNumSteps
   int n_roots = 0;
   RootFunction root_fn;
   bool root_found = false;
@@ -381,6 +383,7 @@ struct CvodeIntegrator::Impl {
       check(CVodeSetNonlinearSolver(mem, NLS), "CVodeSetNonlinearSolver");
     }
     check(CVodeSetMaxNumSteps(mem, opts.max_num_steps), "CVodeSetMaxNumSteps");
+    mxstep_set = opts.max_num_steps;
     if (opts.max_step > 0.0) check(CVodeSetMaxStep(mem, opts.max_step), "CVodeSetMaxStep");
     if (opts.min_step > 0.0) check(CVodeSetMinStep(mem, opts.min_step), "CVodeSetMinStep");
     if (opts.initial_step != 0.0) check(CVodeSetInitStep(mem, opts.initial_step), "CVodeSetInitStep");
@@ -553,11 +556,31 @@ double CvodeIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out)
     m.check(CVodeSetStopTime(m.mem, far), "CVodeSetStopTime");
   }
 
+  // The run's step budget: this call may take at most the steps left plus one (the one that exceeds it).
+  if (m.step_limit > 0) {
+    const long steps_before = m.base.steps + m.segmentStats().steps;
+    const long mxstep = std::min(m.opts.max_num_steps, std::max(1L, m.step_limit - steps_before + 1));
+    if (mxstep != m.mxstep_set) {
+      m.check(CVodeSetMaxNumSteps(m.mem, mxstep), "CVodeSetMaxNumSteps");
+      m.mxstep_set = mxstep;
+    }
+  } else if (m.mxstep_set != m.opts.max_num_steps) {
+    m.check(CVodeSetMaxNumSteps(m.mem, m.opts.max_num_steps), "CVodeSetMaxNumSteps");
+    m.mxstep_set = m.opts.max_num_steps;
+  }
+
   double t_ret = m.t_last;
   const int flag = CVode(m.mem, t_out, m.y, &t_ret, CV_NORMAL);
+  m.fresh = false;
+  if (flag == CV_TOO_MUCH_WORK && m.step_limit > 0 && !m.callback_exception &&
+      m.base.steps + m.segmentStats().steps > m.step_limit) {
+    m.t_last = m.cvodeTime();
+    throw SolverError(m.prefix() + ": more than " + std::to_string(m.step_limit) + " internal steps at t = " +
+                          formatTime(m.t_last) + " s (step limit)",
+                      m.t_last, "STEP_BUDGET", m.opts.component);
+  }
   m.root_found = flag == CV_ROOT_RETURN;
   if (m.root_found) m.check(CVodeGetRootInfo(m.mem, m.root_dirs.data()), "CVodeGetRootInfo");
-  m.fresh = false;
   if (flag < 0 || m.callback_exception) {
     m.t_last = m.cvodeTime();
     m.fail("CVode", flag, m.t_last);
@@ -590,6 +613,11 @@ void CvodeIntegrator::setStopTime(double t_stop) {
 }
 
 void CvodeIntegrator::clearStopTime() { impl_->stop_set = false; }
+
+void CvodeIntegrator::setStepLimit(long steps) {
+  if (steps < 0) throw InputError(impl_->prefix() + ": step limit must be >= 0 (0: none)");
+  impl_->step_limit = steps;
+}
 
 double CvodeIntegrator::time() const { return impl_->t_last; }
 

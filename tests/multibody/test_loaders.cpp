@@ -289,3 +289,34 @@ TEST(Urdf, UnsupportedJointTypeIsNamed) {
               ::testing::ThrowsMessage<InputError>(
                   AllOf(HasSubstr("f.urdf: joint 'free'"), HasSubstr("not supported"))));
 }
+
+// A URDF's joints must form a tree. Was (found by fuzz_urdf): a link made the child of two joints was
+// loaded without a word, urdfdom keeping only its last parent, so a wrist of three links was silently cut
+// off the robot (and urdfdom's shared_ptr cycle leaked).
+TEST(Urdf, LinkWithTwoParentsOrACycleOfJointsIsAnInputError) {
+  const std::string links = R"(<link name="base"/><link name="a"/><link name="b"/><link name="c"/>)";
+  auto joint = [](const std::string& name, const std::string& parent, const std::string& child) {
+    return "\n<joint name=\"" + name + "\" type=\"continuous\"><parent link=\"" + parent + "\"/><child link=\"" +
+           child + "\"/><axis xyz=\"0 0 1\"/></joint>";
+  };
+  auto robot = [&](const std::string& joints) { return "<robot name=\"r\">" + links + joints + "\n</robot>"; };
+  // The tree itself loads (3 joints).
+  EXPECT_EQ(loadUrdfString(robot(joint("j1", "base", "a") + joint("j2", "a", "b") + joint("j3", "b", "c")), "t.urdf").nq,
+            3);
+  EXPECT_THAT(
+      [&] { loadUrdfString(robot(joint("j1", "base", "a") + joint("j2", "a", "b") + joint("j3", "base", "b")), "p.urdf"); },
+      ::testing::ThrowsMessage<InputError>(
+          HasSubstr("p.urdf:4: joint 'j3': link 'b' is already the child of joint 'j2' (line 3)")));
+  // A cycle hanging off nothing (b -> c -> b) beside the tree base -> a.
+  EXPECT_THAT(
+      [&] { loadUrdfString(robot(joint("j1", "base", "a") + joint("j2", "b", "c") + joint("j3", "c", "b")), "c.urdf"); },
+      ::testing::ThrowsMessage<InputError>(AllOf(HasSubstr("c.urdf:"), HasSubstr("closes a cycle of joints"))));
+  // A link that is its own parent.
+  EXPECT_THAT([&] { loadUrdfString(robot(joint("j1", "base", "a") + joint("self", "b", "b")), "s.urdf"); },
+              ::testing::ThrowsMessage<InputError>(
+                  HasSubstr("s.urdf:3: joint 'self' closes a cycle of joints through link 'b'")));
+  // The fuzzer's find: the shipped UR5 with wrist_3_joint's child changed to wrist_1_link.
+  EXPECT_THAT([] { loadUrdf(sourcePath("tests/fuzz/regressions/urdf/wrist_link_with_two_parents.urdf")); },
+              ::testing::ThrowsMessage<InputError>(
+                  HasSubstr("link 'wrist_1_link' is already the child of joint 'wrist_1_joint'")));
+}

@@ -425,6 +425,37 @@ TEST(CvodeErrors, TooMuchWorkThenContinue) {
   EXPECT_GE(cv.stats().steps, 100);
 }
 
+// The run's step limit counts every internal step over restarts and is enforced inside one advance():
+// with max_step = 0.01 s and y' = 1, reaching t = 1 needs at least 100 steps.
+TEST(CvodeErrors, StepLimitBoundsTheWholeRunInsideOneCall) {
+  CvodeOptions opt;
+  opt.max_step = 0.01;
+  opt.max_num_steps = 1000000;
+  CvodeIntegrator cv(
+      1, [](double, const auto&, auto ydot) { ydot[0] = 1.0; }, opt);
+  EXPECT_THROW(cv.setStepLimit(-1), InputError);
+  cv.setStepLimit(60);
+  cv.initialize(0.0, Eigen::VectorXd::Zero(1));
+  Eigen::VectorXd y(1);
+  EXPECT_EQ(cv.advance(0.2, y), 0.2);  // about 20 steps
+  const long first = cv.stats().steps;
+  EXPECT_GE(first, 20);
+  cv.initialize(0.2, y);  // a restart does not reset the budget
+  try {
+    cv.advance(1.0, y);
+    FAIL() << "expected SolverError";
+  } catch (const SolverError& e) {
+    EXPECT_EQ(e.flag(), "STEP_BUDGET");
+    EXPECT_TRUE(contains(e.what(), "more than 60 internal steps"));
+    EXPECT_EQ(cv.stats().steps, 61);
+    EXPECT_GT(e.time(), 0.2);
+    EXPECT_LE(e.time(), 0.2 + 0.01 * static_cast<double>(61 - first) + 1e-12);  // steps of at most 0.01 s
+  }
+  // Raising the limit lets the run go on.
+  cv.setStepLimit(0);
+  EXPECT_EQ(cv.advance(1.0, y), 1.0);
+  EXPECT_NEAR(y[0], 1.0, 1e-12);
+}
 TEST(CvodeErrors, InvalidArgumentsThrowInputError) {
   const RhsFunction f = [](double, const auto&, auto ydot) { ydot.setZero(); };
   auto make = [&](int n, CvodeOptions o) { CvodeIntegrator cv(n, f, o); };

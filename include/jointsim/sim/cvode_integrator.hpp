@@ -171,6 +171,14 @@ class CvodeIntegrator {
   /// Remove a stop time set with setStopTime().
   void clearStopTime();
 
+  /// Budget of internal steps over the integrator's whole life, restarts included (0: none, the
+  /// default). advance() never takes more: the step that would exceed it ends the call with a
+  /// SolverError of flag "STEP_BUDGET" (stats().steps is then limit + 1). Unlike max_num_steps, which
+  /// bounds one call of advance(), this bounds the run, and is enforced inside the call, so a single
+  /// output interval cannot spend more than the budget.
+  /// \throws InputError if steps < 0.
+  void setStepLimit(long steps);
+
   /// Installs root functions (call before initialize(); they persist across restarts). advance() then
   /// returns early at a located root: rootFound() is true and rootDirections() gives, per function,
   /// +1 (rising), −1 (falling) or 0 (no crossing).
