@@ -84,7 +84,7 @@ void addDynamicsCommand(CLI::App& app) {
     }
     forwardKinematics(model, data, q);
     out["tcp"] = rows(data.oMf[static_cast<size_t>(frame)].homogeneous());
-    std::cout << out.dump() << '\n';
+    std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';
   });
 }
 

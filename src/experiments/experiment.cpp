@@ -179,7 +179,9 @@ std::string summaryJson(Experiment& e, const std::string& started, const Summary
   params["config_file"] = e.file();
   e.describe(params, r);
   params["config"] = e.config();
-  return s.dump(2) + "\n";
+  // Text from the input (descriptions, names, paths) need not be valid UTF-8: bytes that are not are
+  // written as U+FFFD rather than failing the run at its last step.
+  return s.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
 }
 
 }  // namespace

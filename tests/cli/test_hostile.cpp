@@ -358,6 +358,20 @@ TEST(HostileOutputs, FailedRunLeavesOnlyItsFailedSummary) {
   fs::remove_all(dir);
 }
 
+// Was (found by fuzz_experiment): a description with bytes that are not UTF-8 made the summary's JSON writer
+// throw after the CSV was written: "internal error", exit 1, no summary.
+TEST(HostileOutputs, DescriptionThatIsNotUtf8IsWrittenWithReplacementCharacters) {
+  const fs::path dir = freshDir("utf8");
+  write(dir / "e.yaml", fallExperiment("{name: fall, type: passive_robot, description: \"bad \xff\xfe bytes\"}"));
+  const Result r = run("run e.yaml -o out", dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  const std::string s = slurp(dir / "out" / "summary.json");
+  EXPECT_THAT(s, HasSubstr("\"status\": \"ok\""));
+  EXPECT_THAT(s, HasSubstr("bad \xEF\xBF\xBD\xEF\xBF\xBD bytes"));  // U+FFFD per bad byte
+  EXPECT_EQ(filesBelow(dir / "out"), (std::vector<std::string>{"fall.csv", "summary.json"}));
+  fs::remove_all(dir);
+}
+
 // Was: clamping curves were written after an "ok" summary; a joint named "j6/x" made the run exit 1 with an
 // "ok" summary and 5 of 6 curves.
 TEST(HostileOutputs, ClampingCurveOfAJointWithASlashInItsName) {
