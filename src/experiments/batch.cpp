@@ -25,6 +25,7 @@
 #include "jointsim/common/text.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/io/input_files.hpp"
+#include "jointsim/io/json.hpp"
 #include "jointsim/io/output.hpp"
 #include "jointsim/io/yaml.hpp"
 #include "jointsim/sim/simulate.hpp"
@@ -85,7 +86,13 @@ SummaryInfo readSummary(const fs::path& p) {
   SummaryInfo s;
   if (!fs::exists(p)) return s;
   s.exists = true;
-  const nlohmann::json j = nlohmann::json::parse(slurpFile(p), nullptr, false);
+  nlohmann::ordered_json parsed;
+  try {
+    parsed = io::parseJson(slurpFile(p), p.string());
+  } catch (const InputError&) {
+    return s;  // nested too deep: unreadable
+  }
+  const nlohmann::ordered_json& j = parsed;
   if (!j.is_object()) return s;  // unreadable: status "" (counted as an error)
   auto text = [&](const char* key) {
     return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string();

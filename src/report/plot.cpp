@@ -31,6 +31,7 @@
 #include "jointsim/experiments/registry.hpp"
 #include "jointsim/io/csv_reader.hpp"
 #include "jointsim/io/input_files.hpp"
+#include "jointsim/io/json.hpp"
 #include "jointsim/io/output.hpp"
 #include "report/gnuplot.hpp"
 
@@ -63,8 +64,7 @@ LoadedRun loadRun(const std::string& run_dir) {
   LoadedRun run;
   run.dir = fs::absolute(run_dir).lexically_normal().string();
   const std::string summary_path = (fs::path(run.dir) / "summary.json").string();
-  auto summary = std::make_shared<nlohmann::ordered_json>(
-      nlohmann::ordered_json::parse(readTextFile(summary_path), nullptr, false));
+  auto summary = std::make_shared<nlohmann::ordered_json>(io::parseJson(readTextFile(summary_path), summary_path));
   if (summary->is_discarded() || !summary->is_object())
     throw InputError(summary_path + ": not a summary.json of `jointsim run` (a JSON object)");
   experiments::RunData& d = run.data;

@@ -192,15 +192,25 @@ TEST(HostileParsers, DeeplyNestedUrdfIsAnInputError) {
   fs::remove_all(dir);
 }
 
-// Was: a deeply nested summary.json overflowed the stack in plot's JSON reader (segfault).
+// Was: a deeply nested value in a summary.json overflowed the stack when plot copied the summary
+// (segfault). The folder is a real run's, with a value a million levels deep put into its parameters.
 TEST(HostileParsers, DeeplyNestedSummaryIsAnInputError) {
   const fs::path dir = freshDir("deepjson");
-  fs::create_directories(dir / "run");
-  write(dir / "run" / "summary.json", std::string(1000000, '[') + std::string(1000000, ']'));
-  const Result r = run("plot run", dir);
+  write(dir / "e.yaml", fallExperiment("{name: fall, type: passive_robot}"));
+  ASSERT_EQ(run("run e.yaml -o run", dir).status, 0);
+  std::string summary = slurp(dir / "run" / "summary.json");
+  const size_t at = summary.find("\"parameters\": {");
+  ASSERT_NE(at, std::string::npos);
+  summary.insert(at + 15, "\"deep\": " + std::string(1000000, '[') + std::string(1000000, ']') + ", ");
+  write(dir / "run" / "summary.json", summary);
+  const Result r = run("plot run -o figures", dir);
   EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_THAT(r.err, HasSubstr("summary.json: not a summary.json"));
+  EXPECT_THAT(r.err, HasSubstr("summary.json: JSON nested deeper than 64 levels"));
   expectOneLine(r);
+  EXPECT_FALSE(fs::exists(dir / "figures"));
+  // Still an input error, not a crash, when the whole file is one deep array.
+  write(dir / "run" / "summary.json", std::string(1000000, '[') + std::string(1000000, ']'));
+  EXPECT_EQ(run("plot run -o figures", dir).status, 2);
   fs::remove_all(dir);
 }
 

@@ -236,3 +236,19 @@ std::string robotName(const ::testing::TestParamInfo<int>& info) {
 }  // namespace
 
 INSTANTIATE_TEST_SUITE_P(Robots, CrossCheck, ::testing::Values(0, 1, 2, 3), robotName);
+
+// Was: Data's Cholesky member was constructed without a factorisation, so its status was an uninitialised
+// enum, and copying a Data (as every tracking and RobotR3 run does) read it: undefined behaviour that UBSan
+// reports (this test fails under scripts/sanitize.sh on a build without the fix). A copy of a fresh Data
+// has a defined status and gives the same forward dynamics as ABA.
+TEST(DataCopy, FreshDataCopiesWithADefinedCholeskyStatus) {
+  const Model model = loadRobot(jointsim::test::sourcePath("config/robots/ur5.yaml"));
+  const Data fresh(model);
+  Data copy = fresh;  // NOLINT(performance-unnecessary-copy-initialization): the copy is the point
+  EXPECT_EQ(copy.llt.info(), Eigen::Success);
+  const Eigen::VectorXd q = Eigen::VectorXd::LinSpaced(model.nq, -0.4, 0.9);
+  const Eigen::VectorXd qd = Eigen::VectorXd::Constant(model.nq, 0.2);
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(model.nq, 1.0, -2.0);
+  Data other(model);
+  EXPECT_TRUE(MatricesNear(forwardDynamicsCrba(model, copy, q, qd, tau), aba(model, other, q, qd, tau), 1e-10));
+}
