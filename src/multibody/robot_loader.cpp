@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -117,6 +118,17 @@ void addUrdfSubtree(const urdf::Link& top, const std::string& file, ModelBuilder
 /// may have. A plain scan of tags (comments, CDATA, processing instructions, declarations and quoted
 /// attribute values skipped); the XML parser reports every other error.
 void checkXmlShape(const std::string& xml, const std::string& name) {
+  // TinyXML (urdfdom's parser, and ours in checkJointGraph) steps over a UTF-8 sequence by its lead byte
+  // alone, so a lead byte at the end of the text makes it read past the end (a heap overflow, found by
+  // fuzz_urdf); and it stops at a NUL byte. XML is UTF-8 text without NUL: anything else is refused here.
+  const size_t bad = std::min(firstInvalidUtf8(xml), xml.find('\0'));
+  if (bad != std::string::npos) {
+    const auto line = 1 + std::count(xml.begin(), xml.begin() + static_cast<std::ptrdiff_t>(bad), '\n');
+    char byte[8];
+    std::snprintf(byte, sizeof byte, "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(xml[bad])));
+    throw InputError(name + ":" + std::to_string(line) + ": byte " + byte +
+                     (xml[bad] == '\0' ? " (NUL)" : " is not UTF-8") + "; a URDF is UTF-8 XML text");
+  }
   constexpr int kMaxDepth = 100;
   int depth = 0;
   size_t links = 0, joints = 0, line = 1;

@@ -7,6 +7,7 @@
 
 #include "jointsim/common/text.hpp"
 
+using jointsim::firstInvalidUtf8;
 using ::testing::EndsWith;
 using ::testing::HasSubstr;
 using ::testing::Not;
@@ -54,4 +55,22 @@ TEST(Printable, NeverSplitsAUtf8Sequence) {
     EXPECT_TRUE(head.empty() || static_cast<unsigned char>(head[0]) == 0xC3);
     EXPECT_TRUE(tail.empty() || static_cast<unsigned char>(tail[0]) == 0xC3);
   }
+}
+
+// Against the well-formed byte sequences of Unicode (table 3-7) and the classic malformed cases.
+TEST(Utf8, FirstInvalidByteOfMalformedSequences) {
+  constexpr size_t kOk = std::string::npos;
+  EXPECT_EQ(firstInvalidUtf8(""), kOk);
+  EXPECT_EQ(firstInvalidUtf8("plain ascii\n"), kOk);
+  EXPECT_EQ(firstInvalidUtf8("N\xC2\xB7m \xE2\x80\x93 \xF0\x9F\x98\x80"), kOk);  // N·m – 😀
+  EXPECT_EQ(firstInvalidUtf8("\xEF\xBF\xBD\xF4\x8F\xBF\xBF"), kOk);               // U+FFFD, U+10FFFF
+  EXPECT_EQ(firstInvalidUtf8("ab\xC4"), 2u);                                       // lead byte at the end
+  EXPECT_EQ(firstInvalidUtf8("ab\xE2\x80"), 2u);                                   // cut 3-byte sequence
+  EXPECT_EQ(firstInvalidUtf8("a\x80"), 1u);                                        // lone continuation byte
+  EXPECT_EQ(firstInvalidUtf8("a\xC0\xAF"), 1u);                                    // overlong '/'
+  EXPECT_EQ(firstInvalidUtf8("a\xE0\x80\xAF"), 1u);                                // overlong, 3 bytes
+  EXPECT_EQ(firstInvalidUtf8("a\xED\xA0\x80"), 1u);                                // surrogate U+D800
+  EXPECT_EQ(firstInvalidUtf8("a\xF4\x90\x80\x80"), 1u);                            // above U+10FFFF
+  EXPECT_EQ(firstInvalidUtf8("a\xF8\x88\x80\x80\x80"), 1u);                        // 5-byte form
+  EXPECT_EQ(firstInvalidUtf8("\xC3\xA9t\xC3"), 3u);                                // é then a cut one
 }

@@ -2,6 +2,8 @@
 // same robot identically, and bad input gives one clear error naming the file, the key path and what was
 // expected.
 #include <cmath>
+#include <fstream>
+#include <iterator>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -316,7 +318,32 @@ TEST(Urdf, LinkWithTwoParentsOrACycleOfJointsIsAnInputError) {
               ::testing::ThrowsMessage<InputError>(
                   HasSubstr("s.urdf:3: joint 'self' closes a cycle of joints through link 'b'")));
   // The fuzzer's find: the shipped UR5 with wrist_3_joint's child changed to wrist_1_link.
-  EXPECT_THAT([] { loadUrdf(sourcePath("tests/fuzz/regressions/urdf/wrist_link_with_two_parents.urdf")); },
+  std::ifstream in(sourcePath("config/robots/ur5.urdf"));
+  std::string ur5((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string child = "<child link=\"wrist_3_link\"/>";
+  const size_t at = ur5.find(child);
+  ASSERT_NE(at, std::string::npos);
+  ur5.replace(at, child.size(), "<child link=\"wrist_1_link\"/>");
+  EXPECT_THAT([&] { loadUrdfString(ur5, "ur5.urdf"); },
               ::testing::ThrowsMessage<InputError>(
                   HasSubstr("link 'wrist_1_link' is already the child of joint 'wrist_1_joint'")));
+}
+
+// Was (found by fuzz_urdf): a UTF-8 lead byte at the end of a URDF made TinyXML, urdfdom's parser, read past
+// the end of the text (heap-buffer-overflow under AddressSanitizer). Text that is not UTF-8, or has a NUL
+// byte, is refused before any XML parser sees it; UTF-8 text (a comment in German) still loads.
+TEST(Urdf, TextThatIsNotUtf8IsRefusedBeforeParsing) {
+  EXPECT_THAT([] { loadUrdf(sourcePath("tests/fuzz/regressions/urdf/utf8_lead_byte_at_end.urdf")); },
+              ::testing::ThrowsMessage<InputError>(AllOf(HasSubstr("utf8_lead_byte_at_end.urdf:"),
+                                                         HasSubstr("byte 0xC4 is not UTF-8"))));
+  const std::string good = "<robot name=\"r\"><!-- Gelenk f\xC3\xBCr die Achse -->\n<link name=\"base\"/>"
+                           "<link name=\"a\"/>\n<joint name=\"j\" type=\"continuous\"><parent link=\"base\"/>"
+                           "<child link=\"a\"/><axis xyz=\"0 0 1\"/></joint></robot>";
+  EXPECT_EQ(loadUrdfString(good, "good.urdf").nq, 1);
+  EXPECT_THAT([&] { loadUrdfString(good.substr(0, 40) + "\xE2\x80" + good.substr(40), "cut.urdf"); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("cut.urdf:1: byte 0xE2 is not UTF-8")));
+  std::string nul = good;
+  nul[good.find('\n') + 3] = '\0';
+  EXPECT_THAT([&] { loadUrdfString(nul, "nul.urdf"); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("nul.urdf:2: byte 0x00 (NUL)")));
 }

@@ -36,5 +36,9 @@ std::string safeFileName(const std::string& name);
 /// longer than about `max_length` bytes, cut in the middle ("... (N bytes cut) ...") keeping the head and the
 /// tail (where a message gives its reason).
 std::string printable(const std::string& text, size_t max_length = 400);
+/// Offset of the first byte of `text` that does not begin a well-formed UTF-8 sequence (RFC 3629: no
+/// overlong form, surrogate or code point above U+10FFFF; a sequence cut by the end counts), or
+/// std::string::npos when all of it is UTF-8.
+size_t firstInvalidUtf8(const std::string& text);
 
 }  // namespace jointsim
