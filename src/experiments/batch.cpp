@@ -84,7 +84,7 @@ struct SummaryInfo {
 };
 SummaryInfo readSummary(const fs::path& p) {
   SummaryInfo s;
-  if (!fs::exists(p)) return s;
+  if (!io::pathExists(p.string())) return s;
   s.exists = true;
   nlohmann::ordered_json parsed;
   try {
@@ -221,7 +221,7 @@ Sweep loadSweep(const std::string& path) {
   if (s.name.empty() || sanitize(s.name) != s.name)
     head["name"].failExpected("a name of letters, digits, '.', '-', '_'");
   s.experiment = head.required("experiment", "the base experiment file, relative to this file").asPath();
-  if (!fs::exists(s.experiment)) head["experiment"].fail("no such file: " + s.experiment);
+  if (!io::pathExists(s.experiment)) head["experiment"].fail("no such file: " + s.experiment);
   const std::vector<std::string> common = readSet(head["set"]);
 
   std::set<std::string> names;

@@ -34,6 +34,19 @@ std::string readAll(const std::string& path, std::string& out) {
 }
 }  // namespace
 
+bool pathExists(const std::string& path) {
+  std::error_code ec;
+  return std::filesystem::exists(path, ec);
+}
+bool isRegularFile(const std::string& path) {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(path, ec);
+}
+bool isDirectory(const std::string& path) {
+  std::error_code ec;
+  return std::filesystem::is_directory(path, ec);
+}
+
 std::string contentHash(const std::string& bytes) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "xxh3:%016llx",

@@ -80,7 +80,7 @@ LoadedRun loadRun(const std::string& run_dir) {
     candidates.push_back(fs::path(csv));
   }
   for (const auto& c : candidates)
-    if (fs::is_regular_file(c)) {
+    if (io::isRegularFile(c.string())) {
       run.csv = fs::absolute(c).lexically_normal().string();
       break;
     }
@@ -173,7 +173,7 @@ std::optional<std::string> runFolder(const std::string& sweep_dir, const Manifes
   }
   candidates.push_back(fs::path(sweep_dir) / row.run);
   for (const auto& c : candidates)
-    if (fs::is_regular_file(c / "summary.json")) return c.string();
+    if (io::isRegularFile((c / "summary.json").string())) return c.string();
   return std::nullopt;
 }
 
@@ -341,7 +341,7 @@ struct Cleanup {
 
 std::string findGnuplot(const std::string& requested) {
   const std::string name = requested.empty() ? "gnuplot" : requested;
-  auto executable = [](const fs::path& p) { return fs::is_regular_file(p) && ::access(p.c_str(), X_OK) == 0; };
+  auto executable = [](const fs::path& p) { return io::isRegularFile(p.string()) && ::access(p.c_str(), X_OK) == 0; };
   if (name.find('/') != std::string::npos) {
     if (executable(name)) return name;
   } else if (const char* path = std::getenv("PATH")) {
@@ -359,10 +359,10 @@ PlotScript plotScript(const std::string& run_dir, const std::string& fig_dir, co
   if (options.width < 200 || options.height < 150 || options.width > 10000 || options.height > 10000)
     throw InputError("plot size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
                      " pixels: expected a width of 200 to 10000 and a height of 150 to 10000");
-  if (!fs::is_directory(run_dir)) throw InputError(run_dir + ": no such run folder");
+  if (!io::isDirectory(run_dir)) throw InputError(run_dir + ": no such run folder");
   const fs::path dir = fs::absolute(run_dir).lexically_normal();
-  const bool is_run = fs::is_regular_file(dir / "summary.json");
-  const bool is_sweep = !is_run && fs::is_regular_file(dir / "manifest.csv");
+  const bool is_run = io::isRegularFile((dir / "summary.json").string());
+  const bool is_sweep = !is_run && io::isRegularFile((dir / "manifest.csv").string());
   if (!is_run && !is_sweep)
     throw InputError(run_dir + ": neither a run folder (summary.json and the CSV log of `jointsim run`) nor a sweep "
                                "folder (manifest.csv of `jointsim batch`)");
@@ -443,7 +443,7 @@ std::vector<std::string> plotRun(const std::string& run_dir, const std::string& 
                 " drawing the figures of " + dir + (err.empty() ? std::string() : ":\n" + err));
   }
   for (const auto& f : finals) {
-    if (!fs::is_regular_file(f + suffix)) throw Error(f + ": gnuplot did not write this figure");
+    if (!io::isRegularFile(f + suffix)) throw Error(f + ": gnuplot did not write this figure");
     if (std::rename((f + suffix).c_str(), f.c_str()) != 0)
       throw Error(f + ": cannot move the figure into place: " + std::strerror(errno));
   }

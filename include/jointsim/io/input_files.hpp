@@ -44,6 +44,12 @@ class InputRecord {
 
 /// "xxh3:" + the XXH3 64-bit hash of `bytes` in hex.
 std::string contentHash(const std::string& bytes);
+/// Whether `path` exists / is a regular file / is a folder. False also when it cannot be examined (a name
+/// too long, a component without permission, a symlink loop): these never throw, unlike std::filesystem's
+/// one-argument forms.
+bool pathExists(const std::string& path);
+bool isRegularFile(const std::string& path);
+bool isDirectory(const std::string& path);
 /// The bytes of a regular file of at most kMaxInputFileBytes; empty when it cannot be read (no record kept).
 std::string readBoundedFile(const std::string& path);
 /// contentHash of the file's bytes; empty when the file cannot be read.
