@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "jointsim/common/error.hpp"
@@ -51,6 +52,19 @@ std::string num(double x) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.9g", x);
   return buf;
+}
+
+/// Columns are matched by name (exact header, else base name without the unit): two columns of one file with
+/// the same base name would make the match ambiguous (a table compared with itself could pair a column with
+/// another one; found by fuzz_csv).
+void checkDistinctNames(const CsvTable& t) {
+  std::map<std::string, size_t> seen;
+  for (size_t i = 0; i < t.header.size(); ++i) {
+    const auto [it, fresh] = seen.emplace(columnBaseName(t.header[i]), i);
+    if (!fresh)
+      throw InputError(t.path + ": columns " + std::to_string(it->second + 1) + " and " + std::to_string(i + 1) +
+                       " have the same name '" + printable(it->first) + "'; the columns of a log must have distinct names");
+  }
 }
 
 void checkTime(const CsvTable& t, int col) {
@@ -175,6 +189,8 @@ CompareResult compareTables(const CsvTable& a, const CsvTable& b, const CompareO
   }
   checkTime(a, ta);
   checkTime(b, tb);
+  checkDistinctNames(a);
+  checkDistinctNames(b);
 
   // Time ranges.
   const double a0 = a.data(0, ta), a1 = a.data(a.rows() - 1, ta);

@@ -281,3 +281,18 @@ TEST(Compare, FirstColumnIsTimeWhenNoneIsNamedTime) {
   EXPECT_TRUE(r.pass()) << report::formatComparison(r);
   ASSERT_EQ(r.columns.size(), 2u);
 }
+
+// Was (found by fuzz_csv): a file whose header repeats a name ("-1,-1") compared with itself failed, its second
+// column being paired with the first. Two columns with one base name make the pairing ambiguous: an error.
+TEST(Compare, RepeatedColumnNamesAreAnInputError) {
+  const auto dir = std::filesystem::temp_directory_path() / ("jointsim_compare_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "repeated.csv").string();
+  std::ofstream(path) << "time[s],x[m],x[mm]\n0,1,1000\n1,2,2000\n";
+  EXPECT_THAT([&] { report::compareCsvFiles(path, path); },
+              ::testing::ThrowsMessage<InputError>(
+                  HasSubstr("repeated.csv: columns 2 and 3 have the same name 'x'")));
+  const std::string fuzz = std::string(JOINTSIM_SOURCE_DIR) + "/tests/fuzz/regressions/csv/header_repeats_a_name.csv";
+  EXPECT_THAT([&] { report::compareCsvFiles(fuzz, fuzz); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("columns 1 and 2 have the same name '-1'")));
+}
