@@ -393,6 +393,13 @@ struct CvodeIntegrator::Impl {
   /// Add the counters of the current segment to `base` (before a CVodeReInit resets them).
   void accumulate() { addCounters(base, segmentStats()); }
 
+  /// Internal steps over all segments (the one counter the step limit needs; segmentStats() reads them all).
+  long stepsSoFar() const {
+    long nst = 0;
+    if (initialized && !fresh) CVodeGetNumSteps(mem, &nst);
+    return base.steps + nst;
+  }
+
   /// Adds the event counters of `from` to `into` (order, step and time are not counters).
   static void addCounters(SolverStats& into, const SolverStats& from) {
     into.steps += from.steps;
@@ -558,7 +565,7 @@ double CvodeIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out)
 
   // The run's step budget: this call may take at most the steps left plus one (the one that exceeds it).
   if (m.step_limit > 0) {
-    const long steps_before = m.base.steps + m.segmentStats().steps;
+    const long steps_before = m.stepsSoFar();
     const long mxstep = std::min(m.opts.max_num_steps, std::max(1L, m.step_limit - steps_before + 1));
     if (mxstep != m.mxstep_set) {
       m.check(CVodeSetMaxNumSteps(m.mem, mxstep), "CVodeSetMaxNumSteps");
@@ -573,7 +580,7 @@ double CvodeIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out)
   const int flag = CVode(m.mem, t_out, m.y, &t_ret, CV_NORMAL);
   m.fresh = false;
   if (flag == CV_TOO_MUCH_WORK && m.step_limit > 0 && !m.callback_exception &&
-      m.base.steps + m.segmentStats().steps > m.step_limit) {
+      m.stepsSoFar() > m.step_limit) {
     m.t_last = m.cvodeTime();
     throw SolverError(m.prefix() + ": more than " + std::to_string(m.step_limit) + " internal steps at t = " +
                           formatTime(m.t_last) + " s (step limit)",
