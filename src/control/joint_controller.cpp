@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
@@ -45,20 +46,28 @@ ControllerOutputs JointController::evaluate(const ControllerInputs& in, const do
   switch (p_.type) {
     case ControllerType::Cascade002: {
       out.voltage = true;
-      out.qdm_ref = p_.P_pos * (in.q_set - in.q_fb) + in.ratio * in.qd_set;
-      const double e_vel = out.qdm_ref - in.qdm_fb;
-      out.i_ref = p_.P_vel * e_vel + p_.I_vel * x[0];
+      const bool velocity_loop = in.entry != ControlEntry::Current;
+      double e_vel = 0.0;
+      if (velocity_loop) {
+        out.qdm_ref = in.entry == ControlEntry::MotorVelocity ? in.command
+                                                               : p_.P_pos * (in.q_set - in.q_fb) + in.ratio * in.qd_set;
+        e_vel = out.qdm_ref - in.qdm_fb;
+        out.i_ref = p_.P_vel * e_vel + p_.I_vel * x[0];
+      } else {
+        out.i_ref = in.command;
+      }
       const double e_cur = out.i_ref - in.i_fb;
       out.u = p_.P_cur * e_cur + p_.I_cur * x[1];
-      xdot[0] = e_vel;
+      xdot[0] = e_vel;  // frozen (0) when the velocity loop is bypassed
       const bool saturated =
           in.v_limit > 0.0 && ((out.u > in.v_limit && e_cur > 0) || (out.u < -in.v_limit && e_cur < 0));
       xdot[1] = saturated ? 0.0 : e_cur;
       break;
     }
     case ControllerType::MotorPPI000: {
-      const double u = in.ratio * in.qd_set + p_.kp * (in.ratio * in.q_set - in.qm_fb) - in.qdm_fb;
-      out.qdm_ref = in.ratio * in.qd_set + p_.kp * (in.ratio * in.q_set - in.qm_fb);
+      out.qdm_ref = in.entry == ControlEntry::MotorVelocity ? in.command
+                                                             : in.ratio * in.qd_set + p_.kp * (in.ratio * in.q_set - in.qm_fb);
+      const double u = out.qdm_ref - in.qdm_fb;
       out.u = p_.ks * (u + x[0]);
       xdot[0] = u / p_.Ts;
       break;
@@ -66,6 +75,35 @@ ControllerOutputs JointController::evaluate(const ControllerInputs& in, const do
     case ControllerType::None: break;
   }
   return out;
+}
+
+bool JointController::accepts(ControlEntry entry) const {
+  switch (p_.type) {
+    case ControllerType::Cascade002: return true;
+    case ControllerType::MotorPPI000: return entry != ControlEntry::Current;
+    default: return false;
+  }
+}
+
+void JointController::matchOutput(const ControllerInputs& in, double u, double i_ref, double* x) const {
+  std::vector<double> xdot(2);
+  if (p_.type == ControllerType::Cascade002) {
+    // i_ref = P_vel e_vel + I_vel x0 (velocity loop in use), then V = P_cur (i_ref − i) + I_cur x1.
+    if (in.entry != ControlEntry::Current && p_.I_vel > 0.0) {
+      x[0] = 0.0;
+      const ControllerOutputs o = evaluate(in, x, xdot.data());
+      x[0] = (i_ref - o.i_ref) / p_.I_vel;
+    }
+    if (p_.I_cur > 0.0) {
+      x[1] = 0.0;
+      const ControllerOutputs o = evaluate(in, x, xdot.data());
+      x[1] = (u - o.u) / p_.I_cur;
+    }
+  } else if (p_.type == ControllerType::MotorPPI000 && p_.ks > 0.0) {
+    x[0] = 0.0;
+    const ControllerOutputs o = evaluate(in, x, xdot.data());
+    x[0] = (u - o.u) / p_.ks;  // τ = ks (u + x)
+  }
 }
 
 }  // namespace jointsim::control

@@ -186,6 +186,13 @@ std::string summaryJson(Experiment& e, const std::string& started, const Summary
 
 }  // namespace
 
+std::unique_ptr<sim::Simulator> makeSimulator(std::shared_ptr<Experiment> experiment) {
+  if (!experiment) throw InputError("makeSimulator: no experiment given");
+  const sim::SimulateOptions options = experiment->simulateOptions();
+  sim::Plant* plant = &experiment->plant();
+  return std::make_unique<sim::Simulator>(std::shared_ptr<sim::Plant>(std::move(experiment), plant), options.solver);
+}
+
 ExperimentResult runInMemory(Experiment& experiment) {
   const std::string started = utcNow();
   sim::TableSink sink(sim::tableColumns(experiment.plant()));

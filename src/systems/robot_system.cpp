@@ -4,9 +4,11 @@
 #include <cmath>
 #include <random>
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 
 namespace jointsim::systems {
@@ -128,6 +130,14 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
   }
   id_data_ = multibody::Data(id_model_);
   tip_ = model_.frameIndex(model_.tip_frame);
+  port_.assign(static_cast<size_t>(n), CommandPort::Setpoint);
+  applied_port_ = port_;
+  cmd_.setZero(n);
+  applied_cmd_.setZero(n);
+  ref_held_.assign(static_cast<size_t>(n), 0);
+  ref_q_.setZero(n);
+  ref_qd_.setZero(n);
+  ref_qdd_.setZero(n);
   const char* per_joint[][2] = {
       {"q_set", "rad"},    {"q", "rad"},         {"q_fb", "rad"},  {"qd", "rad/s"},        {"motor_velocity", "rad/s"},
       {"current", "A"},    {"current_ref", "A"}, {"voltage", "V"}, {"gear_torque", "N·m"}, {"friction_torque", "N·m"},
@@ -136,6 +146,236 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
     for (const auto& c : per_joint) signal_names_.push_back(std::string(c[0]) + "_" + name + "[" + c[1] + "]");
   for (const char* c : {"tcp_x[m]", "tcp_y[m]", "tcp_z[m]", "tcp_roll[rad]", "tcp_pitch[rad]", "tcp_yaw[rad]"})
     signal_names_.emplace_back(c);
+}
+
+const char* portName(CommandPort port) {
+  switch (port) {
+    case CommandPort::Setpoint: return "setpoint";
+    case CommandPort::MotorVelocity: return "motor_velocity";
+    case CommandPort::Current: return "current";
+    case CommandPort::Voltage: return "voltage";
+    case CommandPort::MotorTorque: return "motor_torque";
+  }
+  return "?";
+}
+
+CommandPort parsePort(const std::string& text) {
+  for (CommandPort p : {CommandPort::Setpoint, CommandPort::MotorVelocity, CommandPort::Current, CommandPort::Voltage,
+                        CommandPort::MotorTorque})
+    if (text == portName(p)) return p;
+  throw InputError("unknown command port '" + text +
+                   "'; the ports are: setpoint, motor_velocity, current, voltage, motor_torque");
+}
+
+namespace {
+control::ControlEntry entryOf(CommandPort port) {
+  switch (port) {
+    case CommandPort::MotorVelocity: return control::ControlEntry::MotorVelocity;
+    case CommandPort::Current: return control::ControlEntry::Current;
+    default: return control::ControlEntry::Position;
+  }
+}
+bool controllerDriven(CommandPort port) {
+  return port == CommandPort::Setpoint || port == CommandPort::MotorVelocity || port == CommandPort::Current;
+}
+}  // namespace
+
+void RobotSystem::checkJoint(int joint, const char* what) const {
+  if (joint < 0 || joint >= model_.nq)
+    throw InputError(name() + ": " + what + ": joint index " + std::to_string(joint) + " out of range 0.." +
+                     std::to_string(model_.nq - 1));
+}
+
+void RobotSystem::setCommandPort(int joint, CommandPort port) {
+  checkJoint(joint, "setCommandPort");
+  const size_t k = static_cast<size_t>(joint);
+  const DriveSpec& d = drives_[k];
+  const std::string where = name() + ": joint '" + d.joint + "': the " + portName(port) + " port ";
+  const bool electrics = layout_[k].current >= 0;
+  switch (port) {
+    case CommandPort::Setpoint: break;
+    case CommandPort::MotorVelocity:
+      if (!controllers_[k].accepts(control::ControlEntry::MotorVelocity))
+        throw InputError(where + "needs a controller with a velocity loop (the drive has controller type none)");
+      break;
+    case CommandPort::Current:
+      if (!electrics || !controllers_[k].accepts(control::ControlEntry::Current))
+        throw InputError(where + "needs motor electrics and a current loop (controller cascade_002); this drive has " +
+                         (electrics ? "no current loop" : "electrics: false"));
+      break;
+    case CommandPort::Voltage:
+      if (!electrics) throw InputError(where + "needs motor electrics (the drive has electrics: false)");
+      break;
+    case CommandPort::MotorTorque: break;
+  }
+  if (port_[k] != port) {
+    port_[k] = port;
+    cmd_[joint] = 0.0;  // a new port starts from a zero command unless set
+    ++revision_;
+  }
+}
+
+CommandPort RobotSystem::commandPort(int joint) const {
+  checkJoint(joint, "commandPort");
+  return port_[static_cast<size_t>(joint)];
+}
+
+void RobotSystem::setCommand(int joint, double value) {
+  checkJoint(joint, "setCommand");
+  const size_t k = static_cast<size_t>(joint);
+  const CommandPort port = port_[k];
+  const std::string where = name() + ": joint '" + drives_[k].joint + "': " + portName(port) + " command";
+  if (port == CommandPort::Setpoint)
+    throw InputError(where + ": the joint is under the setpoint port; use setSetpoint or choose another port");
+  if (!std::isfinite(value)) throw InputError(where + ": expected a finite number, got " + formatNumber(value));
+  if (cmd_[joint] != value) {
+    cmd_[joint] = value;
+    ++revision_;
+  }
+}
+
+void RobotSystem::setCommands(const Eigen::VectorXd& values) {
+  if (values.size() != model_.nq)
+    throw InputError(name() + ": setCommands: expected " + std::to_string(model_.nq) + " values, got " +
+                     std::to_string(values.size()));
+  for (int k = 0; k < model_.nq; ++k)
+    if (port_[static_cast<size_t>(k)] != CommandPort::Setpoint && !std::isfinite(values[k]))
+      throw InputError(name() + ": setCommands: joint '" + drives_[static_cast<size_t>(k)].joint +
+                       "': expected a finite number, got " + formatNumber(values[k]));
+  for (int k = 0; k < model_.nq; ++k)
+    if (port_[static_cast<size_t>(k)] != CommandPort::Setpoint) setCommand(k, values[k]);
+}
+
+double RobotSystem::command(int joint) const {
+  checkJoint(joint, "command");
+  return cmd_[joint];
+}
+
+void RobotSystem::setSetpoint(int joint, double q, double qd, double qdd) {
+  checkJoint(joint, "setSetpoint");
+  if (!std::isfinite(q) || !std::isfinite(qd) || !std::isfinite(qdd))
+    throw InputError(name() + ": joint '" + drives_[static_cast<size_t>(joint)].joint +
+                     "': setpoint: expected finite q, qd, qdd, got " + formatNumber(q) + ", " + formatNumber(qd) +
+                     ", " + formatNumber(qdd));
+  char& held = ref_held_[static_cast<size_t>(joint)];
+  if (!held || ref_q_[joint] != q || ref_qd_[joint] != qd || ref_qdd_[joint] != qdd) {
+    held = 1;
+    ref_q_[joint] = q;
+    ref_qd_[joint] = qd;
+    ref_qdd_[joint] = qdd;
+    ++revision_;
+  }
+}
+
+void RobotSystem::holdSetpoints(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd) {
+  const int n = model_.nq;
+  auto check = [&](const Eigen::VectorXd& v, const char* what, bool optional) {
+    if ((optional && v.size() == 0)) return;
+    if (v.size() != n)
+      throw InputError(name() + ": holdSetpoints: " + what + ": expected " + std::to_string(n) + " values, got " +
+                       std::to_string(v.size()));
+    if (!v.allFinite()) throw InputError(name() + ": holdSetpoints: " + what + ": expected finite values");
+  };
+  check(q, "q", false);
+  check(qd, "qd", true);
+  check(qdd, "qdd", true);
+  for (int k = 0; k < n; ++k) setSetpoint(k, q[k], qd.size() ? qd[k] : 0.0, qdd.size() ? qdd[k] : 0.0);
+}
+
+void RobotSystem::releaseSetpoints() {
+  for (auto& h : ref_held_)
+    if (h) {
+      h = 0;
+      ++revision_;
+    }
+}
+
+void RobotSystem::setExternalWrench(const std::string& frame, const Eigen::Matrix<double, 6, 1>& wrench) {
+  const int f = model_.frameIndex(frame);
+  if (!wrench.allFinite()) throw InputError(name() + ": external wrench on frame '" + frame + "': expected finite values");
+  if (model_.frames[static_cast<size_t>(f)].joint < 0)
+    throw InputError(name() + ": external wrench on frame '" + frame +
+                     "': the frame is fixed to the base, a wrench there does not act on the robot");
+  auto it = std::find_if(user_wrenches_.begin(), user_wrenches_.end(), [f](const auto& w) { return w.first == f; });
+  if (wrench.isZero(0.0)) {
+    if (it != user_wrenches_.end()) {
+      user_wrenches_.erase(it);
+      ++revision_;
+    }
+    return;
+  }
+  if (it == user_wrenches_.end()) {
+    user_wrenches_.emplace_back(f, wrench);
+    ++revision_;
+  } else if (it->second != wrench) {
+    it->second = wrench;
+    ++revision_;
+  }
+}
+
+void RobotSystem::clearExternalWrenches() {
+  if (!user_wrenches_.empty()) {
+    user_wrenches_.clear();
+    ++revision_;
+  }
+}
+
+control::ControllerInputs RobotSystem::controllerInputs(int k) const {
+  const auto& L = layout_[static_cast<size_t>(k)];
+  return {sig_.q_set[k], sig_.qd_set[k],  sig_.q_fb[k], sig_.qm[k], sig_.qdm[k],
+          sig_.current[k], L.ratio, drives_[static_cast<size_t>(k)].motor.V_supply};
+}
+
+void RobotSystem::applyInputs(double t, Eigen::Ref<Eigen::VectorXd> y) {
+  for (int k = 0; k < model_.nq; ++k) {
+    const size_t kk = static_cast<size_t>(k);
+    if (port_[kk] != applied_port_[kk]) bumpless(k, applied_port_[kk], t, y);
+  }
+  applied_port_ = port_;
+  applied_cmd_ = cmd_;
+}
+
+void RobotSystem::bumpless(int k, CommandPort from, double t, Eigen::Ref<Eigen::VectorXd> y) {
+  const size_t kk = static_cast<size_t>(k);
+  const DriveSpec& d = drives_[kk];
+  const DriveLayout& L = layout_[kk];
+  const CommandPort to = port_[kk];
+  if (L.controller < 0 || !controllerDriven(to)) return;  // no integrators, or the controller is not in use
+  setpointStage(t);
+  measurementStage(y);
+  double* x = sampled() ? ctrl_x_.data() + L.controller : y.data() + L.controller;
+  const bool cascade = d.controller.type == control::ControllerType::Cascade002;
+  // The actuator value applied just before the switch: the output of the controller under its old entry (held
+  // output under sampled control), the voltage or torque command, or for a cascade leaving the torque port the
+  // voltage that holds the present current (V = R i + k_e q̇_m).
+  double u_prev = 0.0, i_prev = sig_.current[k];
+  if (controllerDriven(from)) {
+    if (sampled()) {
+      u_prev = held_u_[k];
+      i_prev = held_i_ref_[k];
+    } else {
+      control::ControllerInputs in = controllerInputs(k);
+      in.entry = entryOf(from);
+      in.command = applied_cmd_[k];
+      double xdot[4];
+      const control::ControllerOutputs o = controllers_[kk].evaluate(in, x, xdot);
+      u_prev = o.u;
+      i_prev = o.i_ref;
+    }
+  } else if (from == CommandPort::Voltage) {
+    u_prev = motors_[kk].supplyVoltage(applied_cmd_[k]);
+  } else {  // MotorTorque
+    u_prev = cascade ? d.motor.R * sig_.current[k] + d.motor.ke * sig_.qdm[k] : applied_cmd_[k];
+    if (cascade) i_prev = sig_.current[k];
+  }
+  control::ControllerInputs in = controllerInputs(k);
+  in.entry = entryOf(to);
+  in.command = cmd_[k];
+  controllers_[kk].matchOutput(in, u_prev, i_prev, x);
+  if (sampled()) {  // the held output continues until the next sample
+    held_u_[k] = u_prev;
+    held_i_ref_[k] = to == CommandPort::Current ? cmd_[k] : i_prev;
+  }
 }
 
 void RobotSystem::setJointLimits(const JointLimitSettings& settings) {
@@ -188,6 +428,8 @@ std::vector<double> RobotSystem::timeEvents(double) const {
 }
 
 void RobotSystem::start(double t0, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  applied_port_ = port_;  // the state starts consistent with the ports as they are
+  applied_cmd_ = cmd_;
   if (sampled()) controlStep(t0, y);
 }
 
@@ -285,7 +527,7 @@ void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>&
   if (!sampled()) throw InputError("controlStep: sampled control is not enabled");
   const int n = model_.nq;
   const double Ts = 1.0 / sample_rate_;
-  if (setpoints_) setpoints_(t, sig_.q_set, sig_.qd_set, sig_.qdd_set);
+  setpointStage(t);
   const Eigen::VectorXd phi = coupled_ ? Eigen::VectorXd(Ginv_ * y.head(n)) : Eigen::VectorXd(y.head(n));
   const Eigen::VectorXd phid = coupled_ ? Eigen::VectorXd(Ginv_ * y.segment(n, n)) : Eigen::VectorXd(y.segment(n, n));
   std::vector<double> xdot(4, 0.0);
@@ -304,20 +546,30 @@ void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>&
     qdm_meas += rng_->gauss(S.motor_velocity_noise);
     prev_qm_meas_[k] = qm_meas;
     const double i_meas = quantise(i + rng_->gauss(S.current_noise), S.current_quantum);
-    const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q_meas,  qm_meas,
-                                       qdm_meas,      i_meas,         L.ratio, d.motor.V_supply};
+    held_q_fb_[k] = q_meas;
+    const CommandPort port = port_[static_cast<size_t>(k)];
+    if (!controllerDriven(port)) continue;  // voltage or torque command: the controller holds its state
+    control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q_meas,  qm_meas,
+                                 qdm_meas,      i_meas,         L.ratio, d.motor.V_supply};
+    in.entry = entryOf(port);
+    in.command = cmd_[k];
     double* x = L.controller >= 0 ? ctrl_x_.data() + L.controller : nullptr;
     const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(in, x, xdot.data());
     for (int j = 0; j < L.n_controller; ++j) x[j] += Ts * xdot[static_cast<size_t>(j)];  // forward Euler
     held_u_[k] = out.u;
     held_i_ref_[k] = out.i_ref;
-    held_q_fb_[k] = q_meas;
   }
   first_sample_ = false;
 }
 
 void RobotSystem::setpointStage(double t) const {
   if (setpoints_) setpoints_(t, sig_.q_set, sig_.qd_set, sig_.qdd_set);
+  for (int k = 0; k < model_.nq; ++k)
+    if (ref_held_[static_cast<size_t>(k)]) {
+      sig_.q_set[k] = ref_q_[k];
+      sig_.qd_set[k] = ref_qd_[k];
+      sig_.qdd_set[k] = ref_qdd_[k];
+    }
 }
 
 void RobotSystem::measurementStage(const Eigen::Ref<const Eigen::VectorXd>& y) const {
@@ -346,13 +598,21 @@ void RobotSystem::controllerStage(const Eigen::Ref<const Eigen::VectorXd>& y, do
     const DriveSpec& d = drives_[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
     control::ControllerOutputs out;
-    if (sampled()) {  // zero-order hold of the last sample's outputs
+    const CommandPort port = port_[static_cast<size_t>(k)];
+    if (!controllerDriven(port)) {  // the command bypasses the controller, whose integrators hold
+      out.voltage = port == CommandPort::Voltage;
+      out.u = cmd_[k];
+      if (!sampled())
+        for (int j = 0; j < L.n_controller; ++j) ydot[L.controller + j] = 0.0;
+    } else if (sampled()) {  // zero-order hold of the last sample's outputs
       out.voltage = d.controller.type == control::ControllerType::Cascade002;
       out.u = held_u_[k];
       out.i_ref = held_i_ref_[k];
     } else {
-      const control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k],  sig_.q_fb[k], sig_.qm[k],
-                                         sig_.qdm[k],   sig_.current[k], L.ratio,      d.motor.V_supply};
+      control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k],  sig_.q_fb[k], sig_.qm[k],
+                                   sig_.qdm[k],   sig_.current[k], L.ratio,      d.motor.V_supply};
+      in.entry = entryOf(port);
+      in.command = cmd_[k];
       out = controllers_[static_cast<size_t>(k)].evaluate(in, L.controller >= 0 ? y.data() + L.controller : nullptr,
                                                           L.controller >= 0 ? ydot + L.controller : nullptr);
     }
@@ -376,7 +636,12 @@ void RobotSystem::motorElectricsStage(double* ydot) const {
   for (int k = 0; k < model_.nq; ++k) {
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
     const drive::DcMotor& motor = motors_[static_cast<size_t>(k)];
-    if (L.current >= 0) {
+    if (L.current >= 0 && port_[static_cast<size_t>(k)] == CommandPort::MotorTorque) {
+      // Electrics bypassed: the torque is the command; the current relaxes to τ/k_t with L/R.
+      const drive::DcMotorParams& m = drives_[static_cast<size_t>(k)].motor;
+      sig_.tau_motor[k] = sig_.u[k];
+      ydot[L.current] = (sig_.u[k] / m.kt - sig_.current[k]) * m.R / m.L;
+    } else if (L.current >= 0) {
       const double V_cmd = out_is_voltage_[static_cast<size_t>(k)] ? sig_.u[k] : 0.0;
       ydot[L.current] = motor.currentDerivative(sig_.current[k], V_cmd, sig_.qdm[k]);
       sig_.tau_motor[k] = motor.torque(sig_.current[k]);
@@ -434,10 +699,18 @@ void RobotSystem::multibodyStage(double t, const Eigen::Ref<const Eigen::VectorX
     tau_ += sig_.tau_stop;
   }
   const multibody::Matrix6Xd* fext = nullptr;
-  if (wrenches_) {
+  if (wrenches_ || !user_wrenches_.empty()) {
     multibody::forwardKinematics(model_, data_, q);
     fext_.setZero();
-    wrenches_(t, model_, data_, q, qd, fext_);
+    if (wrenches_) wrenches_(t, model_, data_, q, qd, fext_);
+    for (const auto& [f, w] : user_wrenches_) {
+      // World wrench at the frame origin → body frame of the carrying body, moment about the body origin.
+      const multibody::Frame& fr = model_.frames[static_cast<size_t>(f)];
+      const multibody::Placement& B = data_.oMi[static_cast<size_t>(fr.joint)];
+      const Eigen::Vector3d r = data_.oMf[static_cast<size_t>(f)].p - B.p;
+      fext_.col(fr.joint).head<3>() += B.R.transpose() * (w.tail<3>() + r.cross(w.head<3>()));
+      fext_.col(fr.joint).tail<3>() += B.R.transpose() * w.head<3>();
+    }
     fext = &fext_;
   }
   if (crba_path_) {

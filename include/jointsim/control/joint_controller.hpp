@@ -17,6 +17,13 @@ namespace jointsim::control {
 
 enum class ControllerType { None, Cascade002, MotorPPI000 };
 
+/// Where a command enters a controller (the command ports of systems::RobotSystem):
+/// - `Position`: the joint reference (q_set, q̇_set) through every loop;
+/// - `MotorVelocity`: a motor speed reference [rad/s] replaces the position loop's output;
+/// - `Current`: a current reference [A] replaces the velocity loop's output (Cascade002 only).
+/// Integrators of loops that a command bypasses are frozen (their derivative is zero).
+enum class ControlEntry { Position, MotorVelocity, Current };
+
 struct JointControllerParams {
   ControllerType type = ControllerType::None;
   // Cascade002 ([Raviola2023, Table 1])
@@ -41,6 +48,8 @@ struct ControllerInputs {
   double i_fb = 0;               ///< measured motor current [A]
   double ratio = 1;              ///< gear ratio N used to scale references
   double v_limit = 0;            ///< supply voltage [V] (Cascade002 anti-windup)
+  ControlEntry entry = ControlEntry::Position;  ///< where the command enters
+  double command = 0;  ///< motor speed reference [rad/s] (MotorVelocity) or current reference [A] (Current)
 };
 
 struct ControllerOutputs {
@@ -60,6 +69,12 @@ class JointController {
   void initialState(const ControllerInputs& in, double* x) const;
   /// Outputs and state derivatives.
   ControllerOutputs evaluate(const ControllerInputs& in, const double* x, double* xdot) const;
+  /// Whether commands may enter at `entry` (Current needs a current loop: Cascade002).
+  bool accepts(ControlEntry entry) const;
+  /// Bumpless transfer: sets the integrator states x so that evaluate(in, x) gives the output `u` [V or N·m]
+  /// (and, for Cascade002 with a velocity loop in use, the current reference `i_ref` [A]) at this instant.
+  /// Integrators with a zero gain are left as they are.
+  void matchOutput(const ControllerInputs& in, double u, double i_ref, double* x) const;
 
  private:
   JointControllerParams p_;

@@ -26,6 +26,7 @@
 #include "jointsim/io/input_files.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/sim/simulate.hpp"
+#include "jointsim/sim/simulator.hpp"
 #include "jointsim/systems/faults.hpp"
 #include "jointsim/systems/joint_limits.hpp"
 
@@ -140,6 +141,10 @@ struct ExperimentResult {
 /// naming the file, line and key path.
 std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::vector<std::string>& overrides = {},
                                            const std::vector<systems::Fault>& faults = {});
+/// A stepping simulator (sim/simulator.hpp) over a loaded experiment's plant with the experiment's solver settings
+/// (e.g. max_step of one log interval); the simulator keeps the experiment alive. The plant is reachable as
+/// simulator->plant() (for `tracking`, a systems::RobotSystem with its command ports).
+std::unique_ptr<sim::Simulator> makeSimulator(std::shared_ptr<Experiment> experiment);
 /// Runs a loaded experiment in memory: nothing is written. SolverError on failure.
 ExperimentResult runInMemory(Experiment& experiment);
 /// Loads and runs an experiment file, writing the log, extra tables and summary.json (see the file comment).

@@ -59,6 +59,14 @@ class Plant {
   /// One update of the sampled part at t = k·samplePeriod() (measure, compute, hold).
   virtual void sample(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/) {}
 
+  /// Inputs set between steps (command ports; sim::Simulator). A plant with such inputs increments this counter
+  /// whenever an input value actually changes; the simulator then calls applyInputs() and restarts the
+  /// integrator (the right-hand side jumps there), and only then.
+  virtual long inputRevision() const { return 0; }
+  /// Called by sim::Simulator at time t after inputRevision() changed, before the restart: the plant may set its
+  /// states for the new inputs (e.g. controller integrators for a bumpless switch of a command port).
+  virtual void applyInputs(double /*t*/, Eigen::Ref<Eigen::VectorXd> /*y*/) {}
+
   /// Output signals as `name[unit]` (the CSV column names after "time[s]").
   virtual const std::vector<std::string>& signalNames() const = 0;
   /// Values of the output signals at (t, y), in signalNames() order (size signalNames().size()).

@@ -55,6 +55,23 @@ struct DriveSpec {
   SensorSpec sensors;  ///< used with sampled control only
 };
 
+/// Where the command of a drive enters (RobotSystem::setCommandPort), changeable between steps of a
+/// sim::Simulator:
+/// - `Setpoint`: the joint reference (q, q̇, q̈) through the drive's controller (the default; the trajectory of
+///   setTrajectory/setSetpoints, or values held from setSetpoint);
+/// - `MotorVelocity`: a motor speed reference [rad/s] into the velocity loop (the position loop bypassed);
+/// - `Current`: a current reference [A] into the current loop (a drive with electrics and cascade_002);
+/// - `Voltage`: the motor voltage command [V] (a drive with electrics; the PWM saturation at ±V_supply applies);
+/// - `MotorTorque`: the electromagnetic motor torque [N·m] (electrics bypassed: the current state then relaxes
+///   to τ/k_t with the electrical time constant L/R, so that it is consistent when the port switches back).
+/// Loops that a port bypasses hold their integrators; switching back re-initialises them so that the
+/// controller's output continues from the value applied just before (bumpless transfer).
+enum class CommandPort { Setpoint, MotorVelocity, Current, Voltage, MotorTorque };
+/// "setpoint", "motor_velocity", "current", "voltage", "motor_torque".
+const char* portName(CommandPort port);
+/// Inverse of portName(); InputError listing the ports for another text.
+CommandPort parsePort(const std::string& text);
+
 /// Joint-space reference at time t (writes q_set, q̇_set, q̈_set of size n).
 using SetpointFunction = std::function<void(double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
                                             Eigen::Ref<Eigen::VectorXd> qdd)>;
@@ -103,6 +120,35 @@ class RobotSystem : public sim::Plant {
   /// appended; other modes leave the system unchanged (the monitor of warn lives in the experiment).
   void setJointLimits(const JointLimitSettings& settings);
   const EndStops& endStops() const { return stops_; }
+  // ----------------------------------------------------------------------------------- command ports
+  // Inputs a user's controller sets between steps of a sim::Simulator. Each call that changes a value
+  // increments inputRevision(), so the simulator restarts the integrator there (and only there). Bad input
+  // (unknown joint or frame, a port the drive lacks, a non-finite value): InputError, nothing changed.
+  /// Port of joint `joint` (index in model().joint_names or its name).
+  void setCommandPort(int joint, CommandPort port);
+  void setCommandPort(const std::string& joint, CommandPort port) { setCommandPort(model_.jointIndex(joint), port); }
+  CommandPort commandPort(int joint) const;
+  /// Value of the command of joint `joint` for its port MotorVelocity [rad/s], Current [A], Voltage [V] or
+  /// MotorTorque [N·m] (held until changed; InputError under the Setpoint port: use setSetpoint).
+  void setCommand(int joint, double value);
+  /// Values for every joint (size dof()); the entries of joints under the Setpoint port are ignored.
+  void setCommands(const Eigen::VectorXd& values);
+  double command(int joint) const;
+  /// Holds the reference of joint `joint` at (q [rad], q̇ [rad/s], q̈ [rad/s²]) from now on, in place of the
+  /// trajectory (the q̈ feed-forward enters the logged inverse-dynamics reference; the cascade uses q and q̇).
+  void setSetpoint(int joint, double q, double qd = 0.0, double qdd = 0.0);
+  /// Held references of every joint (sizes dof(); qd and qdd may be empty: zero).
+  void holdSetpoints(const Eigen::VectorXd& q, const Eigen::VectorXd& qd = {}, const Eigen::VectorXd& qdd = {});
+  /// Back to the trajectory (or setpoint function) for every joint.
+  void releaseSetpoints();
+  /// An external wrench [f (N); n (N·m)], both in world coordinates, applied at the origin of frame `frame`,
+  /// held until changed (zero removes it). Acts on the body that carries the frame.
+  void setExternalWrench(const std::string& frame, const Eigen::Matrix<double, 6, 1>& wrench);
+  void clearExternalWrenches();
+  long inputRevision() const override { return revision_; }
+  /// Bumpless transfer for joints whose port changed since the last call (or the start).
+  void applyInputs(double t, Eigen::Ref<Eigen::VectorXd> y) override;
+
   /// Joint positions [rad] at t = 0 for initialState() (default: the reference at t = 0, or zeros).
   void setInitialPositions(const Eigen::VectorXd& q0);
 
@@ -171,6 +217,9 @@ class RobotSystem : public sim::Plant {
   void jointTorqueStage() const;
   void multibodyStage(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
   void rotorReactionStage() const;
+  void checkJoint(int joint, const char* what) const;
+  void bumpless(int k, CommandPort from, double t, Eigen::Ref<Eigen::VectorXd> y);
+  control::ControllerInputs controllerInputs(int k) const;  // from sig_ (after the measurement stage)
 
   multibody::Model model_;
   std::vector<DriveSpec> drives_;
@@ -194,6 +243,13 @@ class RobotSystem : public sim::Plant {
   bool first_sample_ = true;
   struct Rng;
   std::shared_ptr<Rng> rng_;
+  // Command ports (inputs between steps).
+  std::vector<CommandPort> port_, applied_port_;
+  Eigen::VectorXd cmd_, applied_cmd_;                 // per joint: the port's value; the value last applied
+  std::vector<char> ref_held_;                        // per joint: the reference is held (setSetpoint)
+  Eigen::VectorXd ref_q_, ref_qd_, ref_qdd_;
+  std::vector<std::pair<int, Eigen::Matrix<double, 6, 1>>> user_wrenches_;  // frame index, world wrench
+  long revision_ = 0;
   // Logged signals.
   std::vector<std::string> signal_names_;
   multibody::Model id_model_;  // rotor inertias of every drive as armature (inverse-dynamics reference)

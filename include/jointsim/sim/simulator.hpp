@@ -1,0 +1,107 @@
+#pragma once
+/// \file
+/// A stepping simulator over any sim::Plant: the loop of sim::simulate() opened up, so that a user's own
+/// controller can run around the plant at its own rate and change the plant's inputs (command ports) between
+/// steps.
+///
+///   systems::RobotSystem robot = systems::loadRobotWithDrives("config/robots/ur5_twin.yaml");
+///   sim::Simulator sim(robot, solver);
+///   robot.setCommandPort(0, systems::CommandPort::Voltage);
+///   for (int k = 0; k < 1000; ++k) {                        // 1 kHz
+///     robot.setCommand(0, pd(sim.signal("q_shoulder_pan_joint"), ...));
+///     sim.advance(1e-3);
+///   }
+///
+/// Events are handled inside advance()/advanceTo() exactly as in sim::simulate(): root events (the plant's
+/// updateModes), time events (the plant's timeEvents) and the plant's sampled part (sample() at k·T_s from the
+/// reset time) restart the integrator. An input change (Plant::inputRevision()) restarts it too, at the start
+/// of the next advance, and only then: between unchanged inputs CVODE keeps its step-size and order history
+/// across calls. Every advance ends exactly at its target time (a CVODE stop time), never by interpolation. A
+/// sample due exactly at the target time is taken at the start of the next advance, so signals() at the target
+/// show the inputs held over the interval that ends there (as sim::simulate's outputs do).
+///
+/// Errors: InputError for a bad target time or state (the simulator is unchanged); SolverError (with the
+/// simulated time, the CVODE flag and the plant's name) when the integration fails — the simulator then keeps
+/// the last state it reached and may be reset().
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "jointsim/sim/cvode_integrator.hpp"
+#include "jointsim/sim/plant.hpp"
+
+namespace jointsim::sim {
+
+class Simulator {
+ public:
+  /// Steps `plant`, which must outlive the simulator; reset() to the plant's initial state at t = 0.
+  explicit Simulator(Plant& plant, const CvodeOptions& solver = {});
+  /// Shares ownership of the plant (e.g. an aliasing pointer that keeps an experiment alive).
+  explicit Simulator(std::shared_ptr<Plant> plant, const CvodeOptions& solver = {});
+  ~Simulator();
+  Simulator(const Simulator&) = delete;
+  Simulator& operator=(const Simulator&) = delete;
+
+  Plant& plant() { return *plant_; }
+  const Plant& plant() const { return *plant_; }
+
+  /// Back to the plant's initialState() at t = 0 (the plant's start() is called: first controller sample).
+  void reset();
+  /// To state `y0` (size stateSize()) at time `t0` [s]; samples continue at t0 + k·T_s.
+  void reset(double t0, const Eigen::VectorXd& y0);
+  /// Integrates over `dt` [s] (> 0, finite); returns the time reached [s]. A target within 1e-12 s (relative)
+  /// of a sample or time event is moved onto it, so steps of 1e-3 s meet samples at k·1e-3 s.
+  double advance(double dt);
+  /// Integrates to `t` [s] (>= time(), finite); returns the time reached.
+  double advanceTo(double t);
+
+  double time() const { return t_; }                     ///< [s]
+  const Eigen::VectorXd& state() const { return y_; }    ///< continuous state (the plant's layout)
+  /// Replaces the continuous state at time() (size stateSize(), finite); the integrator restarts.
+  void setState(const Eigen::VectorXd& y);
+
+  /// Signal names `name[unit]`, the CSV column names of the plant after "time[s]".
+  const std::vector<std::string>& signalNames() const { return plant_->signalNames(); }
+  /// Values of all signals at time() (in signalNames() order).
+  const Eigen::VectorXd& signals() const;
+  /// One signal by name, with or without its unit; InputError listing the signals when absent.
+  double signal(const std::string& name) const;
+  /// Index of a signal for repeated use with signals().
+  int signalIndex(const std::string& name) const;
+
+  /// CVODE statistics since construction, over all restarts.
+  SolverStats stats() const;
+  long events() const { return events_; }      ///< root and time events handled
+  long samples() const { return samples_; }    ///< updates of the sampled part (including the one at reset)
+  long restarts() const { return restarts_; }  ///< integrator restarts (events, samples, inputs, setState)
+
+ private:
+  void prepare();            // input changes and a pending sample at t_, then the restart if needed
+  void refreshEvents(double t_target);
+  void invalidate() { signals_valid_ = false; }
+
+  std::shared_ptr<Plant> plant_;
+  std::unique_ptr<CvodeIntegrator> integ_;
+  std::string component_;
+  double t_ = 0.0, t0_ = 0.0;
+  Eigen::VectorXd y_, y_work_;
+  bool restart_ = true;
+  long seen_revision_ = 0;
+  // Sampled part: next sample at t0 + k·T_s.
+  double Ts_ = 0.0;
+  long sample_k_ = 1;
+  double t_sample_ = 0.0;
+  // Time events of the plant up to horizon_, sorted; next_event_ indexes the first one after t_.
+  std::vector<double> events_list_;
+  double horizon_ = 0.0;
+  size_t next_event_ = 0;
+  long events_ = 0, samples_ = 0, restarts_ = 0;
+  mutable Eigen::VectorXd signals_;
+  mutable bool signals_valid_ = false;
+  mutable long signals_revision_ = 0;
+};
+
+}  // namespace jointsim::sim

@@ -1,0 +1,194 @@
+#include "jointsim/sim/simulator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/common/interrupt.hpp"
+#include "jointsim/common/text.hpp"
+
+namespace jointsim::sim {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+/// A target this close (relative to max(1, |t|)) to a sample or time event is moved onto it.
+constexpr double kSnap = 1e-12;
+bool near(double a, double b) { return std::abs(a - b) <= kSnap * std::max(1.0, std::abs(b)); }
+}  // namespace
+
+Simulator::Simulator(Plant& plant, const CvodeOptions& solver)
+    : Simulator(std::shared_ptr<Plant>(&plant, [](Plant*) {}), solver) {}
+
+Simulator::Simulator(std::shared_ptr<Plant> plant, const CvodeOptions& solver) : plant_(std::move(plant)) {
+  if (!plant_) throw InputError("Simulator: no plant given");
+  CvodeOptions options = solver;
+  if (options.component.empty()) options.component = plant_->name();
+  component_ = options.component;
+  const int n = plant_->stateSize();
+  Plant* p = plant_.get();
+  integ_ = std::make_unique<CvodeIntegrator>(
+      n,
+      [p](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+        if (stopRequested()) throw SolverError(p->name() + ": interrupted", t, "INTERRUPTED", p->name());
+        p->derivatives(t, y, yd);
+      },
+      options);
+  if (plant_->rootCount() > 0)
+    integ_->setRootFunction(plant_->rootCount(), [p](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                                     Eigen::Ref<Eigen::VectorXd> g) { p->roots(t, y, g); });
+  Ts_ = plant_->samplePeriod();
+  if (!(Ts_ >= 0.0) || !std::isfinite(Ts_)) throw InputError(plant_->name() + ": sample period must be >= 0 s");
+  signals_.setZero(static_cast<Eigen::Index>(plant_->signalNames().size()));
+  reset();
+}
+
+Simulator::~Simulator() = default;
+
+void Simulator::reset() {
+  const Eigen::VectorXd y0 = plant_->initialState();
+  reset(0.0, y0);
+}
+
+void Simulator::reset(double t0, const Eigen::VectorXd& y0) {
+  const int n = plant_->stateSize();
+  if (!std::isfinite(t0)) throw InputError(plant_->name() + ": reset: the time must be finite, got " + formatNumber(t0));
+  if (y0.size() != n)
+    throw InputError(plant_->name() + ": reset: the state has " + std::to_string(y0.size()) + " entries, expected " +
+                     std::to_string(n));
+  if (!y0.allFinite()) throw InputError(plant_->name() + ": reset: the state must be finite");
+  t_ = t0_ = t0;
+  y_ = y0;
+  y_work_ = y0;
+  plant_->start(t0, y_);
+  samples_ += Ts_ > 0.0 ? 1 : 0;
+  sample_k_ = 1;
+  t_sample_ = Ts_ > 0.0 ? t0 + Ts_ : kInf;
+  events_list_.clear();
+  horizon_ = t0;
+  next_event_ = 0;
+  seen_revision_ = plant_->inputRevision();
+  restart_ = true;
+  invalidate();
+}
+
+void Simulator::setState(const Eigen::VectorXd& y) {
+  if (y.size() != plant_->stateSize())
+    throw InputError(plant_->name() + ": setState: the state has " + std::to_string(y.size()) +
+                     " entries, expected " + std::to_string(plant_->stateSize()));
+  if (!y.allFinite()) throw InputError(plant_->name() + ": setState: the state must be finite");
+  y_ = y;
+  restart_ = true;
+  invalidate();
+}
+
+void Simulator::refreshEvents(double t_target) {
+  if (t_target <= horizon_ && horizon_ > t0_) return;
+  // The plant lists its events in (0, t_end): ask for a horizon well beyond the target, so that a loop of small
+  // steps asks rarely.
+  const double horizon = std::max(t_target, t_ + std::max(1.0, 2.0 * (horizon_ - t0_)));
+  events_list_.clear();
+  for (double e : plant_->timeEvents(horizon))
+    if (e > t_ && !near(t_, e) && std::isfinite(e)) events_list_.push_back(e);
+  std::sort(events_list_.begin(), events_list_.end());
+  events_list_.erase(std::unique(events_list_.begin(), events_list_.end()), events_list_.end());
+  horizon_ = horizon;
+  next_event_ = 0;
+}
+
+void Simulator::prepare() {
+  const long revision = plant_->inputRevision();
+  if (revision != seen_revision_) {
+    seen_revision_ = revision;
+    plant_->applyInputs(t_, y_);
+    restart_ = true;
+    invalidate();
+  }
+  if (Ts_ > 0.0 && (t_ >= t_sample_ || near(t_, t_sample_))) {  // a sample due at the end of the last advance
+    plant_->sample(t_, y_);
+    ++samples_;
+    t_sample_ = t0_ + static_cast<double>(++sample_k_) * Ts_;
+    restart_ = true;
+    invalidate();
+  }
+  if (restart_) {
+    integ_->initialize(t_, y_);
+    ++restarts_;
+    restart_ = false;
+  }
+}
+
+double Simulator::advance(double dt) {
+  if (!(dt > 0.0) || !std::isfinite(dt))
+    throw InputError(plant_->name() + ": advance: expected a finite time step > 0 s, got " + formatNumber(dt));
+  return advanceTo(t_ + dt);
+}
+
+double Simulator::advanceTo(double t_target) {
+  if (!std::isfinite(t_target) || t_target < t_)
+    throw InputError(plant_->name() + ": advanceTo: expected a finite time >= the current time " + formatNumber(t_) +
+                     " s, got " + formatNumber(t_target));
+  if (t_target == t_) return t_;
+  refreshEvents(t_target);
+  // Snap the target onto a sample or event it nearly meets (accumulated rounding of t + dt).
+  if (Ts_ > 0.0 && near(t_target, t_sample_)) t_target = t_sample_;
+  if (next_event_ < events_list_.size() && near(t_target, events_list_[next_event_]))
+    t_target = events_list_[next_event_];
+  try {
+    prepare();
+    while (t_ < t_target) {
+      if (t_target > horizon_) refreshEvents(t_target);
+      const double t_event = next_event_ < events_list_.size() ? events_list_[next_event_] : kInf;
+      const double stop = std::min(t_target, std::min(t_sample_, t_event));
+      integ_->setStopTime(stop);
+      const double t = integ_->advance(stop, y_work_);
+      t_ = t;
+      y_ = y_work_;
+      invalidate();
+      const bool root = integ_->rootFound();
+      const bool at_event = t_ >= t_event;
+      const bool at_sample = t_ >= t_sample_ && t_ < t_target;  // a sample at the target waits for prepare()
+      if (root || at_event) {
+        if (at_event)
+          while (next_event_ < events_list_.size() && (events_list_[next_event_] <= t_ || near(t_, events_list_[next_event_])))
+            ++next_event_;
+        plant_->updateModes(t_, y_, root ? integ_->rootDirections() : std::vector<int>{});
+        ++events_;
+        restart_ = true;
+      }
+      if (at_sample) {
+        plant_->sample(t_, y_);
+        ++samples_;
+        t_sample_ = t0_ + static_cast<double>(++sample_k_) * Ts_;
+        restart_ = true;
+      }
+      if (restart_ && t_ < t_target) {
+        integ_->initialize(t_, y_);
+        ++restarts_;
+        restart_ = false;
+      }
+    }
+  } catch (const SolverError&) {
+    restart_ = true;  // the integrator's history is unusable; y_ is the last state reached
+    throw;
+  }
+  return t_;
+}
+
+const Eigen::VectorXd& Simulator::signals() const {
+  // The signals depend on the inputs too (e.g. a voltage command): recomputed after either changed.
+  if (!signals_valid_ || signals_revision_ != plant_->inputRevision()) {
+    plant_->signals(t_, y_, signals_);
+    signals_valid_ = true;
+    signals_revision_ = plant_->inputRevision();
+  }
+  return signals_;
+}
+
+int Simulator::signalIndex(const std::string& name) const { return sim::signalIndex(*plant_, name); }
+
+double Simulator::signal(const std::string& name) const { return signals()[signalIndex(name)]; }
+
+SolverStats Simulator::stats() const { return integ_->stats(); }
+
+}  // namespace jointsim::sim
