@@ -1,0 +1,244 @@
+// Command ports of the robot with drives (systems::RobotSystem) driven through sim::Simulator: each port against
+// a closed form on a single gravity-free joint, the external wrench against the Jacobian transpose, bad inputs,
+// and a set-point → voltage → set-point switch on the UR5 twin.
+#include <cmath>
+#include <memory>
+
+#include <gtest/gtest.h>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/drive/transmissions.hpp"
+#include "jointsim/experiments/experiment.hpp"
+#include "jointsim/multibody/algorithms.hpp"
+#include "jointsim/multibody/robot_loader.hpp"
+#include "jointsim/sim/simulator.hpp"
+#include "jointsim/systems/robot_system.hpp"
+#include "test_util.hpp"
+
+namespace jointsim {
+namespace {
+
+using systems::CommandPort;
+
+constexpr double kN = 10.0;     // gear ratio
+constexpr double kIzz = 0.2;    // link inertia about the joint axis [kg·m²]
+
+/// One revolute joint about the vertical axis (gravity along −z exerts no torque), a rigid gear, a DC motor and
+/// the cascade controller; no friction.
+systems::RobotSystem singleJoint(bool electrics = true) {
+  multibody::ModelBuilder b("turntable", "base");
+  multibody::JointSpec j;
+  j.name = "j1";
+  j.axis = {0, 0, 1};
+  multibody::BodyInertia I;
+  I.mass = 1.0;
+  I.inertia = Eigen::Vector3d(0.15, 0.15, kIzz).asDiagonal();
+  b.addLink("base", j, "disc", I);
+  b.addFrame("rim", "disc", {Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.5, 0.0, 0.0)});
+  systems::DriveSpec d;
+  d.joint = "j1";
+  d.electrics = electrics;
+  d.transmission = std::make_shared<drive::RigidGear>(kN);
+  if (electrics) {
+    d.controller.type = control::ControllerType::Cascade002;
+    d.controller.P_pos = 50;
+    d.controller.P_vel = 0.2;
+    d.controller.I_vel = 2.0;
+    d.controller.P_cur = 10;
+    d.controller.I_cur = 5000;
+  } else {
+    d.controller.type = control::ControllerType::MotorPPI000;
+    d.controller.kp = 20;
+    d.controller.ks = 0.05;
+    d.controller.Ts = 0.02;
+  }
+  return systems::RobotSystem(b.build(), {d});
+}
+
+sim::CvodeOptions tight() {
+  sim::CvodeOptions o;
+  o.rtol = 1e-9;
+  o.atol = 1e-11;
+  o.max_step = 1e-3;
+  return o;
+}
+
+double jointInertia(const systems::RobotSystem& r) { return kIzz + kN * kN * r.drives()[0].motor.J_M; }
+
+TEST(CommandPorts, VoltageGivesTheMotorsNoLoadSpeed) {
+  systems::RobotSystem r = singleJoint();
+  sim::Simulator s(r, tight());
+  r.setCommandPort(0, CommandPort::Voltage);
+  r.setCommand(0, 12.0);
+  s.advanceTo(1.5);  // mechanical time constant J R / (k_t k_e) ≈ 40 ms
+  const auto& m = r.drives()[0].motor;
+  EXPECT_NEAR(s.signal("motor_velocity_j1"), 12.0 / m.ke, 1e-6 * 12.0 / m.ke);
+  EXPECT_DOUBLE_EQ(s.signal("voltage_j1"), 12.0);
+  // Beyond the supply the PWM saturates at V_supply.
+  r.setCommand(0, 1e3);
+  s.advance(1.5);
+  EXPECT_DOUBLE_EQ(s.signal("voltage_j1"), m.V_supply);
+  EXPECT_NEAR(s.signal("motor_velocity_j1"), m.V_supply / m.ke, 1e-6 * m.V_supply / m.ke);
+}
+
+TEST(CommandPorts, MotorTorqueAcceleratesTheReflectedInertia) {
+  systems::RobotSystem r = singleJoint();
+  sim::Simulator s(r, tight());
+  r.setCommandPort(0, CommandPort::MotorTorque);
+  r.setCommand(0, 0.5);
+  s.advanceTo(0.3);
+  const double a = kN * 0.5 / jointInertia(r);  // q̈ = N τ / (J_l + N² J_M)
+  EXPECT_NEAR(s.signal("q_j1"), 0.5 * a * 0.09, 1e-8);
+  EXPECT_NEAR(s.signal("qd_j1"), a * 0.3, 1e-8);
+  // The bypassed electrics: the current has relaxed to τ/k_t (L/R ≈ 3 ms).
+  EXPECT_NEAR(s.signal("current_j1"), 0.5 / r.drives()[0].motor.kt, 1e-6);
+}
+
+TEST(CommandPorts, CurrentReferenceIsTrackedAndGivesTorqueConstantTimesCurrent) {
+  systems::RobotSystem r = singleJoint();
+  sim::Simulator s(r, tight());
+  r.setCommandPort(0, CommandPort::Current);
+  r.setCommand(0, 2.0);
+  s.advanceTo(0.2);
+  // The motor speeds up at a constant rate, so the back-EMF k_e ω_m is a ramp disturbance of the current PI loop:
+  // it leaves the steady error k_e ω̇_m / I_cur. With ω̇_m = N² k_t i / J: i = i_ref / (1 + k_e N² k_t / (J I_cur)).
+  const auto& m = r.drives()[0].motor;
+  const double J = jointInertia(r);
+  const double i_ss = 2.0 / (1.0 + m.ke * kN * kN * m.kt / (J * 5000.0));
+  EXPECT_NEAR(s.signal("current_j1"), i_ss, 1e-6);
+  EXPECT_DOUBLE_EQ(s.signal("current_ref_j1"), 2.0);
+  const double qd1 = s.signal("qd_j1");
+  s.advance(0.1);
+  const double a = kN * m.kt * i_ss / J;
+  EXPECT_NEAR((s.signal("qd_j1") - qd1) / 0.1, a, 1e-6 * a);
+}
+
+TEST(CommandPorts, MotorVelocityAndHeldSetpointsReachTheirReferences) {
+  systems::RobotSystem r = singleJoint();
+  sim::Simulator s(r, tight());
+  r.setCommandPort(0, CommandPort::MotorVelocity);
+  r.setCommand(0, 50.0);
+  s.advanceTo(4.0);
+  EXPECT_NEAR(s.signal("motor_velocity_j1"), 50.0, 1e-4);
+  // Back to the set-point port, holding 0.3 rad: no load torque, so the PI loops remove every error.
+  r.setCommandPort(0, CommandPort::Setpoint);
+  r.setSetpoint(0, 0.3);
+  s.advance(4.0);
+  EXPECT_NEAR(s.signal("q_j1"), 0.3, 1e-5);
+  EXPECT_DOUBLE_EQ(s.signal("q_set_j1"), 0.3);
+}
+
+TEST(CommandPorts, TorqueControlledDriveAcceptsVelocityButNotCurrentOrVoltage) {
+  systems::RobotSystem r = singleJoint(false);
+  EXPECT_THROW(r.setCommandPort(0, CommandPort::Voltage), InputError);
+  EXPECT_THROW(r.setCommandPort(0, CommandPort::Current), InputError);
+  sim::Simulator s(r, tight());
+  r.setCommandPort(0, CommandPort::MotorVelocity);
+  r.setCommand(0, 20.0);
+  s.advanceTo(4.0);
+  EXPECT_NEAR(s.signal("motor_velocity_j1"), 20.0, 1e-4);
+}
+
+TEST(CommandPorts, BadCommandsAreInputErrorsAndChangeNothing) {
+  systems::RobotSystem r = singleJoint();
+  const long rev = r.inputRevision();
+  EXPECT_THROW(r.setCommand(0, 1.0), InputError);  // under the set-point port
+  r.setCommandPort(0, CommandPort::Voltage);
+  const long rev2 = r.inputRevision();
+  EXPECT_GT(rev2, rev);
+  EXPECT_THROW(r.setCommand(0, std::nan("")), InputError);
+  EXPECT_THROW(r.setCommand(0, INFINITY), InputError);
+  EXPECT_THROW(r.setCommand(1, 1.0), InputError);
+  EXPECT_THROW(r.setCommandPort(-1, CommandPort::Voltage), InputError);
+  EXPECT_THROW(r.setCommandPort("j9", CommandPort::Voltage), InputError);
+  EXPECT_THROW(r.setCommands(Eigen::VectorXd::Zero(2)), InputError);
+  EXPECT_THROW(r.setSetpoint(0, std::nan("")), InputError);
+  EXPECT_THROW(r.holdSetpoints(Eigen::VectorXd::Zero(3)), InputError);
+  EXPECT_THROW(r.setExternalWrench("nowhere", Eigen::Matrix<double, 6, 1>::Ones()), InputError);
+  EXPECT_THROW(r.setExternalWrench("base", Eigen::Matrix<double, 6, 1>::Ones()), InputError);
+  EXPECT_THROW(systems::parsePort("pwm"), InputError);
+  EXPECT_EQ(r.inputRevision(), rev2);
+  EXPECT_EQ(r.command(0), 0.0);
+  // The same value again is not a change.
+  r.setCommand(0, 3.0);
+  const long rev3 = r.inputRevision();
+  r.setCommand(0, 3.0);
+  r.setCommandPort(0, CommandPort::Voltage);
+  EXPECT_EQ(r.inputRevision(), rev3);
+  EXPECT_EQ(systems::parsePort("motor_torque"), CommandPort::MotorTorque);
+}
+
+TEST(CommandPorts, ExternalWrenchActsAsTheJacobianTransposeSays) {
+  // Two-link planar arm with rigid drives under zero motor torque: adding a world wrench W at a frame changes
+  // q̈ by M⁻¹ J(q)ᵀ W (M with the reflected rotor inertias), an independent path from the body-frame wrench
+  // that the articulated-body algorithm receives.
+  multibody::Model model = multibody::loadRobot(test::sourcePath("tests/data/planar2.urdf"));
+  std::vector<systems::DriveSpec> drives;
+  for (const auto& name : model.joint_names) {
+    systems::DriveSpec d;
+    d.joint = name;
+    d.electrics = false;
+    d.transmission = std::make_shared<drive::RigidGear>(5.0);
+    drives.push_back(d);
+  }
+  systems::RobotSystem r(model, drives);
+  const std::string frame = r.model().tip_frame;
+  for (int k = 0; k < 2; ++k) r.setCommandPort(k, CommandPort::MotorTorque);
+  Eigen::VectorXd y = r.initialState(Eigen::Vector2d(0.4, -0.7));
+  y.segment(2, 2) << 0.3, -0.2;
+  Eigen::VectorXd yd0(y.size()), yd1(y.size());
+  r.derivatives(0.0, y, yd0);
+  Eigen::Matrix<double, 6, 1> W;
+  W << 3.0, -2.0, 5.0, 0.4, -0.3, 0.7;  // [f (N); n (N·m)], world axes, at the frame origin
+  r.setExternalWrench(frame, W);
+  r.derivatives(0.0, y, yd1);
+  multibody::Data data(r.model());
+  const Eigen::MatrixXd M = multibody::crba(r.model(), data, y.head(2));
+  const Eigen::MatrixXd J = multibody::frameJacobian(r.model(), data, y.head(2), r.model().frameIndex(frame));
+  const Eigen::VectorXd expected = M.ldlt().solve(J.transpose() * W);
+  EXPECT_TRUE(test::MatricesNear(yd1.segment(2, 2) - yd0.segment(2, 2), expected, 1e-10));
+  // Removing it restores the free motion.
+  r.setExternalWrench(frame, Eigen::Matrix<double, 6, 1>::Zero());
+  r.derivatives(0.0, y, yd1);
+  EXPECT_TRUE(test::MatricesNear(yd1, yd0, 0.0));
+}
+
+TEST(CommandPorts, SetpointVoltageSetpointSwitchOnTheUr5TwinIsBumpless) {
+  // The UR5 twin holding its start pose; mid-run the elbow goes to the voltage port (commanded the voltage it
+  // had), then back to the set-point port. The voltage is continuous at both switches (bumpless transfer: the
+  // controller integrators are re-initialised), and the joint stays within the physics of the open-loop phase.
+  std::shared_ptr<experiments::Experiment> e =
+      experiments::loadExperiment(test::sourcePath("config/experiments/ur5_pick_and_place.yaml"));
+  auto s = experiments::makeSimulator(e);
+  auto& r = dynamic_cast<systems::RobotSystem&>(s->plant());
+  const int k = r.model().jointIndex("elbow_joint");
+  const Eigen::VectorXd q0 = s->state().head(6);
+  r.holdSetpoints(q0);
+  const int iv = s->signalIndex("voltage_elbow_joint"), iq = s->signalIndex("q_elbow_joint");
+  double worst = 0.0;
+  auto run = [&](double until) {
+    while (s->time() < until - 1e-12) {
+      s->advance(1e-3);
+      worst = std::max(worst, std::abs(s->signals()[iq] - q0[k]));
+    }
+  };
+  run(0.2);
+  const double v_before = s->signals()[iv];
+  r.setCommandPort(k, CommandPort::Voltage);
+  r.setCommand(k, v_before);
+  s->advance(1e-7);
+  EXPECT_NEAR(s->signals()[iv], v_before, 1e-6);
+  run(0.3);
+  const double v_open = s->signals()[iv];
+  EXPECT_DOUBLE_EQ(v_open, v_before);
+  const double drift = std::abs(s->signals()[iq] - q0[k]);
+  r.setCommandPort(k, CommandPort::Setpoint);
+  s->advance(1e-7);
+  EXPECT_NEAR(s->signals()[iv], v_open, 1e-3);  // bumpless: the cascade continues from the applied voltage
+  run(0.8);
+  EXPECT_LT(std::abs(s->signals()[iq] - q0[k]), 1e-4);  // back on the held pose
+  EXPECT_LT(worst, std::max(2.0 * drift, 1e-4));        // no excursion beyond the open-loop drift
+}
+
+}  // namespace
+}  // namespace jointsim
