@@ -5,6 +5,7 @@
 
 #include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 
 namespace jointsim::systems {
 
@@ -88,6 +89,32 @@ JointRig::JointRig(JointRigSetup setup) : s_(std::move(setup)) {
   if (e_idx_ >= 0) signals_.emplace_back("pi_integral[rad]");
 }
 
+void JointRig::setCommand(double value) {
+  if (!std::isfinite(value))
+    throw InputError(name() + ": command: expected a finite number, got " + formatNumber(value));
+  if (!held_ || command_ != value) {
+    held_ = true;
+    command_ = value;
+    ++revision_;
+  }
+}
+
+void JointRig::releaseCommand() {
+  if (held_) {
+    held_ = false;
+    ++revision_;
+  }
+}
+
+void JointRig::setLoadTorque(double tau) {
+  if (!std::isfinite(tau)) throw InputError(name() + ": load torque: expected a finite number, got " + formatNumber(tau));
+  if (s_.clamped && tau != 0.0) throw InputError(name() + ": load torque: the output is clamped");
+  if (load_torque_ != tau) {
+    load_torque_ = tau;
+    ++revision_;
+  }
+}
+
 std::string JointRig::name() const { return "joint rig '" + s_.name + "'"; }
 
 std::vector<double> JointRig::timeEvents(double t_end) const { return s_.profile.breakpoints(t_end); }
@@ -124,7 +151,7 @@ JointRig::Eval JointRig::evaluate(double t, const Eigen::Ref<const Eigen::Vector
     e.qd_l = y[l_idx_ + 1];
   }
   // Input: torque, voltage, or the velocity PI output.
-  e.command = s_.profile.value(t);
+  e.command = held_ ? command_ : s_.profile.value(t);
   double u = e.command;
   if (s_.input == RigInput::VelocityPI) {
     const double err = e.command - (s_.pi.measure == Side::Motor ? qd_m : e.qd_l);
@@ -158,6 +185,7 @@ JointRig::Eval JointRig::evaluate(double t, const Eigen::Ref<const Eigen::Vector
       }
     }
     e.qdd_m = (e.tau_motor - b_l * e.qd_l / N - tau_f_motor_side) / J_eff;
+    if (load_torque_ != 0.0) e.qdd_m += load_torque_ / (N * J_eff);
     e.qdd_l = e.qdd_m / N;
     const double tau_f_on_motor = (s_.friction && s_.friction_side == Side::Motor) ? e.tau_f : 0.0;
     e.tau_in = e.tau_motor - tau_f_on_motor - J_m_ * e.qdd_m;
@@ -169,7 +197,8 @@ JointRig::Eval JointRig::evaluate(double t, const Eigen::Ref<const Eigen::Vector
   e.tau_in = pt.tau_in;
   e.tau_out = pt.tau_out;
   const double drive_m = e.tau_motor - e.tau_in;
-  const double drive_l = e.tau_out - b_l * e.qd_l;
+  double drive_l = e.tau_out - b_l * e.qd_l;
+  if (load_torque_ != 0.0 && !s_.clamped) drive_l += load_torque_;
   double tau_f_m = 0.0, tau_f_l = 0.0;
   if (s_.friction) {
     if (s_.friction_side == Side::Motor) {

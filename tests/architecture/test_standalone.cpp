@@ -73,3 +73,18 @@ TEST(StandsOnItsOwn, TheCheckFindsInternalReferences) {
   EXPECT_EQ(f[1].rfind("fixture:2:", 0), 0u);
   EXPECT_EQ(f[2].rfind("fixture:3:", 0), 0u);
 }
+
+TEST(StandsOnItsOwn, UmbrellaHeaderIncludesEveryPublicHeader) {
+  std::ifstream in(jointsim::test::sourcePath("include/jointsim/jointsim.hpp"));
+  std::stringstream umbrella;
+  umbrella << in.rdbuf();
+  const fs::path root = jointsim::test::sourcePath("include");
+  int headers = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(root / "jointsim")) {
+    if (entry.path().extension() != ".hpp" || entry.path().filename() == "jointsim.hpp") continue;
+    ++headers;
+    const std::string rel = fs::relative(entry.path(), root).generic_string();
+    EXPECT_NE(umbrella.str().find("#include \"" + rel + "\""), std::string::npos) << rel << " is not in jointsim.hpp";
+  }
+  EXPECT_GT(headers, 50);
+}

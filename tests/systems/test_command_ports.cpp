@@ -12,6 +12,7 @@
 #include "jointsim/multibody/algorithms.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
 #include "jointsim/sim/simulator.hpp"
+#include "jointsim/systems/joint_rig.hpp"
 #include "jointsim/systems/robot_system.hpp"
 #include "test_util.hpp"
 
@@ -238,6 +239,28 @@ TEST(CommandPorts, SetpointVoltageSetpointSwitchOnTheUr5TwinIsBumpless) {
   run(0.8);
   EXPECT_LT(std::abs(s->signals()[iq] - q0[k]), 1e-4);  // back on the held pose
   EXPECT_LT(worst, std::max(2.0 * drift, 1e-4));        // no excursion beyond the open-loop drift
+}
+
+TEST(CommandPorts, JointRigHoldsACommandAndTakesALoadTorque) {
+  // Rigid gear N = 4, torque input: the held command τ and a load torque τ_l on the output give
+  // q̈_m = (τ + τ_l / N) / (J_m + J_l / N²) from rest (closed form q_m = ½ q̈_m t²).
+  systems::JointRigSetup setup;
+  setup.rotor_inertia = 2e-3;
+  setup.load_inertia = 0.5;
+  setup.transmission = std::make_shared<drive::RigidGear>(4.0);
+  setup.profile = control::Profile::constant(1.0);
+  systems::JointRig rig(setup);
+  sim::Simulator s(rig, tight());
+  rig.setCommand(0.3);
+  rig.setLoadTorque(-0.4);
+  EXPECT_THROW(rig.setCommand(std::nan("")), InputError);
+  EXPECT_THROW(rig.setLoadTorque(INFINITY), InputError);
+  s.advanceTo(0.5);
+  const double a = (0.3 - 0.4 / 4.0) / (2e-3 + 0.5 / 16.0);
+  EXPECT_NEAR(s.signal("motor_angle"), 0.5 * a * 0.25, 1e-9);
+  EXPECT_DOUBLE_EQ(s.signal("command_torque"), 0.3);
+  rig.releaseCommand();  // back to the profile (1 N·m)
+  EXPECT_DOUBLE_EQ(s.signal("command_torque"), 1.0);
 }
 
 }  // namespace

@@ -83,6 +83,17 @@ class JointRig : public sim::Plant {
   /// break-away); one log interval at most prevents that.
   sim::SimulateOptions simulateOptions() const;
 
+  /// Command port (sim::Simulator): holds the input of the rig's configured type — motor torque [N·m], voltage
+  /// [V] or velocity reference [rad/s] of the PI loop — at `value` in place of the profile, until changed or
+  /// released. InputError for a non-finite value (nothing changed). A change restarts the integrator.
+  void setCommand(double value);
+  /// Back to the input profile.
+  void releaseCommand();
+  /// External torque on the output shaft [N·m] (a load the user applies; ignored while clamped or for a rigid
+  /// transmission, where it acts on the merged shaft as τ/N on the motor side).
+  void setLoadTorque(double tau);
+  long inputRevision() const override { return revision_; }
+
   std::string name() const override;
   int stateSize() const override { return n_; }
   Eigen::VectorXd initialState() const override;
@@ -102,6 +113,9 @@ class JointRig : public sim::Plant {
   int nx_ = 0, nz_ = 0;
   std::optional<drive::DcMotor> motor_;
   std::vector<std::string> signals_;
+  bool held_ = false;
+  double command_ = 0.0, load_torque_ = 0.0;
+  long revision_ = 0;
 };
 
 }  // namespace jointsim::systems
