@@ -5,7 +5,8 @@ set -euo pipefail
 PACKAGES=(cmake ninja-build g++ pkg-config
           libeigen3-dev libsundials-dev liburdfdom-dev libtinyxml-dev libyaml-cpp-dev libcli11-dev libceres-dev nlohmann-json3-dev libxxhash-dev gnuplot-nox
           libgtest-dev libgmock-dev libbenchmark-dev
-          clang-14 libclang-rt-14-dev libomp-14-dev libgoogle-glog-dev)
+          clang-14 libclang-rt-14-dev libomp-14-dev libgoogle-glog-dev
+          python3 python3-venv python3-dev)
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,0 +1,404 @@
+// jointsim._core: Python bindings of the jointsim library (pybind11). NumPy float64 arrays in and out; every
+// jointsim error becomes a Python exception with the library's one-line message:
+//   InputError → ValueError, UnidentifiableError → jointsim.UnidentifiableError (a ValueError),
+//   SolverError → jointsim.SolverError (a RuntimeError), other jointsim errors → RuntimeError.
+// The user-facing API (docstrings, dict results) is python/jointsim/__init__.py; this module is its engine.
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/common/interrupt.hpp"
+#include "jointsim/common/version.hpp"
+#include "jointsim/experiments/experiment.hpp"
+#include "jointsim/identify/clamping_fit.hpp"
+#include "jointsim/identify/friction_fit.hpp"
+#include "jointsim/multibody/algorithms.hpp"
+#include "jointsim/multibody/robot_loader.hpp"
+#include "jointsim/sim/simulator.hpp"
+#include "jointsim/systems/joint_rig.hpp"
+#include "jointsim/systems/robot_with_drives.hpp"
+
+namespace py = pybind11;
+using namespace jointsim;
+
+namespace {
+
+using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+std::string shapeText(const py::array& a) {
+  std::string s = "(";
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) s += (i ? ", " : "") + std::to_string(a.shape(i));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+/// A 1-D float64 view of `a` with `n` entries; ValueError naming `what` otherwise.
+Eigen::Map<const Eigen::VectorXd> vec(const Array& a, Eigen::Index n, const char* what) {
+  if (a.ndim() != 1 || a.shape(0) != n)
+    throw InputError(std::string(what) + ": expected an array of shape (" + std::to_string(n) + ",), got shape " +
+                     shapeText(a));
+  return {a.data(), n};
+}
+
+Eigen::VectorXd anyVec(const Array& a, const char* what) {
+  if (a.ndim() != 1) throw InputError(std::string(what) + ": expected a 1-D array, got shape " + shapeText(a));
+  return Eigen::Map<const Eigen::VectorXd>(a.data(), a.shape(0));
+}
+
+py::array_t<double> toArray(const Eigen::VectorXd& v) {
+  py::array_t<double> out(v.size());
+  std::memcpy(out.mutable_data(), v.data(), sizeof(double) * static_cast<size_t>(v.size()));
+  return out;
+}
+
+py::array_t<double> toArray(const Eigen::MatrixXd& m) {
+  py::array_t<double> out({m.rows(), m.cols()});
+  auto r = out.mutable_unchecked<2>();
+  for (Eigen::Index i = 0; i < m.rows(); ++i)
+    for (Eigen::Index j = 0; j < m.cols(); ++j) r(i, j) = m(i, j);
+  return out;
+}
+
+/// A robot model with its own workspace (the Model/Data pair of the C++ API).
+struct PyModel {
+  explicit PyModel(multibody::Model m) : model(std::move(m)), data(model) {}
+  multibody::Model model;
+  multibody::Data data;
+  std::vector<std::string> frameNames() const {
+    std::vector<std::string> out;
+    for (const auto& f : model.frames) out.push_back(f.name);
+    return out;
+  }
+};
+
+int frameOf(const multibody::Model& model, const py::object& frame) {
+  if (frame.is_none()) return model.frameIndex(model.tip_frame);
+  return model.frameIndex(frame.cast<std::string>());
+}
+
+/// A loaded experiment (shared with simulators made from it).
+struct PyExperiment {
+  std::shared_ptr<experiments::Experiment> e;
+};
+
+/// A stepping simulator and its plant.
+struct PySimulator {
+  std::shared_ptr<sim::Plant> plant;
+  std::unique_ptr<sim::Simulator> sim;
+
+  systems::RobotSystem& robot() {
+    auto* r = dynamic_cast<systems::RobotSystem*>(plant.get());
+    if (!r) throw InputError(plant->name() + " has no per-joint command ports (only a robot with drives has them)");
+    return *r;
+  }
+  int joint(const py::object& j) {
+    auto& r = robot();
+    if (py::isinstance<py::str>(j)) return r.model().jointIndex(j.cast<std::string>());
+    const long k = j.cast<long>();
+    if (k < 0 || k >= r.dof())
+      throw InputError(r.name() + ": joint index " + std::to_string(k) + " out of range 0.." + std::to_string(r.dof() - 1));
+    return static_cast<int>(k);
+  }
+};
+
+sim::CvodeOptions solverFrom(double rtol, double atol, int max_order, double max_step) {
+  sim::CvodeOptions o;
+  o.method = sim::Method::BDF;
+  o.rtol = rtol;
+  o.atol = atol;
+  o.max_order = max_order;
+  o.max_step = max_step;
+  return o;
+}
+
+py::dict fitted(const identify::FittedParameter& p) {
+  py::dict d;
+  d["value"] = p.value;
+  d["std_error"] = p.std_error;
+  d["fitted"] = p.fitted;
+  d["initial"] = p.initial;
+  return d;
+}
+
+py::dict direction(const identify::DirectionFit& f) {
+  py::dict d;
+  auto est = [](const identify::ParameterEstimate& p) {
+    py::dict e;
+    e["value"] = p.value;
+    e["std_error"] = p.std_error;
+    e["initial"] = p.initial;
+    return e;
+  };
+  d["alpha0"] = est(f.alpha0);
+  d["alpha1"] = est(f.alpha1);
+  d["alpha2"] = est(f.alpha2);
+  d["v_s"] = est(f.v_s);
+  d["points"] = f.points;
+  d["rms_residual"] = f.rms_residual;
+  return d;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "jointsim C++ core (use the jointsim package)";
+  static py::exception<SolverError> solver_error(m, "SolverError", PyExc_RuntimeError);
+  static py::exception<UnidentifiableError> unidentifiable(m, "UnidentifiableError", PyExc_ValueError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InputError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const UnidentifiableError& e) {
+      PyErr_SetString(unidentifiable.ptr(), e.what());
+    } catch (const SolverError& e) {
+      PyErr_SetString(solver_error.ptr(), e.what());
+    } catch (const Error& e) {
+      PyErr_SetString(PyExc_RuntimeError, e.what());
+    }
+  });
+  m.attr("__version__") = version();
+
+  // ------------------------------------------------------------------------------------------ multibody
+  py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model")
+      .def_property_readonly("name", [](const PyModel& p) { return p.model.name; })
+      .def_property_readonly("nq", [](const PyModel& p) { return p.model.nq; })
+      .def_property_readonly("joint_names", [](const PyModel& p) { return p.model.joint_names; })
+      .def_property_readonly("frame_names", &PyModel::frameNames)
+      .def_property_readonly("tip_frame", [](const PyModel& p) { return p.model.tip_frame; })
+      .def_property_readonly("gravity", [](const PyModel& p) { return Eigen::VectorXd(p.model.gravity); })
+      .def("__repr__", [](const PyModel& p) {
+        return "<jointsim.Model '" + p.model.name + "' with " + std::to_string(p.model.nq) + " joints>";
+      });
+  m.def("load_robot", [](const std::string& path) { return std::make_shared<PyModel>(multibody::loadRobot(path)); },
+        py::arg("path"));
+  m.def(
+      "rnea",
+      [](PyModel& p, const Array& q, const Array& qd, const Array& qdd) {
+        const auto n = p.model.nq;
+        return toArray(multibody::rnea(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(qdd, n, "qdd")));
+      },
+      "Inverse dynamics (recursive Newton-Euler): tau [N*m] = M(q) qdd + C(q, qd) qd + g(q); q [rad], qd [rad/s], qdd [rad/s^2], each shape (nq,).", py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("qdd"));
+  m.def(
+      "aba",
+      [](PyModel& p, const Array& q, const Array& qd, const Array& tau) {
+        const auto n = p.model.nq;
+        return toArray(multibody::aba(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(tau, n, "tau")));
+      },
+      "Forward dynamics (articulated-body algorithm): qdd [rad/s^2] for q [rad], qd [rad/s], tau [N*m].", py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("tau"));
+  m.def(
+      "crba", [](PyModel& p, const Array& q) { return toArray(multibody::crba(p.model, p.data, vec(q, p.model.nq, "q"))); },
+      "Joint-space mass matrix M(q) [kg*m^2], shape (nq, nq).", py::arg("model"), py::arg("q"));
+  m.def(
+      "gravity_torques",
+      [](PyModel& p, const Array& q) { return toArray(multibody::gravityTorques(p.model, p.data, vec(q, p.model.nq, "q"))); },
+      "Gravity torques g(q) [N*m].", py::arg("model"), py::arg("q"));
+  m.def(
+      "frame_placement",
+      [](PyModel& p, const Array& q, const py::object& frame) {
+        const int f = frameOf(p.model, frame);
+        multibody::forwardKinematics(p.model, p.data, vec(q, p.model.nq, "q"));
+        const auto& X = p.data.oMf[static_cast<size_t>(f)];
+        Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+        T.topLeftCorner<3, 3>() = X.R;
+        T.topRightCorner<3, 1>() = X.p;
+        return toArray(Eigen::MatrixXd(T));
+      },
+      "4x4 homogeneous pose of a frame (default: the tool frame) in the base frame [m].", py::arg("model"), py::arg("q"), py::arg("frame") = py::none());
+  m.def(
+      "frame_jacobian",
+      [](PyModel& p, const Array& q, const py::object& frame) {
+        const int f = frameOf(p.model, frame);
+        return toArray(Eigen::MatrixXd(multibody::frameJacobian(p.model, p.data, vec(q, p.model.nq, "q"), f)));
+      },
+      "Frame Jacobian, shape (6, nq): rows [v; w] in world axes at the frame origin [m/s, rad/s per rad/s].", py::arg("model"), py::arg("q"), py::arg("frame") = py::none());
+
+  // ------------------------------------------------------------------------------------------ experiments
+  py::class_<PyExperiment>(m, "Experiment")
+      .def_property_readonly("name", [](const PyExperiment& x) { return x.e->name(); })
+      .def_property_readonly("type", [](const PyExperiment& x) { return x.e->type(); })
+      .def_property_readonly("file", [](const PyExperiment& x) { return x.e->file(); })
+      .def_property_readonly("columns", [](const PyExperiment& x) { return sim::tableColumns(x.e->plant()); });
+  m.def(
+      "load_experiment",
+      [](const std::string& path, const std::vector<std::string>& overrides) {
+        return PyExperiment{std::shared_ptr<experiments::Experiment>(experiments::loadExperiment(path, overrides))};
+      },
+      py::arg("path"), py::arg("overrides") = std::vector<std::string>{});
+  m.def(
+      "run_in_memory",
+      [](PyExperiment& x) {
+        experiments::ExperimentResult r;
+        {
+          py::gil_scoped_release release;
+          r = experiments::runInMemory(*x.e);
+        }
+        py::dict out;
+        out["columns"] = r.log.columns;
+        out["values"] = toArray(r.log.values);
+        py::dict extras;
+        for (const auto& t : r.extras) extras[py::str(t.suffix)] = py::make_tuple(t.table.columns, toArray(t.table.values));
+        out["extras"] = extras;
+        out["summary_json"] = r.summary_json;
+        return out;
+      },
+      py::arg("experiment"));
+  m.def(
+      "run_experiment_file",
+      [](const std::string& path, const std::string& output_dir, const std::vector<std::string>& overrides) {
+        experiments::RunOptions o;
+        o.output_dir = output_dir;
+        o.overrides = overrides;
+        experiments::RunReport r;
+        {
+          py::gil_scoped_release release;
+          r = experiments::runExperimentFile(path, o);
+        }
+        py::dict d;
+        d["status"] = r.status;
+        d["csv_path"] = r.csv_path;
+        d["summary_path"] = r.summary_path;
+        d["sim_time_s"] = r.sim_time_s;
+        d["wall_time_s"] = r.wall_time_s;
+        d["real_time_factor"] = r.real_time_factor;
+        d["warnings"] = r.warnings;
+        return d;
+      },
+      py::arg("path"), py::arg("output_dir") = "", py::arg("overrides") = std::vector<std::string>{});
+
+  // ------------------------------------------------------------------------------------------ simulator
+  py::class_<PySimulator>(m, "Simulator")
+      .def_static(
+          "from_experiment",
+          [](PyExperiment& x) {
+            PySimulator s;
+            s.plant = std::shared_ptr<sim::Plant>(x.e, &x.e->plant());
+            s.sim = experiments::makeSimulator(x.e);
+            return s;
+          },
+          py::arg("experiment"))
+      .def_static(
+          "from_robot",
+          [](const std::string& path, const py::object& q0, double rtol, double atol, int max_order, double max_step) {
+            auto robot = std::make_shared<systems::RobotSystem>(systems::loadRobotWithDrives(path));
+            if (!q0.is_none()) robot->setInitialPositions(Eigen::VectorXd(vec(q0.cast<Array>(), robot->dof(), "q0")));
+            PySimulator s;
+            s.plant = robot;
+            s.sim = std::make_unique<sim::Simulator>(s.plant, solverFrom(rtol, atol, max_order, max_step));
+            return s;
+          },
+          py::arg("path"), py::arg("q0") = py::none(), py::arg("rtol") = 1e-6, py::arg("atol") = 1e-9,
+          py::arg("max_order") = 2, py::arg("max_step") = 0.0)
+      .def_property_readonly("name", [](PySimulator& s) { return s.plant->name(); })
+      .def_property_readonly("time", [](PySimulator& s) { return s.sim->time(); })
+      .def_property_readonly("state", [](PySimulator& s) { return toArray(s.sim->state()); })
+      .def("set_state", [](PySimulator& s, const Array& y) { s.sim->setState(vec(y, s.plant->stateSize(), "state")); })
+      .def("reset", [](PySimulator& s) { s.sim->reset(); })
+      .def("advance",
+           [](PySimulator& s, double dt) {
+             py::gil_scoped_release release;
+             return s.sim->advance(dt);
+           })
+      .def("advance_to",
+           [](PySimulator& s, double t) {
+             py::gil_scoped_release release;
+             return s.sim->advanceTo(t);
+           })
+      .def_property_readonly("signal_names", [](PySimulator& s) { return s.sim->signalNames(); })
+      .def("signal_values", [](PySimulator& s) { return toArray(s.sim->signals()); })
+      .def("signal", [](PySimulator& s, const std::string& name) { return s.sim->signal(name); })
+      .def("signal_index", [](PySimulator& s, const std::string& name) { return s.sim->signalIndex(name); })
+      .def_property_readonly("restarts", [](PySimulator& s) { return s.sim->restarts(); })
+      .def_property_readonly("steps", [](PySimulator& s) { return s.sim->stats().steps; })
+      .def_property_readonly("dof", [](PySimulator& s) { return s.robot().dof(); })
+      .def_property_readonly("joint_names", [](PySimulator& s) { return s.robot().model().joint_names; })
+      .def_property_readonly("joint_positions",
+                             [](PySimulator& s) { return toArray(Eigen::VectorXd(s.sim->state().head(s.robot().dof()))); })
+      .def_property_readonly("joint_velocities", [](PySimulator& s) {
+        const int n = s.robot().dof();
+        return toArray(Eigen::VectorXd(s.sim->state().segment(n, n)));
+      })
+      .def("model", [](PySimulator& s) { return std::make_shared<PyModel>(s.robot().model()); })
+      .def("set_port", [](PySimulator& s, const py::object& j, const std::string& port) {
+        s.robot().setCommandPort(s.joint(j), systems::parsePort(port));
+      })
+      .def("port", [](PySimulator& s, const py::object& j) { return std::string(systems::portName(s.robot().commandPort(s.joint(j)))); })
+      .def("set_command",
+           [](PySimulator& s, const py::object& j, double value) {
+             if (auto* rig = dynamic_cast<systems::JointRig*>(s.plant.get())) {
+               rig->setCommand(value);
+               return;
+             }
+             s.robot().setCommand(s.joint(j), value);
+           })
+      .def("set_commands", [](PySimulator& s, const Array& v) { s.robot().setCommands(vec(v, s.robot().dof(), "commands")); })
+      .def("set_setpoint", [](PySimulator& s, const py::object& j, double q, double qd, double qdd) {
+        s.robot().setSetpoint(s.joint(j), q, qd, qdd);
+      })
+      .def("hold_setpoints",
+           [](PySimulator& s, const Array& q, const py::object& qd, const py::object& qdd) {
+             const int n = s.robot().dof();
+             const Eigen::VectorXd qv = vec(q, n, "q");
+             const Eigen::VectorXd qdv = qd.is_none() ? Eigen::VectorXd() : Eigen::VectorXd(vec(qd.cast<Array>(), n, "qd"));
+             const Eigen::VectorXd qddv =
+                 qdd.is_none() ? Eigen::VectorXd() : Eigen::VectorXd(vec(qdd.cast<Array>(), n, "qdd"));
+             s.robot().holdSetpoints(qv, qdv, qddv);
+           })
+      .def("release_setpoints", [](PySimulator& s) { s.robot().releaseSetpoints(); })
+      .def("set_external_wrench", [](PySimulator& s, const std::string& frame, const Array& w) {
+        s.robot().setExternalWrench(frame, Eigen::Matrix<double, 6, 1>(vec(w, 6, "wrench")));
+      });
+
+  // ------------------------------------------------------------------------------------------ identification
+  m.def(
+      "identify_clamping",
+      [](const Array& t, const Array& angle, const Array& torque, const py::object& fixed_backlash) {
+        identify::ClampingData d;
+        d.source = "python arrays";
+        d.time = anyVec(t, "time");
+        d.angle = anyVec(angle, "angle");
+        d.torque = anyVec(torque, "torque");
+        identify::ClampingFitOptions o;
+        if (!fixed_backlash.is_none()) o.fixed_backlash = fixed_backlash.cast<double>();
+        identify::ClampingFitResult r;
+        {
+          py::gil_scoped_release release;
+          r = identify::identifyClamping(d, o);
+        }
+        py::dict out;
+        out["stiffness"] = fitted(r.stiffness);
+        out["backlash"] = fitted(r.backlash);
+        out["friction"] = fitted(r.friction);
+        out["center"] = fitted(r.center);
+        out["rms_residual"] = r.rms_residual;
+        out["points"] = r.points;
+        return out;
+      },
+      py::arg("time"), py::arg("angle"), py::arg("torque"), py::arg("fixed_backlash") = py::none());
+  m.def(
+      "fit_friction_map",
+      [](const Array& v, const Array& tau) {
+        const Eigen::VectorXd vv = anyVec(v, "velocity"), tt = anyVec(tau, "torque");
+        if (vv.size() != tt.size())
+          throw InputError("fit_friction_map: velocity and torque have " + std::to_string(vv.size()) + " and " +
+                           std::to_string(tt.size()) + " entries");
+        identify::FrictionFit f;
+        {
+          py::gil_scoped_release release;
+          f = identify::fitFrictionMap(std::vector<double>(vv.data(), vv.data() + vv.size()),
+                                       std::vector<double>(tt.data(), tt.data() + tt.size()));
+        }
+        py::dict out;
+        out["positive"] = direction(f.positive);
+        out["negative"] = direction(f.negative);
+        out["delta"] = f.delta.value;
+        return out;
+      },
+      py::arg("velocity"), py::arg("torque"));
+}
