@@ -96,6 +96,21 @@ void Simulator::refreshEvents(double t_target) {
   next_event_ = 0;
 }
 
+void Simulator::takeSample() {
+  plant_->sample(t_, y_);
+  ++samples_;
+  t_sample_ = t0_ + static_cast<double>(++sample_k_) * Ts_;
+  restart_ = true;
+  invalidate();
+}
+
+void Simulator::restartIfNeeded() {
+  if (!restart_) return;
+  integ_->initialize(t_, y_);
+  ++restarts_;
+  restart_ = false;
+}
+
 void Simulator::prepare() {
   const long revision = plant_->inputRevision();
   if (revision != seen_revision_) {
@@ -104,18 +119,8 @@ void Simulator::prepare() {
     restart_ = true;
     invalidate();
   }
-  if (Ts_ > 0.0 && (t_ >= t_sample_ || near(t_, t_sample_))) {  // a sample due at the end of the last advance
-    plant_->sample(t_, y_);
-    ++samples_;
-    t_sample_ = t0_ + static_cast<double>(++sample_k_) * Ts_;
-    restart_ = true;
-    invalidate();
-  }
-  if (restart_) {
-    integ_->initialize(t_, y_);
-    ++restarts_;
-    restart_ = false;
-  }
+  if (Ts_ > 0.0 && (t_ >= t_sample_ || near(t_, t_sample_))) takeSample();  // due at the end of the last advance
+  restartIfNeeded();
 }
 
 double Simulator::advance(double dt) {
@@ -134,10 +139,10 @@ double Simulator::advanceTo(double t_target) {
   if (Ts_ > 0.0 && near(t_target, t_sample_)) t_target = t_sample_;
   if (next_event_ < events_list_.size() && near(t_target, events_list_[next_event_]))
     t_target = events_list_[next_event_];
+  refreshEvents(t_target);  // a no-op unless the snap moved the target past the horizon
   try {
     prepare();
     while (t_ < t_target) {
-      if (t_target > horizon_) refreshEvents(t_target);
       const double t_event = next_event_ < events_list_.size() ? events_list_[next_event_] : kInf;
       const double stop = std::min(t_target, std::min(t_sample_, t_event));
       integ_->setStopTime(stop);
@@ -156,17 +161,8 @@ double Simulator::advanceTo(double t_target) {
         ++events_;
         restart_ = true;
       }
-      if (at_sample) {
-        plant_->sample(t_, y_);
-        ++samples_;
-        t_sample_ = t0_ + static_cast<double>(++sample_k_) * Ts_;
-        restart_ = true;
-      }
-      if (restart_ && t_ < t_target) {
-        integ_->initialize(t_, y_);
-        ++restarts_;
-        restart_ = false;
-      }
+      if (at_sample) takeSample();
+      if (t_ < t_target) restartIfNeeded();  // at the target: the next advance restarts (after its inputs)
     }
   } catch (const SolverError&) {
     restart_ = true;  // the integrator's history is unusable; y_ is the last state reached

@@ -224,10 +224,12 @@ void RobotSystem::setCommand(int joint, double value) {
   checkJoint(joint, "setCommand");
   const size_t k = static_cast<size_t>(joint);
   const CommandPort port = port_[k];
-  const std::string where = name() + ": joint '" + drives_[k].joint + "': " + portName(port) + " command";
-  if (port == CommandPort::Setpoint)
-    throw InputError(where + ": the joint is under the setpoint port; use setSetpoint or choose another port");
-  if (!std::isfinite(value)) throw InputError(where + ": expected a finite number, got " + formatNumber(value));
+  // The message is built only on error: a controller calls this at every step.
+  auto fail = [&](const std::string& why) {
+    throw InputError(name() + ": joint '" + drives_[k].joint + "': " + portName(port) + " command: " + why);
+  };
+  if (port == CommandPort::Setpoint) fail("the joint is under the setpoint port; use setSetpoint or choose another port");
+  if (!std::isfinite(value)) fail("expected a finite number, got " + formatNumber(value));
   if (cmd_[joint] != value) {
     cmd_[joint] = value;
     ++revision_;

@@ -80,6 +80,8 @@ class Simulator {
 
  private:
   void prepare();            // input changes and a pending sample at t_, then the restart if needed
+  void takeSample();         // the plant's sampled part at t_, next sample time, restart pending
+  void restartIfNeeded();    // CVODE re-initialised at (t_, y_) when a restart is pending
   void refreshEvents(double t_target);
   void invalidate() { signals_valid_ = false; }
 
