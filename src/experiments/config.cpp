@@ -18,7 +18,8 @@ using io::YamlValue;
 sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   if (!node.defined()) return o;
   node.expectMap("a solver mapping {method, rtol, atol, max_step, max_order, stability_limit_detection}");
-  node.allowKeys({"method", "rtol", "atol", "max_step", "max_order", "stability_limit_detection", "max_num_steps"});
+  node.allowKeys({"method", "rtol", "atol", "max_step", "max_order", "stability_limit_detection", "max_num_steps",
+                  "input_jumps"});
   if (node.has("method")) {
     const std::string m = node["method"].asString("adams or bdf");
     if (m == "adams")
@@ -39,6 +40,15 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   if (node.has("max_num_steps")) o.max_num_steps = node["max_num_steps"].asInt("a positive step count");
   if (node.has("stability_limit_detection"))
     o.stability_limit_detection = node["stability_limit_detection"].asBool("true or false");
+  if (node.has("input_jumps")) {
+    const std::string j = node["input_jumps"].asString("keep_history or restart");
+    if (j == "keep_history")
+      o.input_jump = sim::CvodeOptions::InputJump::KeepHistory;
+    else if (j == "restart")
+      o.input_jump = sim::CvodeOptions::InputJump::Restart;
+    else
+      node["input_jumps"].failExpected("keep_history or restart");
+  }
   return o;
 }
 

@@ -74,12 +74,25 @@ struct StopRun {};
 
 }  // namespace
 
+void installPlantJacobian(const Plant& plant, CvodeIntegrator& integ) {
+  const CvodeOptions& o = integ.options();
+  if (!plant.providesJacobian() || !o.plant_jacobian || o.method != Method::BDF) return;
+  integ.setDifferenceJacobian([&plant](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                       const Eigen::Ref<const Eigen::VectorXd>& f,
+                                       const Eigen::Ref<const Eigen::VectorXd>& inc,
+                                       Eigen::Ref<Eigen::MatrixXd> J) { plant.jacobian(t, y, f, inc, J); });
+  JacobianStructure structure = plant.jacobianStructure();
+  if (!structure.empty() && o.dense_solver == CvodeOptions::DenseSolver::Eigen)
+    integ.setJacobianStructure(std::move(structure));
+}
+
 SimulationResult simulate(Plant& plant, const SimulateOptions& options, const OutputSink& sink) {
   options.validate();
   CvodeOptions solver = options.solver;
   if (solver.component.empty()) solver.component = plant.name();
   const int n = plant.stateSize();
   const double t_end = options.t_end;
+  const bool keep_history = solver.input_jump == CvodeOptions::InputJump::KeepHistory;
   const auto wall_start = std::chrono::steady_clock::now();
   auto wall = [&wall_start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(); };
 
@@ -108,6 +121,7 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
         plant.derivatives(t, y, yd);
       },
       solver);
+  installPlantJacobian(plant, integ);
   integ.setStepLimit(options.max_steps);  // enforced inside advance(): one output interval cannot overspend
   if (plant.rootCount() > 0)
     integ.setRootFunction(plant.rootCount(), [&plant](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -154,6 +168,20 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
     const double stop = std::min(t_sample, breaks[next_break]);
     if (options.stop_at_end || stop < t_end) integ.setStopTime(stop);
   };
+  // At a sample: keep CVODE's history when asked to and the jump of the held inputs is small enough for the next
+  // step's error test (CvodeIntegrator::jumpError ≤ 1); otherwise restart. f_old: before the sample's update.
+  Eigen::VectorXd f_old(n), f_new(n);
+  auto sampleAt = [&](double t_now) {
+    if (keep_history) plant.derivatives(t_now, y, f_old);
+    plant.sample(t_now, y);
+    ++result.samples;
+    t_sample = sampleTime(++sample_k);
+  };
+  auto keepHistory = [&](double t_now) {
+    if (!keep_history) return false;
+    plant.derivatives(t_now, y, f_new);
+    return integ.jumpError(f_old, f_new, std::min(t_sample, breaks[next_break]) - t_now) <= 1.0;
+  };
   auto budgets = [&](double t) {
     if (stopNow()) throw SolverError(solver.component + ": " + stop_message, t, stop_flag, solver.component);
   };
@@ -185,24 +213,26 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
                                   " events in one output interval (chattering) at t = " + std::to_string(t) + " s",
                               t, "EVENT_CHATTERING", solver.component);
         }
-        if (at_sample) {
-          plant.sample(t, y);
-          ++result.samples;
-          t_sample = sampleTime(++sample_k);
-        }
-        if (root || at_break || at_sample) {
+        if (at_sample) sampleAt(t);
+        if (root || at_break || (at_sample && !keepHistory(t))) {
           integ.initialize(t, y);
-          setStop();
+          ++result.restarts;
+        } else if (at_sample) {
+          ++result.input_jumps;  // CVODE stopped exactly at the sample and goes on with the new held inputs
         }
+        if (root || at_break || at_sample) setStop();
       }
       emit(t);
       const bool done = by_rate ? k >= n_outputs : t_out >= t_end;
       if (done) break;
       if (t >= t_sample && t_sample < t_end) {  // the output was due at a sample: update after it
-        plant.sample(t, y);
-        ++result.samples;
-        t_sample = sampleTime(++sample_k);
-        integ.initialize(t, y);
+        sampleAt(t);
+        if (keepHistory(t)) {
+          ++result.input_jumps;
+        } else {
+          integ.initialize(t, y);
+          ++result.restarts;
+        }
         setStop();
       }
     }

@@ -1,4 +1,5 @@
 #include "jointsim/sim/simulator.hpp"
+#include "jointsim/sim/simulate.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,6 +16,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 /// A target this close (relative to max(1, |t|)) to a sample or time event is moved onto it.
 constexpr double kSnap = 1e-12;
 bool near(double a, double b) { return std::abs(a - b) <= kSnap * std::max(1.0, std::abs(b)); }
+/// An input jump whose CvodeIntegrator::jumpError exceeds this restarts the integrator.
+constexpr double kKeepHistoryLimit = 1.0;
 }  // namespace
 
 Simulator::Simulator(Plant& plant, const CvodeOptions& solver)
@@ -25,6 +28,7 @@ Simulator::Simulator(std::shared_ptr<Plant> plant, const CvodeOptions& solver) :
   CvodeOptions options = solver;
   if (options.component.empty()) options.component = plant_->name();
   component_ = options.component;
+  keep_history_ = options.input_jump == CvodeOptions::InputJump::KeepHistory;
   const int n = plant_->stateSize();
   Plant* p = plant_.get();
   integ_ = std::make_unique<CvodeIntegrator>(
@@ -34,12 +38,15 @@ Simulator::Simulator(std::shared_ptr<Plant> plant, const CvodeOptions& solver) :
         p->derivatives(t, y, yd);
       },
       options);
+  installPlantJacobian(*plant_, *integ_);
   if (plant_->rootCount() > 0)
     integ_->setRootFunction(plant_->rootCount(), [p](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                                                      Eigen::Ref<Eigen::VectorXd> g) { p->roots(t, y, g); });
   Ts_ = plant_->samplePeriod();
   if (!(Ts_ >= 0.0) || !std::isfinite(Ts_)) throw InputError(plant_->name() + ": sample period must be >= 0 s");
   signals_.setZero(static_cast<Eigen::Index>(plant_->signalNames().size()));
+  f_work_.setZero(n);
+  f_old_.setZero(n);
   reset();
 }
 
@@ -97,30 +104,51 @@ void Simulator::refreshEvents(double t_target) {
 }
 
 void Simulator::takeSample() {
+  if (keep_history_ && !jump_) plant_->derivatives(t_, y_, f_old_);  // before the held inputs jump
   plant_->sample(t_, y_);
   ++samples_;
   t_sample_ = t0_ + static_cast<double>(++sample_k_) * Ts_;
-  restart_ = true;
+  inputJumped();
   invalidate();
 }
 
-void Simulator::restartIfNeeded() {
-  if (!restart_) return;
-  integ_->initialize(t_, y_);
-  ++restarts_;
-  restart_ = false;
+void Simulator::inputJumped() {
+  if (keep_history_)
+    jump_ = true;
+  else
+    restart_ = true;
 }
 
-void Simulator::prepare() {
+void Simulator::restartIfNeeded(double h_max) {
+  if (jump_ && !restart_) {
+    // Keep the history only where the jump leaves the next step within the error test (CvodeOptions::input_jump).
+    plant_->derivatives(t_, y_, f_work_);
+    if (integ_->jumpError(f_old_, f_work_, h_max) <= kKeepHistoryLimit)
+      ++input_jumps_;  // CVODE stopped exactly here (a stop time) and goes on with the new right-hand side
+    else
+      restart_ = true;
+  }
+  if (restart_) {
+    integ_->initialize(t_, y_);
+    ++restarts_;
+  }
+  restart_ = jump_ = false;
+}
+
+void Simulator::prepare(double t_target) {
   const long revision = plant_->inputRevision();
   if (revision != seen_revision_) {
     seen_revision_ = revision;
+    y_work_ = y_;
     plant_->applyInputs(t_, y_);
-    restart_ = true;
+    if (y_ != y_work_)
+      restart_ = true;  // the plant moved states (bumpless transfer): CVODE's history no longer matches
+    else
+      inputJumped();
     invalidate();
   }
   if (Ts_ > 0.0 && (t_ >= t_sample_ || near(t_, t_sample_))) takeSample();  // due at the end of the last advance
-  restartIfNeeded();
+  restartIfNeeded(std::min(t_sample_, t_target) - t_);
 }
 
 double Simulator::advance(double dt) {
@@ -141,7 +169,7 @@ double Simulator::advanceTo(double t_target) {
     t_target = events_list_[next_event_];
   refreshEvents(t_target);  // a no-op unless the snap moved the target past the horizon
   try {
-    prepare();
+    prepare(t_target);
     while (t_ < t_target) {
       const double t_event = next_event_ < events_list_.size() ? events_list_[next_event_] : kInf;
       const double stop = std::min(t_target, std::min(t_sample_, t_event));
@@ -162,12 +190,15 @@ double Simulator::advanceTo(double t_target) {
         restart_ = true;
       }
       if (at_sample) takeSample();
-      if (t_ < t_target) restartIfNeeded();  // at the target: the next advance restarts (after its inputs)
+      // At the target: the next advance restarts or goes on (after its inputs).
+      if (t_ < t_target) restartIfNeeded(std::min(t_sample_, t_target) - t_);
     }
   } catch (const SolverError&) {
     restart_ = true;  // the integrator's history is unusable; y_ is the last state reached
     throw;
   }
+  // The derivative with the inputs in force now: the reference for an input change before the next advance.
+  if (keep_history_) plant_->derivatives(t_, y_, f_old_);
   return t_;
 }
 

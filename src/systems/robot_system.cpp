@@ -763,6 +763,97 @@ void RobotSystem::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>&
   evaluate(t, y, ydot.data());
 }
 
+sim::JacobianStructure RobotSystem::jacobianStructure() const {
+  sim::JacobianStructure s;
+  const int n = model_.nq;
+  for (int i = 0; i < 2 * n; ++i) s.hub.push_back(i);
+  jac_block_drive_.clear();
+  for (int k = 0; k < n; ++k) {
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    std::vector<int> b;
+    auto add = [&b](int first, int count) {
+      if (first >= 0)
+        for (int j = 0; j < count; ++j) b.push_back(first + j);
+    };
+    if (!L.rigid) add(L.motor, 2);
+    add(L.current, 1);
+    add(L.gear, L.n_gear);
+    add(L.friction, L.n_friction);
+    if (!sampled()) add(L.controller, L.n_controller);  // sampled: the controller states are not ODE states
+    if (b.empty()) continue;
+    s.blocks.push_back(std::move(b));
+    jac_block_drive_.push_back(k);
+  }
+  return s;
+}
+
+void RobotSystem::jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                           const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
+                           Eigen::Ref<Eigen::MatrixXd> J) const {
+  const int n = model_.nq;
+  if (jac_y_.size() != n_states_) {  // first call for this state layout
+    jac_structure_ = jacobianStructure();
+    jac_y_.resize(n_states_);
+    jac_f_.resize(n_states_);
+    jac_tau0_.resize(n);
+    jac_qdd0_.resize(n);
+    jac_tau_.resize(n);
+    jac_P_.resize(n, n);
+  }
+  Eigen::VectorXd& yp = jac_y_;
+  Eigen::VectorXd& fp = jac_f_;
+  yp = y;
+  // The base point: the drives' output torques and the total joint torque (drives, end stops) behind q̈.
+  evaluate(t, y, fp.data());
+  jac_tau0_ = tau_out_;
+  jac_qdd0_ = sig_.qdd;
+  const Eigen::VectorXd& tau_total = tau_;
+  // ∂q̈/∂τ_out = M⁻¹ G⁻ᵀ, column by column; q̈ is affine in the joint torque, so a unit difference is exact to
+  // rounding. (The external wrenches fext_ of the base evaluation stay in place.)
+  const auto q = y.head(n);
+  const auto qd = y.segment(n, n);
+  const bool with_fext = wrenches_ || !user_wrenches_.empty();
+  for (int j = 0; j < n; ++j) {
+    jac_tau_ = tau_total;
+    if (coupled_)
+      jac_tau_ += Ginv_.row(j).transpose();
+    else
+      jac_tau_[j] += 1.0;
+    if (crba_path_) {
+      jac_P_.col(j) = jac_tau_ - data_.nle;
+      llt_.solveInPlace(jac_P_.col(j));
+    } else {
+      jac_P_.col(j) = multibody::aba(model_, data_, q, qd, jac_tau_, with_fext ? &fext_ : nullptr);
+    }
+    jac_P_.col(j) -= jac_qdd0_;
+  }
+  // Hub columns: whole difference quotients.
+  for (int j = 0; j < 2 * n; ++j) {
+    yp[j] = y[j] + inc[j];
+    evaluate(t, yp, fp.data());
+    J.col(j) = (fp - f) / inc[j];
+    yp[j] = y[j];
+  }
+  // Drive columns: state c of every drive at once.
+  size_t max_m = 0;
+  for (const auto& b : jac_structure_.blocks) max_m = std::max(max_m, b.size());
+  const auto& blocks = jac_structure_.blocks;
+  for (size_t c = 0; c < max_m; ++c) {
+    for (const auto& b : blocks)
+      if (b.size() > c) yp[b[c]] = y[b[c]] + inc[b[c]];
+    evaluate(t, yp, fp.data());
+    for (size_t bi = 0; bi < blocks.size(); ++bi) {
+      const auto& b = blocks[bi];
+      if (b.size() <= c) continue;
+      const int s = b[c];
+      for (int r : b) J(r, s) = (fp[r] - f[r]) / inc[s];
+      const int k = jac_block_drive_[bi];
+      J.col(s).segment(n, n) = jac_P_.col(k) * ((tau_out_[k] - jac_tau0_[k]) / inc[s]);
+      yp[s] = y[s];
+    }
+  }
+}
+
 const RobotSignals& RobotSystem::driveSignals(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   evaluate(t, y, tmp_.data());
   return sig_;

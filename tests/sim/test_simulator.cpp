@@ -215,5 +215,89 @@ TEST(Simulator, SteppingAnExperimentReproducesItsRunOnTheLogGrid) {
   EXPECT_GT(s->events(), 0);  // the path's breakpoints
 }
 
+/// ẏ = −a y + u with a digital P controller u_k = −K y(t_k) held over [t_k, t_k + T_s): the exact recursion
+/// y_{k+1} = e^{−a T_s} y_k + (1 − e^{−a T_s}) u_k / a.
+class SampledFirstOrder : public sim::Plant {
+ public:
+  double a = 1.0, K = 0.5, Ts = 1e-3;
+  std::string name() const override { return "sampled first order"; }
+  int stateSize() const override { return 1; }
+  Eigen::VectorXd initialState() const override { return Eigen::VectorXd::Constant(1, 1.0); }
+  void derivatives(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) const override {
+    yd[0] = -a * y[0] + u_;
+  }
+  double samplePeriod() const override { return Ts; }
+  void start(double, const Eigen::Ref<const Eigen::VectorXd>& y) override { u_ = -K * y[0]; }
+  void sample(double, const Eigen::Ref<const Eigen::VectorXd>& y) override { u_ = -K * y[0]; }
+  const std::vector<std::string>& signalNames() const override { return names_; }
+  void signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override {
+    out[0] = y[0];
+  }
+  double exact(int samples) const {
+    const double e = std::exp(-a * Ts);
+    double y = 1.0;
+    for (int k = 0; k < samples; ++k) y = e * y + (1.0 - e) * (-K * y) / a;
+    return y;
+  }
+
+ private:
+  double u_ = 0.0;
+  std::vector<std::string> names_{"y[1]"};
+};
+
+TEST(Simulator, SmallInputJumpsKeepTheHistoryAndLargeOnesRestart) {
+  // Held inputs jump at every sample. With input_jump KeepHistory the integrator goes on through the small jumps of
+  // this slow loop (no restarts, fewer steps); both policies follow the exact recursion to what the tolerance
+  // allows over 500 samples (a global error of a few 1e-5 at rtol 1e-6), KeepHistory no worse than Restart.
+  double error[2] = {0, 0};
+  long steps[2] = {0, 0};
+  for (int i = 0; i < 2; ++i) {
+    const auto policy = i == 0 ? sim::CvodeOptions::InputJump::KeepHistory : sim::CvodeOptions::InputJump::Restart;
+    SampledFirstOrder p;
+    sim::CvodeOptions o;
+    o.rtol = 1e-6;
+    o.atol = 1e-9;
+    o.input_jump = policy;
+    sim::Simulator s(p, o);
+    s.advanceTo(0.5);
+    error[i] = std::abs(s.state()[0] - p.exact(500));
+    steps[i] = s.stats().steps;
+    EXPECT_LT(error[i], 1e-4);
+    // simulate() likewise.
+    sim::SimulationResult r;
+    const sim::SignalTable t = sim::simulateTable(p, sim::SimulateOptions::atRate(0.5, 100.0, o), &r);
+    EXPECT_LT(std::abs(t["y"][t.values.rows() - 1] - p.exact(500)), 1e-4);
+    EXPECT_EQ(r.samples, 500);
+    if (policy == sim::CvodeOptions::InputJump::KeepHistory) {
+      EXPECT_GT(s.inputJumps(), 450);
+      EXPECT_LT(s.restarts(), 50);
+      EXPECT_GT(r.input_jumps, 450);
+    } else {
+      EXPECT_EQ(s.inputJumps(), 0);
+      EXPECT_GE(s.restarts(), 499);
+      EXPECT_EQ(r.input_jumps, 0);
+    }
+  }
+  EXPECT_LE(error[0], 2.0 * error[1] + 1e-6);
+  EXPECT_LT(steps[0], steps[1]);
+  // A jump far beyond the tolerance restarts even under KeepHistory: the step to 3 on a tight tolerance.
+  FirstOrder p;
+  sim::Simulator s(p, tight());
+  s.advanceTo(0.5);
+  const long restarts = s.restarts(), kept = s.inputJumps();
+  p.setInput(3.0);
+  s.advanceTo(0.6);
+  EXPECT_EQ(s.restarts(), restarts + 1);
+  EXPECT_EQ(s.inputJumps(), kept);
+  // A jump of 1e-13 on that tolerance keeps the history, and the closed form still holds.
+  const double y06 = s.state()[0];
+  p.setInput(3.0 + 1e-13);
+  s.advanceTo(0.7);
+  EXPECT_EQ(s.restarts(), restarts + 1);
+  EXPECT_EQ(s.inputJumps(), kept + 1);
+  const double u = 3.0 + 1e-13;
+  EXPECT_NEAR(s.state()[0], u / 2 + (y06 - u / 2) * std::exp(-0.2), 1e-9);
+}
+
 }  // namespace
 }  // namespace jointsim

@@ -28,6 +28,19 @@ enum class Method {
   Adams,
 };
 
+/// Block structure of the Jacobian ∂f/∂y of a system made of a hub (e.g. a multibody's q, q̇) and parts that
+/// couple only to themselves and to the hub (e.g. one drive per joint): J(i, j) = 0 whenever i and j lie in two
+/// different blocks. The BDF Newton matrix I − γJ then has a bordered block-diagonal form, which
+/// CvodeIntegrator factorises by block elimination (each block's LU, then the hub's Schur complement), in
+/// O(Σ m_k³ + h³) instead of O(n³). Every state lies in the hub or in exactly one block.
+struct JacobianStructure {
+  std::vector<int> hub;                  ///< states coupled to every other state
+  std::vector<std::vector<int>> blocks;  ///< groups coupled only to themselves and to the hub
+  bool empty() const { return blocks.empty(); }
+  /// InputError unless every index 0..n−1 appears exactly once.
+  void validate(int n) const;
+};
+
 /// Integrator settings. Validated by the CvodeIntegrator constructor (InputError on bad values).
 struct CvodeOptions {
   /// Integration method, see Method.
@@ -76,6 +89,23 @@ struct CvodeOptions {
   /// CV_LSETUP_FAIL). Without this budget, an RHS that is NaN for all t beyond some time makes CVODE
   /// creep towards that time until max_num_steps is spent. 0 = every non-finite result is fatal.
   int max_nonfinite_retries = 100;
+  /// How sim::simulate and sim::Simulator go on where a held input jumps: at the samples of a sampled (zero-order
+  /// hold) controller and where an input set between steps changes (Plant::inputRevision). The state is continuous
+  /// there; only its derivative jumps.
+  /// - `KeepHistory` (default): the integrator stops exactly at the jump (a stop time) and continues with its step
+  ///   size, order and Newton matrix. The first step after the jump sees the new derivative; the local error test
+  ///   measures the mismatch with the history (of order h·Δẏ) and shrinks the step where the jump is large, so the
+  ///   tolerance still governs the error. A sampled controller at 20 kHz then costs about one step per sample.
+  /// - `Restart`: CVodeReInit at every jump (order 1, a fresh step-size estimate, a new Jacobian): the most
+  ///   conservative choice, and the reference the default is tested against; costs tens of steps per jump on
+  ///   a stiff drive train.
+  /// Root events, time events (profile and trajectory breakpoints) and state changes (setState, a bumpless port
+  /// switch) always restart. CvodeIntegrator itself does not read this setting.
+  enum class InputJump { KeepHistory, Restart } input_jump = InputJump::KeepHistory;
+  /// Use the plant's own Jacobian and block structure where it provides them (sim::Plant::providesJacobian; read
+  /// by sim::simulate and sim::Simulator). false: CVODE's dense difference quotients, one RHS evaluation per
+  /// state, and a dense LU (the reference the structured Jacobian is tested against).
+  bool plant_jacobian = true;
   /// Name of the simulated system, used in error messages (e.g. "ur5 multibody"). May be empty.
   std::string component;
 };
@@ -111,6 +141,14 @@ using RhsFunction =
 /// Dense Jacobian J = df/dy (n x n, column-major; J(i, j) = d ydot_i / d y_j) at (t, y), with
 /// `ydot` = f(t, y) already evaluated. J is zero on entry, so only non-zeros need to be written.
 /// May throw like RhsFunction.
+/// Jacobian by differences that the caller organises itself (e.g. by structure): as JacobianFunction, plus the
+/// increment CVODE's own difference quotients would use for each state, inc_j = max(√ε |y_j|, m / w_j) with w the
+/// error weights and m = 1000 |h| ε n ‖f‖_w (SUNDIALS' cvLsDenseDQJac).
+using DifferenceJacobianFunction =
+    std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                       const Eigen::Ref<const Eigen::VectorXd>& ydot, const Eigen::Ref<const Eigen::VectorXd>& inc,
+                       Eigen::Ref<Eigen::MatrixXd> J)>;
+
 /// Root (event) functions g(t, y) (size n_roots): CVODE locates sign changes of each component to its
 /// tolerance and stops there. Must be pure like the right-hand side.
 using RootFunction =
@@ -178,6 +216,23 @@ class CvodeIntegrator {
   /// output interval cannot spend more than the budget.
   /// \throws InputError if steps < 0.
   void setStepLimit(long steps);
+
+  /// A Jacobian by differences organised by the caller (see DifferenceJacobianFunction) in place of the one given
+  /// at construction or CVODE's dense difference quotients; BDF only; call before initialize().
+  void setDifferenceJacobian(DifferenceJacobianFunction jacobian);
+  /// Factorise the Newton matrix by block elimination over `structure` (validated here; BDF with the Eigen
+  /// dense solver only; call before initialize()). The Jacobian must respect the structure: entries between
+  /// two blocks are ignored. A block (or the hub's Schur complement) that is numerically singular falls back
+  /// to the dense LU for that factorisation.
+  void setJacobianStructure(JacobianStructure structure);
+
+  /// Where an input jumped at time() (the integrator stopped there), the local error the multistep history would
+  /// carry into the next step: h ‖f_new − f_old‖_w, the weighted RMS norm (CVODE's error weights) of the jump of the
+  /// derivative at (time(), y) from the old inputs (f_old) to the new ones (f_new), times h = min(the next step
+  /// size, h_max). About 1 or less: the next step passes the error test with the history kept; far above: the step
+  /// would have to shrink by that factor (a restart is cheaper). +∞ before the first step of a segment.
+  double jumpError(const Eigen::Ref<const Eigen::VectorXd>& f_old, const Eigen::Ref<const Eigen::VectorXd>& f_new,
+                   double h_max) const;
 
   /// Installs root functions (call before initialize(); they persist across restarts). advance() then
   /// returns early at a located root: rootFound() is true and rootDirections() gives, per function,

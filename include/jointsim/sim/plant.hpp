@@ -25,6 +25,8 @@
 
 #include <Eigen/Core>
 
+#include "jointsim/sim/cvode_integrator.hpp"
+
 namespace jointsim::sim {
 
 class Plant {
@@ -66,6 +68,17 @@ class Plant {
   /// Called by sim::Simulator at time t after inputRevision() changed, before the restart: the plant may set its
   /// states for the new inputs (e.g. controller integrators for a bumpless switch of a command port).
   virtual void applyInputs(double /*t*/, Eigen::Ref<Eigen::VectorXd> /*y*/) {}
+
+  /// A Jacobian of its own (jacobian(), jacobianStructure()) that the simulators use for BDF (unless
+  /// CvodeOptions::plant_jacobian is false).
+  virtual bool providesJacobian() const { return false; }
+  /// J = ∂f/∂y at (t, y) with f = f(t, y), J zero on entry; `inc` holds the difference increment CVODE would use
+  /// per state (DifferenceJacobianFunction). Pure like derivatives(); must respect jacobianStructure().
+  virtual void jacobian(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
+                        const Eigen::Ref<const Eigen::VectorXd>& /*f*/, const Eigen::Ref<const Eigen::VectorXd>& /*inc*/,
+                        Eigen::Ref<Eigen::MatrixXd> /*J*/) const {}
+  /// Block structure of the Jacobian (empty: dense).
+  virtual JacobianStructure jacobianStructure() const { return {}; }
 
   /// Output signals as `name[unit]` (the CSV column names after "time[s]").
   virtual const std::vector<std::string>& signalNames() const = 0;

@@ -6,8 +6,8 @@
 /// Event handling. The integrator carries a stop time at the next time event or sample, so no step crosses
 /// one. At a located root or a time event the plant updates its modes (updateModes) and CVODE is restarted
 /// (its multistep history is discarded: the right-hand side may jump there); outputs at that instant show the
-/// state after the update. At a sample t_k the plant's sampled part is updated (sample) and CVODE is
-/// restarted; an output due at t_k (within 1e-12 s) is taken before the update, i.e. it shows the inputs held
+/// state after the update. At a sample t_k the plant's sampled part is updated (sample) and CVODE goes on with
+/// its history or is restarted, per CvodeOptions::input_jump; an output due at t_k (within 1e-12 s) is taken before the update, i.e. it shows the inputs held
 /// over the interval that ends at t_k, as a sampled-data recorder would.
 ///
 /// Output grid: either a rate (t_k = min(t_end, k / rate), k = 1 .. ⌈t_end·rate − 1e-9⌉, the experiments
@@ -59,6 +59,8 @@ struct SimulationResult {
   double wall_time_s = 0.0;  ///< wall-clock time of the run [s]
   long events = 0;           ///< root and time events handled
   long samples = 0;          ///< updates of the sampled part (including the one at t = 0)
+  long restarts = 0;         ///< integrator restarts after t = 0 (events; samples under input_jump Restart)
+  long input_jumps = 0;      ///< samples integrated through with the history kept (input_jump KeepHistory)
   long outputs = 0;          ///< rows handed to the sink (including t = 0)
   double realTimeFactor() const { return wall_time_s > 0.0 ? sim_time_s / wall_time_s : 0.0; }
 };
@@ -88,6 +90,10 @@ class Interrupted : public SimulationFailure {
 
 /// Receives one output row: [t, signals...] (size 1 + plant.signalNames().size()). May throw: the run stops.
 using OutputSink = std::function<void(const Eigen::VectorXd& row)>;
+
+/// Gives `integ` the plant's own Jacobian and its block structure when the plant provides them and the
+/// integrator's options ask for it (plant_jacobian, BDF); before integ.initialize().
+void installPlantJacobian(const Plant& plant, CvodeIntegrator& integ);
 
 /// Runs `plant` from its initialState() at t = 0 to options.t_end. Throws InputError for bad options (also an
 /// output grid over max_rows), SimulationFailure (a SolverError with the simulated time, the flag and the plant's

@@ -13,10 +13,12 @@
 ///   }
 ///
 /// Events are handled inside advance()/advanceTo() exactly as in sim::simulate(): root events (the plant's
-/// updateModes), time events (the plant's timeEvents) and the plant's sampled part (sample() at k·T_s from the
-/// reset time) restart the integrator. An input change (Plant::inputRevision()) restarts it too, at the start
-/// of the next advance, and only then: between unchanged inputs CVODE keeps its step-size and order history
-/// across calls. Every advance ends exactly at its target time (a CVODE stop time), never by interpolation. A
+/// updateModes) and time events (the plant's timeEvents) restart the integrator. At the plant's samples
+/// (sample() at k·T_s from the reset time) and at an input change (Plant::inputRevision(), taken at the start of
+/// the next advance) a held input jumps: the integrator goes on with its history (CvodeOptions::input_jump
+/// KeepHistory, the default) or restarts (Restart). A change of the state (setState, or applyInputs moving
+/// controller states for a bumpless switch) always restarts. Between unchanged inputs CVODE keeps its step-size
+/// and order history across calls. Every advance ends exactly at its target time (a CVODE stop time), never by interpolation. A
 /// sample due exactly at the target time is taken at the start of the next advance, so signals() at the target
 /// show the inputs held over the interval that ends there (as sim::simulate's outputs do).
 ///
@@ -76,12 +78,16 @@ class Simulator {
   SolverStats stats() const;
   long events() const { return events_; }      ///< root and time events handled
   long samples() const { return samples_; }    ///< updates of the sampled part (including the one at reset)
-  long restarts() const { return restarts_; }  ///< integrator restarts (events, samples, inputs, setState)
+  long restarts() const { return restarts_; }  ///< integrator restarts (events, setState, and jumps under Restart)
+  /// Input jumps (samples, input changes) integrated through with the history kept (input_jump KeepHistory, where
+  /// the jump is small enough: CvodeIntegrator::jumpError ≤ 1; larger ones restart).
+  long inputJumps() const { return input_jumps_; }
 
  private:
-  void prepare();            // input changes and a pending sample at t_, then the restart if needed
-  void takeSample();         // the plant's sampled part at t_, next sample time, restart pending
-  void restartIfNeeded();    // CVODE re-initialised at (t_, y_) when a restart is pending
+  void prepare(double t_target);  // input changes and a pending sample at t_, then the restart if needed
+  void takeSample();         // the plant's sampled part at t_, next sample time, input jump pending
+  void inputJumped();        // a held input jumped at t_: a restart or a kept history, per the options
+  void restartIfNeeded(double h_max);  // CVODE re-initialised at (t_, y_) when needed; h_max: to the next stop
   void refreshEvents(double t_target);
   void invalidate() { signals_valid_ = false; }
 
@@ -89,8 +95,11 @@ class Simulator {
   std::unique_ptr<CvodeIntegrator> integ_;
   std::string component_;
   double t_ = 0.0, t0_ = 0.0;
-  Eigen::VectorXd y_, y_work_;
+  Eigen::VectorXd y_, y_work_, f_work_;
+  Eigen::VectorXd f_old_;  // ẏ at (t_, y_) with the inputs before a jump (KeepHistory)
   bool restart_ = true;
+  bool jump_ = false;  // an input jumped at t_ (counted once, when the integration goes on)
+  bool keep_history_ = true;
   long seen_revision_ = 0;
   // Sampled part: next sample at t0 + k·T_s.
   double Ts_ = 0.0;
@@ -100,7 +109,7 @@ class Simulator {
   std::vector<double> events_list_;
   double horizon_ = 0.0;
   size_t next_event_ = 0;
-  long events_ = 0, samples_ = 0, restarts_ = 0;
+  long events_ = 0, samples_ = 0, restarts_ = 0, input_jumps_ = 0;
   mutable Eigen::VectorXd signals_;
   mutable bool signals_valid_ = false;
   mutable long signals_revision_ = 0;
