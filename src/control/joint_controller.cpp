@@ -106,4 +106,15 @@ void JointController::matchOutput(const ControllerInputs& in, double u, double i
   }
 }
 
+double sampledCurrentLoopRadius(const JointControllerParams& params, double R, double L, double Ts) {
+  if (params.type != ControllerType::Cascade002 || !(R > 0.0) || !(L > 0.0) || !(Ts > 0.0)) return 0.0;
+  const double a = std::exp(-R * Ts / L), b = (1.0 - a) / R;
+  // λ² − (m11 + m22) λ + (m11 m22 − m12 m21) = 0 for [[m11, m12], [m21, m22]] = [[a − b P, b I], [−Ts, 1]].
+  const double m11 = a - b * params.P_cur, tr = m11 + 1.0, det = m11 + b * params.I_cur * Ts;
+  const double disc = tr * tr - 4.0 * det;
+  if (disc < 0.0) return std::sqrt(det);  // complex pair: |λ|² = det
+  const double r = std::sqrt(disc);
+  return std::max(std::abs(0.5 * (tr + r)), std::abs(0.5 * (tr - r)));
+}
+
 }  // namespace jointsim::control

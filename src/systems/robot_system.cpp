@@ -438,6 +438,27 @@ void RobotSystem::start(double t0, const Eigen::Ref<const Eigen::VectorXd>& y) {
 void RobotSystem::setSampledControl(double rate, unsigned seed) {
   if (!(rate > 0.0)) throw InputError("control rate: expected a sampling rate > 0 Hz");
   if (sample_rate_ > 0.0) throw InputError("sampled control already set");
+  // A current loop that the sampling makes unstable would ring at the Nyquist frequency against the supply
+  // limits: refuse it, naming the rate from which it is stable.
+  for (size_t k = 0; k < drives_.size(); ++k) {
+    const DriveSpec& d = drives_[k];
+    if (!d.electrics) continue;
+    auto radius = [&](double f) { return control::sampledCurrentLoopRadius(d.controller, d.motor.R, d.motor.L, 1.0 / f); };
+    const double rho = radius(rate);
+    if (rho < 1.0) continue;
+    double lo = rate, hi = rate;
+    while (radius(hi) >= 1.0 && hi < 1e9) hi *= 2.0;
+    for (int it = 0; it < 60; ++it) {
+      const double mid = std::sqrt(lo * hi);
+      (radius(mid) >= 1.0 ? lo : hi) = mid;
+    }
+    throw InputError("control rate " + formatNumber(rate) + " Hz: the current loop of drive '" + d.joint +
+                     "' (P_cur = " + formatNumber(d.controller.P_cur) + " V/A, I_cur = " +
+                     formatNumber(d.controller.I_cur) + " V/(A·s), R = " + formatNumber(d.motor.R) + " Ω, L = " +
+                     formatNumber(d.motor.L) + " H) is unstable when sampled at this rate (discrete pole magnitude " +
+                     formatNumber(rho, 3) + " ≥ 1): it would ring at the Nyquist frequency against the supply "
+                     "voltage. It is stable from about " + formatNumber(hi, 3) + " Hz; sample faster or lower P_cur");
+  }
   sample_rate_ = rate;
   int first = n_states_;
   for (const auto& L : layout_)

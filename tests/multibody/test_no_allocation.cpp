@@ -119,7 +119,7 @@ TEST(NoAllocation, RobotSystemTwinContinuousAndSampled) {
   for (const bool sampled : {false, true}) {
     jointsim::systems::RobotSystem sys =
         jointsim::systems::loadRobotWithDrives(jointsim::test::sourcePath("config/robots/ur5_drives.yaml"));
-    if (sampled) sys.setSampledControl(2000.0, 3);
+    if (sampled) sys.setSampledControl(20000.0, 3);
     sys.setTrajectory(fourier(6));
     const Eigen::VectorXd y = sys.initialState();
     sys.start(0.0, y);

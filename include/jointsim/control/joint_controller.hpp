@@ -80,4 +80,13 @@ class JointController {
   JointControllerParams p_;
 };
 
+/// Spectral radius of the cascade's current loop when it is sampled every Ts [s] (zero-order hold, the integrator
+/// by forward Euler as in sampled control) around the motor's R–L circuit (R [Ω], L [H]; back-EMF, a slow
+/// mechanical coupling, neglected):
+///   i_{k+1} = a i_k + b u_k,  a = e^{−R Ts/L},  b = (1 − a)/R,  u_k = P_cur (r − i_k) + I_cur x_k,
+///   x_{k+1} = x_k + Ts (r − i_k),
+/// the eigenvalues of [[a − b P_cur, b I_cur], [−Ts, 1]]. ≥ 1: the sampled loop is unstable (it rings at the
+/// Nyquist frequency and saturates the supply). 0 for a controller without a current loop.
+double sampledCurrentLoopRadius(const JointControllerParams& params, double R, double L, double Ts);
+
 }  // namespace jointsim::control

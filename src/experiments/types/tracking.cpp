@@ -40,7 +40,11 @@ TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name,
     s.control_rate = rate.asDouble("a rate in Hz");
     if (!(s.control_rate > 0.0)) rate.failExpected("a rate > 0 Hz");
     const long seed = c["seed"].defined() ? c["seed"].asInt("an integer seed") : 1;
-    sys.setSampledControl(s.control_rate, static_cast<unsigned>(seed));
+    try {
+      sys.setSampledControl(s.control_rate, static_cast<unsigned>(seed));
+    } catch (const InputError& e) {
+      rate.fail(e.what());
+    }
   }
   s.trajectory = control::trajectoryFromYaml(root.required("trajectory", "the reference trajectory"), n, base_dir);
   const bool check = !root.has("check_limits") || root["check_limits"].asBool("true or false");
