@@ -85,6 +85,30 @@ static void UR5_CRBA_Cholesky_FD(benchmark::State& state) {
 }
 BENCHMARK(UR5_CRBA_Cholesky_FD);
 
+// Analytic derivatives: ∂τ/∂q, ∂τ/∂q̇ and M of RNEA; ∂q̈/∂q, ∂q̈/∂q̇ and M⁻¹ of ABA (Pinocchio's
+// computeRNEADerivatives / computeABADerivatives compute the same sets).
+static void UR5_RNEA_Derivatives(benchmark::State& state) {
+  auto& f = fixture();
+  size_t k = 0;
+  for (auto _ : state) {
+    const size_t i = k++ & 63;
+    computeRneaDerivatives(f.model, f.data, f.q[i], f.qd[i], f.qdd[i]);
+    benchmark::DoNotOptimize(f.data.dtau_dq.data());
+  }
+}
+BENCHMARK(UR5_RNEA_Derivatives);
+
+static void UR5_ABA_Derivatives(benchmark::State& state) {
+  auto& f = fixture();
+  size_t k = 0;
+  for (auto _ : state) {
+    const size_t i = k++ & 63;
+    computeAbaDerivatives(f.model, f.data, f.q[i], f.qd[i], f.qdd[i]);
+    benchmark::DoNotOptimize(f.data.ddq_dq.data());
+  }
+}
+BENCHMARK(UR5_ABA_Derivatives);
+
 static void UR5_Jacobian(benchmark::State& state) {
   auto& f = fixture();
   const int frame = f.model.frameIndex(f.model.tip_frame);

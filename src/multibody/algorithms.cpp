@@ -214,49 +214,89 @@ const Eigen::VectorXd& nonLinearEffects(const Model& model, Data& data, const Ve
   return data.nle;
 }
 
+namespace {
+
+// 6×6 matrix of the motion cross product, [v×] m = v × m.
+inline Matrix6d crossMatrix(const Vector6d& v) {
+  Matrix6d X = Matrix6d::Zero();
+  const Matrix3d W = skew(v.head<3>()), V = skew(v.tail<3>());
+  X.topLeftCorner<3, 3>() = W;
+  X.bottomLeftCorner<3, 3>() = V;
+  X.bottomRightCorner<3, 3>() = W;
+  return X;
+}
+
+// World spatial inertia (6×6, base axes, about the base origin) of body i from its placement oMi:
+// h' = R h + m p, I' = R I_O Rᵀ − [Rh][p] − [p][Rh] − m [p]², as the matrix [[I', [h']], [−[h'], m 1]].
+inline void worldInertia(const Model& model, size_t i, const Placement& X, Matrix6d& out) {
+  const double m = model.mass[i];
+  const Vector3d Rh = X.R * model.first_moment[i];
+  const Matrix3d P = skew(X.p), H = skew(Rh);
+  const Vector3d hw = Rh + m * X.p;
+  out.topLeftCorner<3, 3>().noalias() = X.R * model.inertia_origin[i] * X.R.transpose();
+  out.topLeftCorner<3, 3>() -= H * P + P * H + m * P * P;
+  const Matrix3d Hw = skew(hw);
+  out.topRightCorner<3, 3>() = Hw;
+  out.bottomLeftCorner<3, 3>() = -Hw;
+  out.bottomRightCorner<3, 3>() = m * Matrix3d::Identity();
+}
+
+// Joint motion subspace in base coordinates: revolute [z; o × z], prismatic [0; z].
+inline Vector6d worldAxis(const Model& model, size_t i, const Placement& oMi) {
+  Vector6d S;
+  const Vector3d z = oMi.R * model.axes[i];
+  if (isRevolute(model, i)) {
+    S.head<3>() = z;
+    S.tail<3>() = oMi.p.cross(z);
+  } else {
+    S.head<3>().setZero();
+    S.tail<3>() = z;
+  }
+  return S;
+}
+
+}  // namespace
+
 const Eigen::MatrixXd& crba(const Model& model, Data& data, const VecRef& q) {
   checkSize(model, data, q, "q");
   const auto n = static_cast<size_t>(model.nq);
+  // Composite rigid bodies in base coordinates about the base origin ([Featherstone2008, §6.2] in the world-frame
+  // form): the composites are plain sums, and M(k, i) = S_k·(Ic_i S_i) for k on the path from i to the root.
+  // Body inertia in base coordinates (m, h' = R h + m p, I' = R I_O Rᵀ − [Rh][p] − [p][Rh] − m[p]²), with
+  // [a][b] + [b][a] = b aᵀ + a bᵀ − 2 (a·b) 1 and [p]² = p pᵀ − (p·p) 1.
   for (size_t i = 0; i < n; ++i) {
-    jointPlacement(model, i, q[static_cast<Eigen::Index>(i)], data.liMi[i]);
     const int parent = model.parents[i];
-    data.oMi[i] = parent < 0 ? data.liMi[i] : data.oMi[static_cast<size_t>(parent)] * data.liMi[i];
-    data.Yc_m[i] = model.mass[i];
-    data.Yc_h[i] = model.first_moment[i];
-    data.Yc_I[i] = model.inertia_origin[i];
+    Placement& X = data.liMi[i];
+    jointPlacement(model, i, q[static_cast<Eigen::Index>(i)], X);
+    const Placement& oMi = data.oMi[i] = parent < 0 ? X : data.oMi[static_cast<size_t>(parent)] * X;
+    data.oS[i] = worldAxis(model, i, oMi);
+    const double m = model.mass[i];
+    const Vector3d Rh = oMi.R * model.first_moment[i];
+    const Vector3d& p = oMi.p;
+    data.Yc_m[i] = m;
+    data.Yc_h[i] = Rh + m * p;
+    Matrix3d& I = data.Yc_I[i];
+    I.noalias() = oMi.R * model.inertia_origin[i] * oMi.R.transpose();
+    I.noalias() -= p * Rh.transpose() + Rh * p.transpose() + m * (p * p.transpose());
+    I.diagonal().array() += 2.0 * Rh.dot(p) + m * p.squaredNorm();
   }
   for (size_t i = n; i-- > 0;) {
     const auto ii = static_cast<Eigen::Index>(i);
-    // F = Ic_i S_i;  M_ii = S_iᵀ F + armature_i.
+    // F = Ic_i S_i = [I ω + h × v; m v − h × ω] for S_i = [ω; v].
+    const Vector6d& S = data.oS[i];
     Vector6d F;
-    if (isRevolute(model, i)) {
-      F.head<3>().noalias() = data.Yc_I[i] * model.axes[i];
-      F.tail<3>() = model.axes[i].cross(data.Yc_h[i]);
-    } else {
-      F.head<3>() = data.Yc_h[i].cross(model.axes[i]);
-      F.tail<3>() = data.Yc_m[i] * model.axes[i];
-    }
-    data.M(ii, ii) = jointProject(model, i, F) + model.armature[ii];
-    // Walk to the root: F ← X* F;  M_ij = M_ji = S_jᵀ F.
-    size_t j = i;
-    while (model.parents[j] >= 0) {
-      F = forceToParent(data.liMi[j], F);
-      j = static_cast<size_t>(model.parents[j]);
-      const auto jj = static_cast<Eigen::Index>(j);
-      data.M(jj, ii) = data.M(ii, jj) = jointProject(model, j, F);
-    }
-    // Ic_λ += X Ic_i Xᵀ:  m' = m, h' = R h + m p, I' = R I Rᵀ − [Rh][p] − [p][Rh] − m [p]².
+    F.head<3>().noalias() = data.Yc_I[i] * S.head<3>();
+    F.head<3>() += data.Yc_h[i].cross(S.tail<3>());
+    F.tail<3>() = data.Yc_m[i] * S.tail<3>() - data.Yc_h[i].cross(S.head<3>());
+    data.M(ii, ii) = S.dot(F) + model.armature[ii];
+    for (int k = model.parents[i]; k >= 0; k = model.parents[static_cast<size_t>(k)])
+      data.M(k, ii) = data.M(ii, k) = data.oS[static_cast<size_t>(k)].dot(F);
     const int parent = model.parents[i];
     if (parent >= 0) {
       const auto pp = static_cast<size_t>(parent);
-      const Placement& X = data.liMi[i];
-      const double m = data.Yc_m[i];
-      const Vector3d Rh = X.R * data.Yc_h[i];
-      const Matrix3d P = skew(X.p), H = skew(Rh);
-      data.Yc_m[pp] += m;
-      data.Yc_h[pp] += Rh + m * X.p;
-      data.Yc_I[pp].noalias() += X.R * data.Yc_I[i] * X.R.transpose();
-      data.Yc_I[pp].noalias() -= H * P + P * H + m * P * P;
+      data.Yc_m[pp] += data.Yc_m[i];
+      data.Yc_h[pp] += data.Yc_h[i];
+      data.Yc_I[pp] += data.Yc_I[i];
     }
   }
   return data.M;
@@ -408,6 +448,153 @@ Eigen::Vector3d centerOfMass(const Model& model, Data& data, const VecRef& q) {
     mc += model.mass[i] * data.oMi[i].act(model.inertias[i].com);
   }
   return m > 0.0 ? Vector3d(mc / m) : Vector3d::Zero();
+}
+
+
+namespace {
+
+// B = [v×*] I − I [v×] for a world inertia I = [[A, [h]], [−[h], m 1]] and v = [ω; v_l]: with W = [ω], V = [v_l],
+// H = [h] (skew), B = [[−(AW + (AW)ᵀ + HV + (HV)ᵀ), (HW)ᵀ − HW + mV], [its transpose, 0]] (symmetric).
+inline void coriolisComposite(const Matrix6d& I, const Vector6d& v, Matrix6d& B) {
+  const Matrix3d W = skew(v.head<3>()), V = skew(v.tail<3>());
+  const Matrix3d A = I.topLeftCorner<3, 3>(), H = I.topRightCorner<3, 3>();
+  const double m = I(3, 3);
+  const Matrix3d AW = A * W, HV = H * V, HW = H * W;
+  B.topLeftCorner<3, 3>() = -(AW + AW.transpose() + HV + HV.transpose());
+  const Matrix3d B12 = HW.transpose() - HW + m * V;
+  B.topRightCorner<3, 3>() = B12;
+  B.bottomLeftCorner<3, 3>() = B12.transpose();
+  B.bottomRightCorner<3, 3>().setZero();
+}
+
+// The passes of the RNEA derivatives. With `solve_for_qdd` (ABA derivatives) the accelerations are not given:
+// pass 1 runs with q̈ = 0, pass 2 gives M and the bias torques b, q̈ = M⁻¹(τ − b) (data.ddq, data.llt), and
+// pass 3 adds the accelerations' share to the body accelerations and forces; otherwise q̈ = `qdd` from the start.
+void rneaDerivativesCore(const Model& model, Data& data, const VecRef& q, const VecRef& qd, const VecRef& qdd_or_tau,
+                         const Matrix6Xd* fext, bool solve_for_qdd) {
+  const auto n = static_cast<size_t>(model.nq);
+  const Vector6d a0 = baseAcceleration(model);
+  const Vector6d zero6 = Vector6d::Zero();
+  data.dtau_dq.setZero();  // entries of joints on different branches stay zero
+  data.dtau_dqd.setZero();
+  data.M.setZero();
+  // Pass 1 (forward, base coordinates): v_i = v_λ + S_i q̇_i, Ṡ_i = v_i × S_i, a_i = a_λ + S_i q̈_i + Ṡ_i q̇_i,
+  // f_i = I_i a_i + v_i ×* I_i v_i − fext_i, h_i = I_i v_i, B_i, u_i = S_i × v_λ.
+  for (size_t i = 0; i < n; ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    const int parent = model.parents[i];
+    Placement& X = data.liMi[i];
+    jointPlacement(model, i, q[ii], X);
+    data.oMi[i] = parent < 0 ? X : data.oMi[static_cast<size_t>(parent)] * X;
+    const Vector6d& S = data.oS[i] = worldAxis(model, i, data.oMi[i]);
+    const Vector6d& v_par = parent < 0 ? zero6 : data.ov[static_cast<size_t>(parent)];
+    const Vector6d& a_par = parent < 0 ? a0 : data.oa[static_cast<size_t>(parent)];
+    data.ov[i] = v_par + S * qd[ii];
+    data.odS[i] = crossMotion(data.ov[i], S);
+    data.oa[i] = a_par + data.odS[i] * qd[ii];
+    if (!solve_for_qdd) data.oa[i] += S * qdd_or_tau[ii];
+    data.ou[i] = crossMotion(S, v_par);
+    Matrix6d& I = data.oI[i];
+    worldInertia(model, i, data.oMi[i], I);
+    data.oIc[i] = I;
+    data.oh[i].noalias() = I * data.ov[i];
+    data.oF[i].noalias() = I * data.oa[i];
+    data.oF[i] += crossForce(data.ov[i], data.oh[i]);
+    if (fext != nullptr) data.oF[i] -= forceToParent(data.oMi[i], fext->col(ii));  // body-fixed wrench
+    coriolisComposite(I, data.ov[i], data.oB[i]);
+  }
+  // Pass 2 (backward): sums over each subtree; M(i, k) = S_k·(Ic_i S_i) for k on the path to the root.
+  for (size_t i = n; i-- > 0;) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    data.oP[i].noalias() = data.oIc[i] * data.oS[i];
+    for (int k = static_cast<int>(i); k >= 0; k = model.parents[static_cast<size_t>(k)])
+      data.M(k, ii) = data.M(ii, k) = data.oS[static_cast<size_t>(k)].dot(data.oP[i]);
+    data.M(ii, ii) += model.armature[ii];
+    data.tau[ii] = data.oS[i].dot(data.oF[i]);
+    const int parent = model.parents[i];
+    if (parent < 0) continue;
+    const auto pp = static_cast<size_t>(parent);
+    data.oIc[pp] += data.oIc[i];
+    data.oF[pp] += data.oF[i];
+    data.oh[pp] += data.oh[i];
+    data.oB[pp] += data.oB[i];
+  }
+  if (solve_for_qdd) {
+    data.llt.compute(data.M);
+    if (data.llt.info() != Eigen::Success)
+      throw InputError("joint-space inertia matrix of robot '" + model.name + "' is not positive definite");
+    data.ddq = qdd_or_tau - data.tau;  // τ − b(q, q̇)
+    data.llt.solveInPlace(data.ddq);
+    data.tau = qdd_or_tau;
+  } else {
+    for (Eigen::Index i = 0; i < model.nq; ++i) data.tau[i] += model.armature[i] * qdd_or_tau[i];
+  }
+  const VecRef& qdd = solve_for_qdd ? VecRef(data.ddq) : qdd_or_tau;
+  // Pass 3 (forward): c_i = S_i × a_λ − u_i × v_λ; with q̈ solved for, the accelerations' share Δa_i = Δa_λ + S_i q̈_i
+  // of a_i and its force I_i Δa_i (kept in oDF, summed over the subtrees in pass 4).
+  for (size_t i = 0; i < n; ++i) {
+    const int parent = model.parents[i];
+    const Vector6d& v_par = parent < 0 ? zero6 : data.ov[static_cast<size_t>(parent)];
+    if (solve_for_qdd) {
+      data.oDa[i] = data.oS[i] * qdd[static_cast<Eigen::Index>(i)];
+      if (parent >= 0) data.oDa[i] += data.oDa[static_cast<size_t>(parent)];
+      data.oa[i] += data.oDa[i];
+      data.oDF[i].noalias() = data.oI[i] * data.oDa[i];
+    }
+    const Vector6d& a_par = parent < 0 ? a0 : data.oa[static_cast<size_t>(parent)];
+    data.oc[i] = crossMotion(data.oS[i], a_par) - crossMotion(data.ou[i], v_par);
+  }
+  // Pass 4 (backward): the derivative entries of row i (columns on the path to the root) and of column i (rows
+  // of the ancestors).
+  for (size_t i = n; i-- > 0;) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    const int parent = model.parents[i];
+    if (solve_for_qdd) {
+      data.oF[i] += data.oDF[i];  // oF holds the subtree sums of pass 2; oDF the subtree sums so far
+      if (parent >= 0) data.oDF[static_cast<size_t>(parent)] += data.oDF[i];
+    }
+    const Vector6d& S = data.oS[i];
+    const Vector6d& P = data.oP[i];
+    const Vector6d Q = crossForce(S, data.oh[i]) - data.oB[i] * S;  // B symmetric: Bᵀ S = B S
+    const Vector6d Psi = crossForce(S, data.oF[i]) - data.oIc[i] * data.oc[i] - crossForce(data.ou[i], data.oh[i]) -
+                         data.oB[i] * data.ou[i];
+    const Vector6d Omega = 2.0 * (data.oIc[i] * data.odS[i]) + data.oB[i] * S + crossForce(S, data.oh[i]);
+    for (int k = static_cast<int>(i); k >= 0; k = model.parents[static_cast<size_t>(k)]) {
+      const auto kk = static_cast<size_t>(k);
+      data.dtau_dq(ii, k) = -data.oc[kk].dot(P) + data.ou[kk].dot(Q);
+      data.dtau_dqd(ii, k) = 2.0 * data.odS[kk].dot(P) - data.oS[kk].dot(Q);
+      if (k != static_cast<int>(i)) {  // column i of the ancestor rows k (joint i lies below k)
+        data.dtau_dq(k, ii) = data.oS[kk].dot(Psi);
+        data.dtau_dqd(k, ii) = data.oS[kk].dot(Omega);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void computeRneaDerivatives(const Model& model, Data& data, const VecRef& q, const VecRef& qd, const VecRef& qdd,
+                            const Matrix6Xd* fext) {
+  checkSize(model, data, q, "q");
+  checkSize(model, data, qd, "qd");
+  checkSize(model, data, qdd, "qdd");
+  checkFext(model, fext);
+  rneaDerivativesCore(model, data, q, qd, qdd, fext, false);
+}
+
+void computeAbaDerivatives(const Model& model, Data& data, const VecRef& q, const VecRef& qd, const VecRef& tau,
+                           const Matrix6Xd* fext) {
+  checkSize(model, data, q, "q");
+  checkSize(model, data, qd, "qd");
+  checkSize(model, data, tau, "tau");
+  checkFext(model, fext);
+  // q̈ = M⁻¹(τ − b(q, q̇)) ⇒ ∂q̈/∂x = −M⁻¹ ∂RNEA/∂x at (q, q̇, q̈) for x = q, q̇, and ∂q̈/∂τ = M⁻¹; q̈ itself from
+  // the Cholesky factor of the M that the derivative passes build anyway (no separate ABA).
+  rneaDerivativesCore(model, data, q, qd, tau, fext, true);
+  data.Minv.setIdentity();
+  data.llt.solveInPlace(data.Minv);
+  data.ddq_dq.noalias() = -data.Minv * data.dtau_dq;
+  data.ddq_dqd.noalias() = -data.Minv * data.dtau_dqd;
 }
 
 }  // namespace jointsim::multibody

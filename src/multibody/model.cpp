@@ -254,7 +254,26 @@ Data::Data(const Model& model)
       M(Eigen::MatrixXd::Zero(model.nq, model.nq)),
       llt(model.nq),
       J(Matrix6Xd::Zero(6, model.nq)),
-      zeros(Eigen::VectorXd::Zero(model.nq)) {
+      zeros(Eigen::VectorXd::Zero(model.nq)),
+      dtau_dq(Eigen::MatrixXd::Zero(model.nq, model.nq)),
+      dtau_dqd(Eigen::MatrixXd::Zero(model.nq, model.nq)),
+      ddq_dq(Eigen::MatrixXd::Zero(model.nq, model.nq)),
+      ddq_dqd(Eigen::MatrixXd::Zero(model.nq, model.nq)),
+      Minv(Eigen::MatrixXd::Zero(model.nq, model.nq)),
+      oS(static_cast<size_t>(model.nq), Vector6d::Zero()),
+      ov(static_cast<size_t>(model.nq), Vector6d::Zero()),
+      oa(static_cast<size_t>(model.nq), Vector6d::Zero()),
+      oF(static_cast<size_t>(model.nq), Vector6d::Zero()),
+      oh(static_cast<size_t>(model.nq), Vector6d::Zero()),
+      ou(static_cast<size_t>(model.nq), Vector6d::Zero()),
+      oc(static_cast<size_t>(model.nq), Vector6d::Zero()),
+      odS(static_cast<size_t>(model.nq), Vector6d::Zero()),
+      oP(static_cast<size_t>(model.nq), Vector6d::Zero()),
+      oDa(static_cast<size_t>(model.nq), Vector6d::Zero()),
+      oDF(static_cast<size_t>(model.nq), Vector6d::Zero()),
+      oI(static_cast<size_t>(model.nq), Matrix6d::Zero()),
+      oIc(static_cast<size_t>(model.nq), Matrix6d::Zero()),
+      oB(static_cast<size_t>(model.nq), Matrix6d::Zero()) {
   // A factorisation (of the identity) so that the LLT's status is defined before the first use: copying a
   // Data copies it (reading an unset status is undefined behaviour).
   llt.compute(Eigen::MatrixXd::Identity(model.nq, model.nq));

@@ -38,6 +38,24 @@ const Eigen::MatrixXd& crba(const Model& model, Data& data, const VecRef& q);
 const Eigen::VectorXd& aba(const Model& model, Data& data, const VecRef& q, const VecRef& qd, const VecRef& tau,
                            const Matrix6Xd* fext = nullptr);
 
+/// Analytic derivatives of inverse dynamics τ = RNEA(q, q̇, q̈, fext) in the base frame ([Carpentier2018]; body-fixed
+/// external wrenches): data.dtau_dq = ∂τ/∂q, data.dtau_dqd = ∂τ/∂q̇, data.M = ∂τ/∂q̈ (with armature, both
+/// triangles), data.tau = τ. No heap allocation. With D_i the subtree of joint i, Ic, F, h the sums over D_i of
+/// the world spatial inertias, forces and momenta, B = Σ([v×*]I − I[v×]), u_k = S_k × v_λ(k),
+/// c_k = S_k × a_λ(k) − u_k × v_λ(k) and Ṡ_k = v_k × S_k:
+///   ∂τ_i/∂q_k = −c_k·(Ic_i S_i) + u_k·(S_i ×* h_i − B_i S_i),  ∂τ_i/∂q̇_k = 2 Ṡ_k·(Ic_i S_i) − S_k·(S_i ×* h_i − B_i S_i)
+///     for k ancestor of i or i itself;
+///   ∂τ_i/∂q_k = S_i·(S_k ×* F_k − Ic_k c_k − u_k ×* h_k − B_k u_k),  ∂τ_i/∂q̇_k = S_i·(2 Ic_k Ṡ_k + B_k S_k + S_k ×* h_k)
+///     for k a descendant of i (zero for joints on other branches).
+void computeRneaDerivatives(const Model& model, Data& data, const VecRef& q, const VecRef& qd, const VecRef& qdd,
+                            const Matrix6Xd* fext = nullptr);
+
+/// Analytic derivatives of forward dynamics q̈ = ABA(q, q̇, τ, fext): data.ddq_dq = ∂q̈/∂q = −M⁻¹ ∂τ/∂q,
+/// data.ddq_dqd = ∂q̈/∂q̇ = −M⁻¹ ∂τ/∂q̇ (the RNEA derivatives at the computed q̈), data.Minv = ∂q̈/∂τ = M⁻¹,
+/// data.ddq = q̈. No heap allocation.
+void computeAbaDerivatives(const Model& model, Data& data, const VecRef& q, const VecRef& qd, const VecRef& tau,
+                           const Matrix6Xd* fext = nullptr);
+
 /// Forward dynamics by CRBA + Cholesky (independent cross-check of aba): q̈ = M⁻¹(τ − C q̇ − g + Jᵀfext).
 /// Result in data.ddq; data.M and data.llt hold the factorised inertia.
 const Eigen::VectorXd& forwardDynamicsCrba(const Model& model, Data& data, const VecRef& q, const VecRef& qd,

@@ -46,6 +46,19 @@ struct Data {
   Eigen::LLT<Eigen::MatrixXd> llt;  ///< Cholesky factor of M (forwardDynamicsCrba)
   Matrix6Xd J;                      ///< (6×nq) frame Jacobian (frameJacobian)
   Eigen::VectorXd zeros;            ///< (nq) zero vector used internally
+
+  // Derivatives (computeRneaDerivatives, computeAbaDerivatives; crba's world-frame pass).
+  Eigen::MatrixXd dtau_dq;   ///< (nq×nq) ∂τ/∂q of RNEA
+  Eigen::MatrixXd dtau_dqd;  ///< (nq×nq) ∂τ/∂q̇ of RNEA
+  Eigen::MatrixXd ddq_dq;    ///< (nq×nq) ∂q̈/∂q of ABA
+  Eigen::MatrixXd ddq_dqd;   ///< (nq×nq) ∂q̈/∂q̇ of ABA
+  Eigen::MatrixXd Minv;      ///< (nq×nq) M⁻¹ = ∂q̈/∂τ (computeAbaDerivatives)
+  // World-frame workspace, base coordinates about the base origin: joint motion subspaces S_i, twists,
+  // accelerations (gravity as base acceleration), composite inertias, forces, momenta, B = [v×*]I − I[v×] and
+  // the per-joint vectors of the derivative recursions.
+  std::vector<Vector6d> oS, ov, oa, oF, oh, ou, oc, odS, oP, oDa, oDF;
+  std::vector<Matrix6d> oI, oIc, oB;
+
 };
 
 }  // namespace jointsim::multibody
