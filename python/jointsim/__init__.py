@@ -37,6 +37,7 @@ from ._core import (
     SolverError,
     UnidentifiableError,
     aba,
+    aba_derivatives,
     crba,
     fit_friction_map,
     frame_jacobian,
@@ -45,14 +46,16 @@ from ._core import (
     identify_clamping,
     load_robot,
     rnea,
+    rnea_derivatives,
 )
 
 __version__ = _core.__version__
 
 __all__ = [
-    "Model", "SolverError", "UnidentifiableError", "Experiment", "Simulator", "aba", "crba", "fit_friction_map",
+    "Model", "SolverError", "UnidentifiableError", "Experiment", "Simulator", "aba", "aba_derivatives", "crba",
+    "fit_friction_map",
     "frame_jacobian", "frame_placement", "gravity_torques", "identify_clamping", "load_experiment", "load_robot",
-    "rnea", "run_experiment", "run_experiment_file", "PORTS",
+    "rnea", "rnea_derivatives", "run_experiment", "run_experiment_file", "PORTS",
 ]
 
 #: The command ports of a drive (Simulator.set_port).

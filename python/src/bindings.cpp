@@ -196,6 +196,26 @@ PYBIND11_MODULE(_core, m) {
       "crba", [](PyModel& p, const Array& q) { return toArray(multibody::crba(p.model, p.data, vec(q, p.model.nq, "q"))); },
       "Joint-space mass matrix M(q) [kg*m^2], shape (nq, nq).", py::arg("model"), py::arg("q"));
   m.def(
+      "rnea_derivatives",
+      [](PyModel& p, const Array& q, const Array& qd, const Array& qdd) {
+        const auto n = p.model.nq;
+        multibody::computeRneaDerivatives(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(qdd, n, "qdd"));
+        return py::make_tuple(toArray(p.data.dtau_dq), toArray(p.data.dtau_dqd), toArray(p.data.M));
+      },
+      "Analytic derivatives of inverse dynamics at (q, qd, qdd): (dtau/dq [N*m/rad], dtau/dqd [N*m*s/rad], "
+      "M = dtau/dqdd [kg*m^2]), each shape (nq, nq).",
+      py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("qdd"));
+  m.def(
+      "aba_derivatives",
+      [](PyModel& p, const Array& q, const Array& qd, const Array& tau) {
+        const auto n = p.model.nq;
+        multibody::computeAbaDerivatives(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(tau, n, "tau"));
+        return py::make_tuple(toArray(p.data.ddq_dq), toArray(p.data.ddq_dqd), toArray(p.data.Minv));
+      },
+      "Analytic derivatives of forward dynamics at (q, qd, tau): (dqdd/dq [1/s^2], dqdd/dqd [1/s], "
+      "dqdd/dtau = M^-1 [1/(kg*m^2)]), each shape (nq, nq).",
+      py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("tau"));
+  m.def(
       "gravity_torques",
       [](PyModel& p, const Array& q) { return toArray(multibody::gravityTorques(p.model, p.data, vec(q, p.model.nq, "q"))); },
       "Gravity torques g(q) [N*m].", py::arg("model"), py::arg("q"));

@@ -257,46 +257,49 @@ inline Vector6d worldAxis(const Model& model, size_t i, const Placement& oMi) {
 
 }  // namespace
 
+// Composite rigid bodies in the body frames ([Featherstone2008, §6.2]); only the local placements are needed
+// (a base-coordinate variant, with world inertias and no walk, measured slower on the UR5: 465 against 442 ns).
 const Eigen::MatrixXd& crba(const Model& model, Data& data, const VecRef& q) {
   checkSize(model, data, q, "q");
   const auto n = static_cast<size_t>(model.nq);
-  // Composite rigid bodies in base coordinates about the base origin ([Featherstone2008, §6.2] in the world-frame
-  // form): the composites are plain sums, and M(k, i) = S_k·(Ic_i S_i) for k on the path from i to the root.
-  // Body inertia in base coordinates (m, h' = R h + m p, I' = R I_O Rᵀ − [Rh][p] − [p][Rh] − m[p]²), with
-  // [a][b] + [b][a] = b aᵀ + a bᵀ − 2 (a·b) 1 and [p]² = p pᵀ − (p·p) 1.
   for (size_t i = 0; i < n; ++i) {
-    const int parent = model.parents[i];
-    Placement& X = data.liMi[i];
-    jointPlacement(model, i, q[static_cast<Eigen::Index>(i)], X);
-    const Placement& oMi = data.oMi[i] = parent < 0 ? X : data.oMi[static_cast<size_t>(parent)] * X;
-    data.oS[i] = worldAxis(model, i, oMi);
-    const double m = model.mass[i];
-    const Vector3d Rh = oMi.R * model.first_moment[i];
-    const Vector3d& p = oMi.p;
-    data.Yc_m[i] = m;
-    data.Yc_h[i] = Rh + m * p;
-    Matrix3d& I = data.Yc_I[i];
-    I.noalias() = oMi.R * model.inertia_origin[i] * oMi.R.transpose();
-    I.noalias() -= p * Rh.transpose() + Rh * p.transpose() + m * (p * p.transpose());
-    I.diagonal().array() += 2.0 * Rh.dot(p) + m * p.squaredNorm();
+    jointPlacement(model, i, q[static_cast<Eigen::Index>(i)], data.liMi[i]);
+    data.Yc_m[i] = model.mass[i];
+    data.Yc_h[i] = model.first_moment[i];
+    data.Yc_I[i] = model.inertia_origin[i];
   }
   for (size_t i = n; i-- > 0;) {
     const auto ii = static_cast<Eigen::Index>(i);
-    // F = Ic_i S_i = [I ω + h × v; m v − h × ω] for S_i = [ω; v].
-    const Vector6d& S = data.oS[i];
+    // F = Ic_i S_i;  M_ii = S_iᵀ F + armature_i.
     Vector6d F;
-    F.head<3>().noalias() = data.Yc_I[i] * S.head<3>();
-    F.head<3>() += data.Yc_h[i].cross(S.tail<3>());
-    F.tail<3>() = data.Yc_m[i] * S.tail<3>() - data.Yc_h[i].cross(S.head<3>());
-    data.M(ii, ii) = S.dot(F) + model.armature[ii];
-    for (int k = model.parents[i]; k >= 0; k = model.parents[static_cast<size_t>(k)])
-      data.M(k, ii) = data.M(ii, k) = data.oS[static_cast<size_t>(k)].dot(F);
+    if (isRevolute(model, i)) {
+      F.head<3>().noalias() = data.Yc_I[i] * model.axes[i];
+      F.tail<3>() = model.axes[i].cross(data.Yc_h[i]);
+    } else {
+      F.head<3>() = data.Yc_h[i].cross(model.axes[i]);
+      F.tail<3>() = data.Yc_m[i] * model.axes[i];
+    }
+    data.M(ii, ii) = jointProject(model, i, F) + model.armature[ii];
+    // Walk to the root: F ← X* F;  M_ij = M_ji = S_jᵀ F.
+    size_t j = i;
+    while (model.parents[j] >= 0) {
+      F = forceToParent(data.liMi[j], F);
+      j = static_cast<size_t>(model.parents[j]);
+      const auto jj = static_cast<Eigen::Index>(j);
+      data.M(jj, ii) = data.M(ii, jj) = jointProject(model, j, F);
+    }
+    // Ic_λ += X Ic_i Xᵀ:  m' = m, h' = R h + m p, I' = R I Rᵀ − [Rh][p] − [p][Rh] − m [p]².
     const int parent = model.parents[i];
     if (parent >= 0) {
       const auto pp = static_cast<size_t>(parent);
-      data.Yc_m[pp] += data.Yc_m[i];
-      data.Yc_h[pp] += data.Yc_h[i];
-      data.Yc_I[pp] += data.Yc_I[i];
+      const Placement& X = data.liMi[i];
+      const double m = data.Yc_m[i];
+      const Vector3d Rh = X.R * data.Yc_h[i];
+      const Matrix3d P = skew(X.p), H = skew(Rh);
+      data.Yc_m[pp] += m;
+      data.Yc_h[pp] += Rh + m * X.p;
+      data.Yc_I[pp].noalias() += X.R * data.Yc_I[i] * X.R.transpose();
+      data.Yc_I[pp].noalias() -= H * P + P * H + m * P * P;
     }
   }
   return data.M;

@@ -50,6 +50,28 @@ def test_rigid_body_closed_forms(planar2):
     np.testing.assert_allclose(jointsim.rnea(m, [0.4, -0.7], [0, 0], [0, 0]), jointsim.gravity_torques(m, q))
 
 
+def test_dynamics_derivatives_against_central_differences(root):
+    m = jointsim.load_robot(str(root / "config/robots/ur5.yaml"))
+    rng = np.random.default_rng(4)
+    q, qd, qdd, tau = (rng.uniform(-2, 2, 6) for _ in range(4))
+    dtau_dq, dtau_dqd, M = jointsim.rnea_derivatives(m, q, qd, qdd)
+    dqdd_dq, dqdd_dqd, Minv = jointsim.aba_derivatives(m, q, qd, tau)
+    h = 1e-6
+    for j in range(6):
+        e = np.zeros(6)
+        e[j] = h
+        fd = (jointsim.rnea(m, q + e, qd, qdd) - jointsim.rnea(m, q - e, qd, qdd)) / (2 * h)
+        np.testing.assert_allclose(dtau_dq[:, j], fd, rtol=0, atol=1e-6 * max(1.0, np.abs(fd).max()))
+        fd = (jointsim.rnea(m, q, qd + e, qdd) - jointsim.rnea(m, q, qd - e, qdd)) / (2 * h)
+        np.testing.assert_allclose(dtau_dqd[:, j], fd, rtol=0, atol=1e-6 * max(1.0, np.abs(fd).max()))
+        fd = (jointsim.aba(m, q + e, qd, tau) - jointsim.aba(m, q - e, qd, tau)) / (2 * h)
+        np.testing.assert_allclose(dqdd_dq[:, j], fd, rtol=0, atol=1e-6 * max(1.0, np.abs(fd).max()))
+        fd = (jointsim.aba(m, q, qd + e, tau) - jointsim.aba(m, q, qd - e, tau)) / (2 * h)
+        np.testing.assert_allclose(dqdd_dqd[:, j], fd, rtol=0, atol=1e-6 * max(1.0, np.abs(fd).max()))
+    np.testing.assert_allclose(M, jointsim.crba(m, q), atol=1e-12)
+    np.testing.assert_allclose(Minv @ jointsim.crba(m, q), np.eye(6), atol=1e-9)
+
+
 def _cli_log(cli, config, overrides, tmp_path):
     args = [str(cli), "run", str(config), "-o", str(tmp_path)]
     for o in overrides:
