@@ -435,31 +435,44 @@ void RobotSystem::start(double t0, const Eigen::Ref<const Eigen::VectorXd>& y) {
   if (sampled()) controlStep(t0, y);
 }
 
-void RobotSystem::setSampledControl(double rate, unsigned seed) {
-  if (!(rate > 0.0)) throw InputError("control rate: expected a sampling rate > 0 Hz");
+void RobotSystem::setSampledControl(double rate, unsigned seed, double current_rate) {
+  if (!(rate > 0.0) || !std::isfinite(rate)) throw InputError("control rate: expected a sampling rate > 0 Hz");
   if (sample_rate_ > 0.0) throw InputError("sampled control already set");
+  long per_outer = 1;
+  if (current_rate != 0.0) {
+    per_outer = std::isfinite(current_rate) ? std::lround(current_rate / rate) : 0;
+    if (!(current_rate >= rate) || per_outer < 1 ||
+        std::abs(static_cast<double>(per_outer) * rate - current_rate) > 1e-9 * current_rate)
+      throw InputError("current rate " + formatNumber(current_rate) + " Hz: expected an integer multiple of the control rate " +
+                       formatNumber(rate) + " Hz");
+  }
+  const double loop_rate = current_rate != 0.0 ? current_rate : rate;
   // A current loop that the sampling makes unstable would ring at the Nyquist frequency against the supply
   // limits: refuse it, naming the rate from which it is stable.
   for (size_t k = 0; k < drives_.size(); ++k) {
     const DriveSpec& d = drives_[k];
     if (!d.electrics) continue;
     auto radius = [&](double f) { return control::sampledCurrentLoopRadius(d.controller, d.motor.R, d.motor.L, 1.0 / f); };
-    const double rho = radius(rate);
+    const double rho = radius(loop_rate);
     if (rho < 1.0) continue;
-    double lo = rate, hi = rate;
+    double lo = loop_rate, hi = loop_rate;
     while (radius(hi) >= 1.0 && hi < 1e9) hi *= 2.0;
     for (int it = 0; it < 60; ++it) {
       const double mid = std::sqrt(lo * hi);
       (radius(mid) >= 1.0 ? lo : hi) = mid;
     }
-    throw InputError("control rate " + formatNumber(rate) + " Hz: the current loop of drive '" + d.joint +
+    throw InputError(std::string(current_rate != 0.0 ? "current rate " : "control rate ") + formatNumber(loop_rate) +
+                     " Hz: the current loop of drive '" + d.joint +
                      "' (P_cur = " + formatNumber(d.controller.P_cur) + " V/A, I_cur = " +
                      formatNumber(d.controller.I_cur) + " V/(A·s), R = " + formatNumber(d.motor.R) + " Ω, L = " +
                      formatNumber(d.motor.L) + " H) is unstable when sampled at this rate (discrete pole magnitude " +
                      formatNumber(rho, 3) + " ≥ 1): it would ring at the Nyquist frequency against the supply "
-                     "voltage. It is stable from about " + formatNumber(hi, 3) + " Hz; sample faster or lower P_cur");
+                     "voltage. It is stable from about " + formatNumber(hi, 3) + " Hz; sample faster, run the current loop "
+                     "faster than the outer loops (control.current_rate), or lower P_cur");
   }
   sample_rate_ = rate;
+  current_rate_ = current_rate;
+  inner_per_outer_ = per_outer;
   int first = n_states_;
   for (const auto& L : layout_)
     if (L.controller >= 0) first = std::min(first, L.controller);
@@ -543,11 +556,16 @@ Eigen::VectorXd RobotSystem::initialState(const Eigen::VectorXd& q0, double t0) 
   if (!sampled()) return y;
   const_cast<RobotSystem*>(this)->ctrl_x_.assign(y.data() + n_states_, y.data() + n_full);
   const_cast<RobotSystem*>(this)->first_sample_ = true;
+  const_cast<RobotSystem*>(this)->inner_count_ = 0;
   return y.head(n_states_);
 }
 
 void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
   if (!sampled()) throw InputError("controlStep: sampled control is not enabled");
+  if (current_rate_ > 0.0) {
+    multiRateStep(t, y);
+    return;
+  }
   const int n = model_.nq;
   const double Ts = 1.0 / sample_rate_;
   setpointStage(t);
@@ -581,6 +599,64 @@ void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>&
     for (int j = 0; j < L.n_controller; ++j) x[j] += Ts * xdot[static_cast<size_t>(j)];  // forward Euler
     held_u_[k] = out.u;
     held_i_ref_[k] = out.i_ref;
+  }
+  first_sample_ = false;
+}
+
+void RobotSystem::multiRateStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  // Every call is a current-loop sample; every inner_per_outer_-th also an outer (position, velocity) sample.
+  const int n = model_.nq;
+  const double Ts_in = 1.0 / current_rate_, Ts_out = 1.0 / sample_rate_;
+  const bool outer = inner_count_ % inner_per_outer_ == 0;
+  ++inner_count_;
+  setpointStage(t);
+  double xdot[4] = {0.0, 0.0, 0.0, 0.0};
+  for (int k = 0; k < n; ++k) {
+    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    const SensorSpec& S = d.sensors;
+    const CommandPort port = port_[static_cast<size_t>(k)];
+    const bool cascade = d.controller.type == control::ControllerType::Cascade002;
+    double* x = L.controller >= 0 ? ctrl_x_.data() + L.controller : nullptr;
+    const double i = L.current >= 0 ? y[L.current] : 0.0;
+    const double i_meas = quantise(i + rng_->gauss(S.current_noise), S.current_quantum);
+    if (outer) {  // measure the joint and the motor, advance the outer loops over Ts_out
+      const double phi = coupled_ ? Ginv_.row(k).dot(y.head(n)) : y[k];
+      const double phid = coupled_ ? Ginv_.row(k).dot(y.segment(n, n)) : y[n + k];
+      const double qm = L.rigid ? L.ratio * phi : y[L.motor];
+      const double qdm = L.rigid ? L.ratio * phid : y[L.motor + 1];
+      const double q_meas = quantise(y[k] + S.joint_bias + rng_->gauss(S.joint_noise), S.joint_quantum);
+      const double qm_meas = quantise(qm, S.motor_quantum);
+      double qdm_meas = qdm;
+      if (S.motor_quantum > 0.0) qdm_meas = first_sample_ ? 0.0 : (qm_meas - prev_qm_meas_[k]) / Ts_out;
+      qdm_meas += rng_->gauss(S.motor_velocity_noise);
+      prev_qm_meas_[k] = qm_meas;
+      held_q_fb_[k] = q_meas;
+      if (controllerDriven(port)) {
+        control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q_meas,  qm_meas,
+                                     qdm_meas,      i_meas,         L.ratio, d.motor.V_supply};
+        in.entry = entryOf(port);
+        in.command = cmd_[k];
+        const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(in, x, xdot);
+        if (cascade) {
+          x[0] += Ts_out * xdot[0];  // the velocity integrator; the current loop below
+          held_i_ref_[k] = out.i_ref;
+        } else {
+          for (int j = 0; j < L.n_controller; ++j) x[j] += Ts_out * xdot[j];
+          held_u_[k] = out.u;
+          held_i_ref_[k] = out.i_ref;
+        }
+      }
+    }
+    if (!cascade || !controllerDriven(port)) continue;
+    // The current loop on the held reference (or the Current port's command), over Ts_in.
+    control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], held_q_fb_[k], 0.0, 0.0, i_meas, L.ratio,
+                                 d.motor.V_supply};
+    in.entry = control::ControlEntry::Current;
+    in.command = port == CommandPort::Current ? cmd_[k] : held_i_ref_[k];
+    const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(in, x, xdot);
+    x[1] += Ts_in * xdot[1];
+    held_u_[k] = out.u;
   }
   first_sample_ = false;
 }

@@ -155,9 +155,15 @@ class RobotSystem : public sim::Plant {
   /// Switches to sampled (discrete-time) control at `rate` [Hz]: the controller states leave the ODE state
   /// vector (stateSize() shrinks) and live in the sampled-control state; between samples the controller
   /// outputs are held (zero-order hold). Call before initialState(). `seed` fixes the sensor noise sequence.
-  void setSampledControl(double rate, unsigned seed);
+  /// `current_rate` [Hz] (0: `rate`): a faster rate for the cascades' current loops, an integer multiple of
+  /// `rate` (multi-rate control as in servo drives: the current loop at the PWM rate, position and velocity loops
+  /// at `rate`). InputError for a rate at which a current loop is unstable (control::sampledCurrentLoopRadius,
+  /// the message names the rate from which it is stable) or a current rate that is not such a multiple.
+  void setSampledControl(double rate, unsigned seed, double current_rate = 0.0);
   bool sampled() const { return sample_rate_ > 0.0; }
   double sampleRate() const { return sample_rate_; }
+  /// Rate of the current loops under sampled control [Hz] (sampleRate() unless set faster).
+  double currentRate() const { return current_rate_ > 0.0 ? current_rate_ : sample_rate_; }
   /// One control period at time t: measure (noise, quantisation, encoder-difference speed), advance the
   /// discrete controllers by forward Euler over 1/rate and hold their outputs. The integrator must restart
   /// after each call (the held inputs jump); sim::simulate does.
@@ -195,7 +201,7 @@ class RobotSystem : public sim::Plant {
   std::vector<double> timeEvents(double t_end) const override;
   /// Sampled control: the controllers' first sample at t0.
   void start(double t0, const Eigen::Ref<const Eigen::VectorXd>& y) override;
-  double samplePeriod() const override { return sampled() ? 1.0 / sample_rate_ : 0.0; }
+  double samplePeriod() const override { return sampled() ? 1.0 / currentRate() : 0.0; }
   void sample(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override { controlStep(t, y); }
   /// Per joint: q_set, q, q_fb, qd, motor_velocity, current, current_ref, voltage, gear_torque,
   /// friction_torque and the inverse-dynamics reference id_torque = RNEA(q_set, q̇_set, q̈_set) + N² J_M q̈_set
@@ -230,6 +236,7 @@ class RobotSystem : public sim::Plant {
   void rotorReactionStage() const;
   void checkJoint(int joint, const char* what) const;
   void bumpless(int k, CommandPort from, double t, Eigen::Ref<Eigen::VectorXd> y);
+  void multiRateStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y);
   control::ControllerInputs controllerInputs(int k) const;  // from sig_ (after the measurement stage)
 
   multibody::Model model_;
@@ -249,6 +256,9 @@ class RobotSystem : public sim::Plant {
   Eigen::VectorXd q0_;
   // Sampled control: discrete controller states, held outputs and sensor memory (not ODE states).
   double sample_rate_ = 0.0;
+  double current_rate_ = 0.0;   // multi-rate: the current loops' rate (0: single rate)
+  long inner_per_outer_ = 1;    // current-loop samples per outer sample
+  long inner_count_ = 0;        // current-loop samples since the start
   std::vector<double> ctrl_x_;
   Eigen::VectorXd held_u_, held_i_ref_, held_q_fb_, prev_qm_meas_;
   bool first_sample_ = true;

@@ -34,16 +34,19 @@ TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name,
   s.joint_limits = readJointLimits(root["joint_limits"]);
   sys.setJointLimits(s.joint_limits);
   if (const YamlValue c = root["control"]; c.defined()) {
-    c.expectMap("a mapping {rate: Hz, seed}");
-    c.allowKeys({"rate", "seed"});
+    c.expectMap("a mapping {rate: Hz, current_rate: Hz, seed}");
+    c.allowKeys({"rate", "current_rate", "seed"});
     const YamlValue rate = c.required("rate", "control sampling rate in Hz");
     s.control_rate = rate.asDouble("a rate in Hz");
     if (!(s.control_rate > 0.0)) rate.failExpected("a rate > 0 Hz");
     const long seed = c["seed"].defined() ? c["seed"].asInt("an integer seed") : 1;
+    const YamlValue current = c["current_rate"];
+    const double current_rate = current.defined() ? current.asDouble("a rate in Hz") : 0.0;
+    if (current.defined() && !(current_rate > 0.0)) current.failExpected("a rate > 0 Hz");
     try {
-      sys.setSampledControl(s.control_rate, static_cast<unsigned>(seed));
+      sys.setSampledControl(s.control_rate, static_cast<unsigned>(seed), current_rate);
     } catch (const InputError& e) {
-      rate.fail(e.what());
+      (current.defined() ? current : rate).fail(e.what());
     }
   }
   s.trajectory = control::trajectoryFromYaml(root.required("trajectory", "the reference trajectory"), n, base_dir);
@@ -108,6 +111,8 @@ class TrackingExperiment : public Experiment {
                         {"electrics", d.electrics}});
     w["max_tracking_error_rad"] = detail::vectorJson(max_err_);
     w["control_rate_hz"] = s_.control_rate;
+    if (s_.robot->sampled() && s_.robot->currentRate() != s_.control_rate)
+      w["current_rate_hz"] = s_.robot->currentRate();
     w["duration"] = s_.duration;
     w["log_rate"] = s_.log_rate;
     solverJson(w["solver"], s_.solver);
