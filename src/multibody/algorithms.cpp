@@ -218,16 +218,6 @@ const Eigen::VectorXd& nonLinearEffects(const Model& model, Data& data, const Ve
 
 namespace {
 
-// 6×6 matrix of the motion cross product, [v×] m = v × m.
-inline Matrix6d crossMatrix(const Vector6d& v) {
-  Matrix6d X = Matrix6d::Zero();
-  const Matrix3d W = skew(v.head<3>()), V = skew(v.tail<3>());
-  X.topLeftCorner<3, 3>() = W;
-  X.bottomLeftCorner<3, 3>() = V;
-  X.bottomRightCorner<3, 3>() = W;
-  return X;
-}
-
 // World spatial inertia (6×6, base axes, about the base origin) of body i from its placement oMi:
 // h' = R h + m p, I' = R I_O Rᵀ − [Rh][p] − [p][Rh] − m [p]², as the matrix [[I', [h']], [−[h'], m 1]].
 inline void worldInertia(const Model& model, size_t i, const Placement& X, Matrix6d& out) {
@@ -515,7 +505,8 @@ void rneaDerivativesCore(const Model& model, Data& data, const VecRef& q, const 
     for (int k = static_cast<int>(i); k >= 0; k = model.parents[static_cast<size_t>(k)])
       data.M(k, ii) = data.M(ii, k) = data.oS[static_cast<size_t>(k)].dot(data.oP[i]);
     data.M(ii, ii) += model.armature[ii];
-    data.tau[ii] = data.oS[i].dot(data.oF[i]);
+    // ABA mode: the bias torques b(q, q̇) into data.nle (data.tau may be the caller's τ).
+    (solve_for_qdd ? data.nle : data.tau)[ii] = data.oS[i].dot(data.oF[i]);
     const int parent = model.parents[i];
     if (parent < 0) continue;
     const auto pp = static_cast<size_t>(parent);
@@ -528,7 +519,7 @@ void rneaDerivativesCore(const Model& model, Data& data, const VecRef& q, const 
     data.llt.compute(data.M);
     if (data.llt.info() != Eigen::Success)
       throw InputError("joint-space inertia matrix of robot '" + model.name + "' is not positive definite");
-    data.ddq = qdd_or_tau - data.tau;  // τ − b(q, q̇)
+    data.ddq = qdd_or_tau - data.nle;  // τ − b(q, q̇)
     data.llt.solveInPlace(data.ddq);
     data.tau = qdd_or_tau;
   } else {

@@ -29,7 +29,8 @@ namespace {
 
 // ------------------------------------------------------------------ Eigen dense linear solver
 // A SUNLinearSolver (matrix-based, direct) over SUNDenseMatrix storage: setup factorises the Newton
-// matrix with Eigen::PartialPivLU (blocked, vectorised), solve applies it. No allocation after creation.
+// matrix with Eigen::PartialPivLU (blocked, vectorised), solve applies it. The solves allocate nothing; with a
+// block structure the setup's condition estimates (PartialPivLU::rcond) use small temporaries.
 /// Block elimination of a bordered block-diagonal matrix A (JacobianStructure): with H the hub and B_k the blocks,
 ///   D_k = A(B_k, B_k), C_k = A(B_k, H), E_k = A(H, B_k), W_k = D_k⁻¹ C_k, S = A(H, H) − Σ E_k W_k,
 /// and A x = b is solved by z_k = D_k⁻¹ b_k, x_H = S⁻¹ (b_H − Σ E_k z_k), x_k = z_k − W_k x_H. Every workspace

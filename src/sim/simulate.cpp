@@ -180,7 +180,7 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
   auto keepHistory = [&](double t_now) {
     if (!keep_history) return false;
     plant.derivatives(t_now, y, f_new);
-    return integ.jumpError(f_old, f_new, std::min(t_sample, breaks[next_break]) - t_now) <= 1.0;
+    return integ.jumpError(f_old, f_new, std::min(t_sample, breaks[next_break]) - t_now) <= kKeepHistoryLimit;
   };
   auto budgets = [&](double t) {
     if (stopNow()) throw SolverError(solver.component + ": " + stop_message, t, stop_flag, solver.component);

@@ -16,8 +16,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 /// A target this close (relative to max(1, |t|)) to a sample or time event is moved onto it.
 constexpr double kSnap = 1e-12;
 bool near(double a, double b) { return std::abs(a - b) <= kSnap * std::max(1.0, std::abs(b)); }
-/// An input jump whose CvodeIntegrator::jumpError exceeds this restarts the integrator.
-constexpr double kKeepHistoryLimit = 1.0;
 }  // namespace
 
 Simulator::Simulator(Plant& plant, const CvodeOptions& solver)

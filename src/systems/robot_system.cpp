@@ -432,7 +432,11 @@ std::vector<double> RobotSystem::timeEvents(double) const {
 void RobotSystem::start(double t0, const Eigen::Ref<const Eigen::VectorXd>& y) {
   applied_port_ = port_;  // the state starts consistent with the ports as they are
   applied_cmd_ = cmd_;
-  if (sampled()) controlStep(t0, y);
+  if (sampled()) {
+    first_sample_ = true;  // a (re)start: the encoder speed and the outer loops begin afresh
+    inner_count_ = 0;
+    controlStep(t0, y);
+  }
 }
 
 void RobotSystem::setSampledControl(double rate, unsigned seed, double current_rate) {
@@ -471,7 +475,7 @@ void RobotSystem::setSampledControl(double rate, unsigned seed, double current_r
                      "faster than the outer loops (control.current_rate), or lower P_cur");
   }
   sample_rate_ = rate;
-  current_rate_ = current_rate;
+  current_rate_ = per_outer > 1 ? current_rate : 0.0;  // equal rates: the single-rate controller
   inner_per_outer_ = per_outer;
   int first = n_states_;
   for (const auto& L : layout_)

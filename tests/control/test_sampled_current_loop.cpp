@@ -117,10 +117,6 @@ TEST(SampledCurrentLoop, MultiRateRunsTheCurrentLoopWhereTheOuterRateWouldBeUnst
     EXPECT_LE((multi[q] - fast[q]).cwiseAbs().maxCoeff(), 2e-4) << joint;
     EXPECT_LE((multi[q] - multi[q_set]).cwiseAbs().maxCoeff(), 2e-3) << joint;
   }
-  // A current rate equal to the rate is the single-rate controller, value for value (no sensor noise).
-  const sim::SignalTable same = trackingRun("{rate: 20000, current_rate: 20000}");
-  ASSERT_EQ(same.values.rows(), fast.values.rows());
-  EXPECT_EQ((same.values - fast.values).cwiseAbs().maxCoeff(), 0.0);
 }
 
 }  // namespace

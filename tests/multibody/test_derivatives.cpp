@@ -127,6 +127,16 @@ TEST(Derivatives, RobotR3AndIrb140AgainstCentralDifferences) {
   checkModel(loadRobot(jointsim::test::sourcePath("config/robots/irb140.yaml")));
 }
 
+TEST(Derivatives, AbaDerivativesAcceptTheTorquesOfTheSameWorkspace) {
+  // rnea(...) then computeAbaDerivatives(..., data.tau): the torques live in the workspace the passes write.
+  const Model m = loadRobot(jointsim::test::sourcePath("config/robots/ur5.yaml"));
+  Data d(m);
+  const Point p = point(m, 5);
+  rnea(m, d, p.q, p.qd, p.qdd);
+  computeAbaDerivatives(m, d, p.q, p.qd, d.tau);
+  EXPECT_LE((d.ddq - p.qdd).cwiseAbs().maxCoeff(), 1e-9);
+}
+
 TEST(Derivatives, BranchedTreeWithPrismaticJointAndArmature) {
   const Model m = tree();
   ASSERT_EQ(m.nq, 4);

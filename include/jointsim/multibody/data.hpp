@@ -16,7 +16,7 @@ struct Data {
 
   int nq;  ///< size of the model this workspace was made for
 
-  // Kinematics (forwardKinematics and every dynamics algorithm update them).
+  // Kinematics (forwardKinematics and the dynamics algorithms update them; crba only liMi).
   std::vector<Placement> liMi;  ///< (nq) body frame i in its parent body frame
   std::vector<Placement> oMi;   ///< (nq) body frame i in the base frame
   std::vector<Placement> oMf;   ///< (nframes) frames in the base frame (forwardKinematics / updateFrames)
@@ -47,7 +47,7 @@ struct Data {
   Matrix6Xd J;                      ///< (6×nq) frame Jacobian (frameJacobian)
   Eigen::VectorXd zeros;            ///< (nq) zero vector used internally
 
-  // Derivatives (computeRneaDerivatives, computeAbaDerivatives; crba's world-frame pass).
+  // Derivatives (computeRneaDerivatives, computeAbaDerivatives).
   Eigen::MatrixXd dtau_dq;   ///< (nq×nq) ∂τ/∂q of RNEA
   Eigen::MatrixXd dtau_dqd;  ///< (nq×nq) ∂τ/∂q̇ of RNEA
   Eigen::MatrixXd ddq_dq;    ///< (nq×nq) ∂q̈/∂q of ABA

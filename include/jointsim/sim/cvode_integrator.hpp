@@ -92,13 +92,13 @@ struct CvodeOptions {
   /// How sim::simulate and sim::Simulator go on where a held input jumps: at the samples of a sampled (zero-order
   /// hold) controller and where an input set between steps changes (Plant::inputRevision). The state is continuous
   /// there; only its derivative jumps.
-  /// - `KeepHistory` (default): the integrator stops exactly at the jump (a stop time) and continues with its step
-  ///   size, order and Newton matrix. The first step after the jump sees the new derivative; the local error test
-  ///   measures the mismatch with the history (of order h·Δẏ) and shrinks the step where the jump is large, so the
-  ///   tolerance still governs the error. A sampled controller at 20 kHz then costs about one step per sample.
-  /// - `Restart`: CVodeReInit at every jump (order 1, a fresh step-size estimate, a new Jacobian): the most
-  ///   conservative choice, and the reference the default is tested against; costs tens of steps per jump on
-  ///   a stiff drive train.
+  /// - `KeepHistory` (default): where the jump is small, h‖Δẏ‖_w ≤ 1 (CvodeIntegrator::jumpError: the next step
+  ///   then passes the error test), the integrator stops exactly at the jump (a stop time) and continues with its
+  ///   step size, order and Newton matrix; the local error test still measures the mismatch with the history.
+  ///   Larger jumps restart, as under `Restart` (carrying the history through them makes CVODE fail its error
+  ///   test down to the minimum step).
+  /// - `Restart`: CVodeReInit at every jump (order 1, a fresh step-size estimate, a new Jacobian): the reference
+  ///   the default is tested against; costs several steps per jump on a stiff drive train.
   /// Root events, time events (profile and trajectory breakpoints) and state changes (setState, a bumpless port
   /// switch) always restart. CvodeIntegrator itself does not read this setting.
   enum class InputJump { KeepHistory, Restart } input_jump = InputJump::KeepHistory;
@@ -141,9 +141,15 @@ using RhsFunction =
 /// Dense Jacobian J = df/dy (n x n, column-major; J(i, j) = d ydot_i / d y_j) at (t, y), with
 /// `ydot` = f(t, y) already evaluated. J is zero on entry, so only non-zeros need to be written.
 /// May throw like RhsFunction.
-/// Jacobian by differences that the caller organises itself (e.g. by structure): as JacobianFunction, plus the
-/// increment CVODE's own difference quotients would use for each state, inc_j = max(√ε |y_j|, m / w_j) with w the
-/// error weights and m = 1000 |h| ε n ‖f‖_w (SUNDIALS' cvLsDenseDQJac).
+using JacobianFunction =
+    std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                       const Eigen::Ref<const Eigen::VectorXd>& ydot, Eigen::Ref<Eigen::MatrixXd> J)>;
+
+/// Jacobian by differences that the caller organises itself (e.g. by structure): as JacobianFunction, plus an
+/// increment per state modelled on CVODE's own difference quotients, inc_j = max(√ε |y_j|, m / w_j) with w the
+/// error weights and m = 1000 |h| ε n ‖f‖_w (SUNDIALS' cvLsDenseDQJac; h here is CVODE's planned step, which
+/// can differ from the step being attempted after a failure or a stop time, so the increments are close to,
+/// not always equal to, CVODE's).
 using DifferenceJacobianFunction =
     std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                        const Eigen::Ref<const Eigen::VectorXd>& ydot, const Eigen::Ref<const Eigen::VectorXd>& inc,
@@ -153,10 +159,6 @@ using DifferenceJacobianFunction =
 /// tolerance and stops there. Must be pure like the right-hand side.
 using RootFunction =
     std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g)>;
-
-using JacobianFunction =
-    std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                       const Eigen::Ref<const Eigen::VectorXd>& ydot, Eigen::Ref<Eigen::MatrixXd> J)>;
 
 /// CVODE integrator for y' = f(t, y), y in R^n.
 ///

@@ -59,7 +59,7 @@ struct SimulationResult {
   double wall_time_s = 0.0;  ///< wall-clock time of the run [s]
   long events = 0;           ///< root and time events handled
   long samples = 0;          ///< updates of the sampled part (including the one at t = 0)
-  long restarts = 0;         ///< integrator restarts after t = 0 (events; samples under input_jump Restart)
+  long restarts = 0;         ///< integrator restarts after t = 0 (events; samples under Restart or with a large jump)
   long input_jumps = 0;      ///< samples integrated through with the history kept (input_jump KeepHistory)
   long outputs = 0;          ///< rows handed to the sink (including t = 0)
   double realTimeFactor() const { return wall_time_s > 0.0 ? sim_time_s / wall_time_s : 0.0; }
@@ -90,6 +90,9 @@ class Interrupted : public SimulationFailure {
 
 /// Receives one output row: [t, signals...] (size 1 + plant.signalNames().size()). May throw: the run stops.
 using OutputSink = std::function<void(const Eigen::VectorXd& row)>;
+
+/// An input jump whose CvodeIntegrator::jumpError exceeds this restarts the integrator (CvodeOptions::input_jump).
+constexpr double kKeepHistoryLimit = 1.0;
 
 /// Gives `integ` the plant's own Jacobian and its block structure when the plant provides them and the
 /// integrator's options ask for it (plant_jacobian, BDF); before integ.initialize().

@@ -164,9 +164,10 @@ class RobotSystem : public sim::Plant {
   double sampleRate() const { return sample_rate_; }
   /// Rate of the current loops under sampled control [Hz] (sampleRate() unless set faster).
   double currentRate() const { return current_rate_ > 0.0 ? current_rate_ : sample_rate_; }
-  /// One control period at time t: measure (noise, quantisation, encoder-difference speed), advance the
-  /// discrete controllers by forward Euler over 1/rate and hold their outputs. The integrator must restart
-  /// after each call (the held inputs jump); sim::simulate does.
+  /// One sample at time t (every 1/currentRate()): measure (noise, quantisation, encoder-difference speed), advance
+  /// the discrete controllers by forward Euler and hold their outputs; with a faster current rate the position and
+  /// velocity loops advance over 1/rate at every (currentRate()/rate)-th call, the current loops at every call. The
+  /// held inputs jump: the simulators stop there (and restart or keep the history, CvodeOptions::input_jump).
   void controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y);
 
   /// Initial state: joints at q0 (at rest), motors at N φ_out, gear internal states at static equilibrium,
@@ -213,8 +214,8 @@ class RobotSystem : public sim::Plant {
   /// (2n evaluations); drive columns by perturbing one state of every drive at once (as many evaluations as
   /// the largest drive has states), the drive's own rows from the difference and the q̈ rows through the
   /// drive's output torque, ∂q̈/∂x = (∂q̈/∂τ_out,k)(∂τ_out,k/∂x), with ∂q̈/∂τ_out = M⁻¹G⁻ᵀ exact (q̈ is
-  /// affine in the joint torques). With the increments CVODE itself would use, the result equals CVODE's
-  /// dense difference-quotient Jacobian to rounding, at about a quarter of its evaluations on the UR5 twin.
+  /// affine in the joint torques). With the same increments the result equals plain difference quotients of every
+  /// column to rounding (tested), at about a quarter of their evaluations on the UR5 twin.
   bool providesJacobian() const override { return true; }
   void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f,
                 const Eigen::Ref<const Eigen::VectorXd>& inc, Eigen::Ref<Eigen::MatrixXd> J) const override;
