@@ -564,6 +564,30 @@ Eigen::VectorXd RobotSystem::initialState(const Eigen::VectorXd& q0, double t0) 
   return y.head(n_states_);
 }
 
+RobotSystem::MotionMeasurement RobotSystem::measureMotion(int k, const Eigen::Ref<const Eigen::VectorXd>& y, double phi,
+                                                          double phid, double Ts) {
+  const DriveLayout& L = layout_[static_cast<size_t>(k)];
+  const SensorSpec& S = drives_[static_cast<size_t>(k)].sensors;
+  const double qm = L.rigid ? L.ratio * phi : y[L.motor];
+  const double qdm = L.rigid ? L.ratio * phid : y[L.motor + 1];
+  // Noise first, then the sensor's quantiser; encoder speed by differencing over Ts.
+  MotionMeasurement m;
+  m.q = quantise(y[k] + S.joint_bias + rng_->gauss(S.joint_noise), S.joint_quantum);
+  m.qm = quantise(qm, S.motor_quantum);
+  m.qdm = qdm;
+  if (S.motor_quantum > 0.0) m.qdm = first_sample_ ? 0.0 : (m.qm - prev_qm_meas_[k]) / Ts;
+  m.qdm += rng_->gauss(S.motor_velocity_noise);
+  prev_qm_meas_[k] = m.qm;
+  held_q_fb_[k] = m.q;
+  return m;
+}
+
+double RobotSystem::measureCurrent(int k, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  const DriveLayout& L = layout_[static_cast<size_t>(k)];
+  const SensorSpec& S = drives_[static_cast<size_t>(k)].sensors;
+  return quantise((L.current >= 0 ? y[L.current] : 0.0) + rng_->gauss(S.current_noise), S.current_quantum);
+}
+
 void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
   if (!sampled()) throw InputError("controlStep: sampled control is not enabled");
   if (current_rate_ > 0.0) {
@@ -579,23 +603,12 @@ void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>&
   for (int k = 0; k < n; ++k) {
     const DriveSpec& d = drives_[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
-    const SensorSpec& S = d.sensors;
-    const double qm = L.rigid ? L.ratio * phi[k] : y[L.motor];
-    const double qdm = L.rigid ? L.ratio * phid[k] : y[L.motor + 1];
-    const double i = L.current >= 0 ? y[L.current] : 0.0;
-    // Measurements: noise first, then the sensor's quantiser; encoder speed by differencing.
-    const double q_meas = quantise(y[k] + S.joint_bias + rng_->gauss(S.joint_noise), S.joint_quantum);
-    const double qm_meas = quantise(qm, S.motor_quantum);
-    double qdm_meas = qdm;
-    if (S.motor_quantum > 0.0) qdm_meas = first_sample_ ? 0.0 : (qm_meas - prev_qm_meas_[k]) / Ts;
-    qdm_meas += rng_->gauss(S.motor_velocity_noise);
-    prev_qm_meas_[k] = qm_meas;
-    const double i_meas = quantise(i + rng_->gauss(S.current_noise), S.current_quantum);
-    held_q_fb_[k] = q_meas;
+    const MotionMeasurement m = measureMotion(k, y, phi[k], phid[k], Ts);
+    const double i_meas = measureCurrent(k, y);
     const CommandPort port = port_[static_cast<size_t>(k)];
     if (!controllerDriven(port)) continue;  // voltage or torque command: the controller holds its state
-    control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q_meas,  qm_meas,
-                                 qdm_meas,      i_meas,         L.ratio, d.motor.V_supply};
+    control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], m.q,     m.qm,
+                                 m.qdm,         i_meas,         L.ratio, d.motor.V_supply};
     in.entry = entryOf(port);
     in.command = cmd_[k];
     double* x = L.controller >= 0 ? ctrl_x_.data() + L.controller : nullptr;
@@ -618,27 +631,17 @@ void RobotSystem::multiRateStep(double t, const Eigen::Ref<const Eigen::VectorXd
   for (int k = 0; k < n; ++k) {
     const DriveSpec& d = drives_[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
-    const SensorSpec& S = d.sensors;
     const CommandPort port = port_[static_cast<size_t>(k)];
     const bool cascade = d.controller.type == control::ControllerType::Cascade002;
     double* x = L.controller >= 0 ? ctrl_x_.data() + L.controller : nullptr;
-    const double i = L.current >= 0 ? y[L.current] : 0.0;
-    const double i_meas = quantise(i + rng_->gauss(S.current_noise), S.current_quantum);
+    const double i_meas = measureCurrent(k, y);
     if (outer) {  // measure the joint and the motor, advance the outer loops over Ts_out
       const double phi = coupled_ ? Ginv_.row(k).dot(y.head(n)) : y[k];
       const double phid = coupled_ ? Ginv_.row(k).dot(y.segment(n, n)) : y[n + k];
-      const double qm = L.rigid ? L.ratio * phi : y[L.motor];
-      const double qdm = L.rigid ? L.ratio * phid : y[L.motor + 1];
-      const double q_meas = quantise(y[k] + S.joint_bias + rng_->gauss(S.joint_noise), S.joint_quantum);
-      const double qm_meas = quantise(qm, S.motor_quantum);
-      double qdm_meas = qdm;
-      if (S.motor_quantum > 0.0) qdm_meas = first_sample_ ? 0.0 : (qm_meas - prev_qm_meas_[k]) / Ts_out;
-      qdm_meas += rng_->gauss(S.motor_velocity_noise);
-      prev_qm_meas_[k] = qm_meas;
-      held_q_fb_[k] = q_meas;
+      const MotionMeasurement m = measureMotion(k, y, phi, phid, Ts_out);
       if (controllerDriven(port)) {
-        control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q_meas,  qm_meas,
-                                     qdm_meas,      i_meas,         L.ratio, d.motor.V_supply};
+        control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], m.q,     m.qm,
+                                     m.qdm,         i_meas,         L.ratio, d.motor.V_supply};
         in.entry = entryOf(port);
         in.command = cmd_[k];
         const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(in, x, xdot);
@@ -864,11 +867,13 @@ void RobotSystem::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>&
   evaluate(t, y, ydot.data());
 }
 
-sim::JacobianStructure RobotSystem::jacobianStructure() const {
+sim::JacobianStructure RobotSystem::jacobianStructure() const { return jacobianStructure(nullptr); }
+
+sim::JacobianStructure RobotSystem::jacobianStructure(std::vector<int>* drive_of_block) const {
   sim::JacobianStructure s;
   const int n = model_.nq;
   for (int i = 0; i < 2 * n; ++i) s.hub.push_back(i);
-  jac_block_drive_.clear();
+  if (drive_of_block) drive_of_block->clear();
   for (int k = 0; k < n; ++k) {
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
     std::vector<int> b;
@@ -883,7 +888,7 @@ sim::JacobianStructure RobotSystem::jacobianStructure() const {
     if (!sampled()) add(L.controller, L.n_controller);  // sampled: the controller states are not ODE states
     if (b.empty()) continue;
     s.blocks.push_back(std::move(b));
-    jac_block_drive_.push_back(k);
+    if (drive_of_block) drive_of_block->push_back(k);
   }
   return s;
 }
@@ -893,7 +898,7 @@ void RobotSystem::jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                            Eigen::Ref<Eigen::MatrixXd> J) const {
   const int n = model_.nq;
   if (jac_y_.size() != n_states_) {  // first call for this state layout
-    jac_structure_ = jacobianStructure();
+    jac_structure_ = jacobianStructure(&jac_block_drive_);
     jac_y_.resize(n_states_);
     jac_f_.resize(n_states_);
     jac_tau0_.resize(n);

@@ -77,11 +77,13 @@ void expectStructuredEqualsPlain(const systems::RobotSystem& sys, unsigned seed)
   const sim::JacobianStructure st = sys.jacobianStructure();
   st.validate(static_cast<int>(n));
   EXPECT_EQ(st.blocks.size(), static_cast<size_t>(sys.dof()));
-  for (size_t a = 0; a < st.blocks.size(); ++a)
-    for (size_t b = 0; b < st.blocks.size(); ++b)
-      if (a != b)
-        for (int i : st.blocks[a])
-          for (int j : st.blocks[b]) EXPECT_EQ(plain(i, j), 0.0) << "drive " << a << " row " << i << ", col " << j;
+  for (size_t a = 0; a < st.blocks.size(); ++a) {
+    for (size_t b = 0; b < st.blocks.size(); ++b) {
+      if (a == b) continue;
+      for (int i : st.blocks[a])
+        for (int j : st.blocks[b]) EXPECT_EQ(plain(i, j), 0.0) << "drive " << a << " row " << i << ", col " << j;
+    }
+  }
 }
 
 TEST(StructuredJacobian, Ur5TwinEqualsPlainDifferenceQuotients) {

@@ -220,6 +220,8 @@ class RobotSystem : public sim::Plant {
   void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f,
                 const Eigen::Ref<const Eigen::VectorXd>& inc, Eigen::Ref<Eigen::MatrixXd> J) const override;
   sim::JacobianStructure jacobianStructure() const override;
+  /// The same, and for each block the index of its drive.
+  sim::JacobianStructure jacobianStructure(std::vector<int>* drive_of_block) const;
   void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override;
 
  private:
@@ -238,6 +240,14 @@ class RobotSystem : public sim::Plant {
   void checkJoint(int joint, const char* what) const;
   void bumpless(int k, CommandPort from, double t, Eigen::Ref<Eigen::VectorXd> y);
   void multiRateStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y);
+  // Sampled control's sensors of drive k (noise, quantisers): the joint and motor angles and the encoder speed
+  // differenced over Ts (updates the encoder memory and the held joint feedback), and the current.
+  struct MotionMeasurement {
+    double q = 0.0, qm = 0.0, qdm = 0.0;
+  };
+  MotionMeasurement measureMotion(int k, const Eigen::Ref<const Eigen::VectorXd>& y, double phi, double phid,
+                                  double Ts);
+  double measureCurrent(int k, const Eigen::Ref<const Eigen::VectorXd>& y);
   control::ControllerInputs controllerInputs(int k) const;  // from sig_ (after the measurement stage)
 
   multibody::Model model_;
