@@ -182,6 +182,17 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
     plant.derivatives(t_now, y, f_new);
     return integ.jumpError(f_old, f_new, std::min(t_sample, breaks[next_break]) - t_now) <= kKeepHistoryLimit;
   };
+  // After an event (`restart`: the right-hand side may jump anywhere) or a sample: restart, or go on with the
+  // history; then the stop time at the next event or sample.
+  auto goOn = [&](double t_now, bool restart) {
+    if (restart || !keepHistory(t_now)) {
+      integ.initialize(t_now, y);
+      ++result.restarts;
+    } else {
+      ++result.input_jumps;  // CVODE stopped exactly at the sample and goes on with the new held inputs
+    }
+    setStop();
+  };
   auto budgets = [&](double t) {
     if (stopNow()) throw SolverError(solver.component + ": " + stop_message, t, stop_flag, solver.component);
   };
@@ -214,26 +225,14 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
                               t, "EVENT_CHATTERING", solver.component);
         }
         if (at_sample) sampleAt(t);
-        if (root || at_break || (at_sample && !keepHistory(t))) {
-          integ.initialize(t, y);
-          ++result.restarts;
-        } else if (at_sample) {
-          ++result.input_jumps;  // CVODE stopped exactly at the sample and goes on with the new held inputs
-        }
-        if (root || at_break || at_sample) setStop();
+        if (root || at_break || at_sample) goOn(t, root || at_break);
       }
       emit(t);
       const bool done = by_rate ? k >= n_outputs : t_out >= t_end;
       if (done) break;
       if (t >= t_sample && t_sample < t_end) {  // the output was due at a sample: update after it
         sampleAt(t);
-        if (keepHistory(t)) {
-          ++result.input_jumps;
-        } else {
-          integ.initialize(t, y);
-          ++result.restarts;
-        }
-        setStop();
+        goOn(t, false);
       }
     }
   } catch (const SolverError& e) {
