@@ -47,6 +47,7 @@ int main(int argc, char** argv) {
   jointsim::cli::addBatchCommand(app);
   jointsim::cli::addCompareCommand(app);
   jointsim::cli::addPlotCommand(app);
+  jointsim::cli::addFmuCommand(app);
   installStopHandlers();
   try {
     app.parse(argc, argv);

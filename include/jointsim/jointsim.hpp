@@ -57,3 +57,4 @@
 #include "jointsim/identify/friction_fit.hpp"
 #include "jointsim/report/compare.hpp"
 #include "jointsim/report/plot.hpp"
+#include "jointsim/fmi/fmu.hpp"

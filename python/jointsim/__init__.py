@@ -55,7 +55,7 @@ __all__ = [
     "Model", "SolverError", "UnidentifiableError", "Experiment", "Simulator", "aba", "aba_derivatives", "crba",
     "fit_friction_map",
     "frame_jacobian", "frame_placement", "gravity_torques", "identify_clamping", "load_experiment", "load_robot",
-    "rnea", "rnea_derivatives", "run_experiment", "run_experiment_file", "PORTS",
+    "rnea", "rnea_derivatives", "run_experiment", "run_experiment_file", "PORTS", "export_fmu",
 ]
 
 #: The command ports of a drive (Simulator.set_port).
@@ -163,6 +163,24 @@ def run_experiment_file(path: str, output_dir: Optional[str] = None, overrides: 
     """As `jointsim run`: writes DIR/<name>.csv and DIR/summary.json (each renamed into place when complete; bad
     input writes nothing). Returns status, csv_path, summary_path, sim_time_s, wall_time_s, real_time_factor."""
     return dict(_core.run_experiment_file(str(path), "" if output_dir is None else str(output_dir), _overrides(overrides)))
+
+
+def export_fmu(config: str, fmu_path: str, inputs: Sequence[str] = (), outputs: Sequence[str] = (),
+               overrides: Overrides = None, binary_dir: Optional[str] = None, step_size: float = 1e-3) -> Dict[str, Any]:
+    """As `jointsim fmu`: writes an FMI 2.0 Co-Simulation FMU of an experiment file (types tracking, joint_rig).
+
+    inputs: command ports, "PORT" (every joint) or "JOINT:PORT" (voltage, current, motor_torque, motor_velocity,
+    setpoint) for a robot, "command" for a joint rig; outputs: signal names (default all); overrides: as --set.
+    binary_dir: the FMU binary's folder (default: the one shipped in this package). Returns the FMU's description
+    (model identifier, GUID, variables with their value references = their indices).
+    """
+    import os
+    if binary_dir is None:
+        here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "fmu", "linux64")
+        binary_dir = here if os.path.isfile(os.path.join(here, "jointsim_fmu.so")) else ""
+    raw = _core.export_fmu(str(config), str(fmu_path), list(inputs), list(outputs), _overrides(overrides),
+                           str(binary_dir), float(step_size))
+    return json.loads(raw)
 
 
 class Simulator:

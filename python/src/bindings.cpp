@@ -17,6 +17,9 @@
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/version.hpp"
 #include "jointsim/experiments/experiment.hpp"
+#include "jointsim/fmi/fmu.hpp"
+
+#include <nlohmann/json.hpp>
 #include "jointsim/identify/clamping_fit.hpp"
 #include "jointsim/identify/friction_fit.hpp"
 #include "jointsim/multibody/algorithms.hpp"
@@ -291,6 +294,24 @@ PYBIND11_MODULE(_core, m) {
         return d;
       },
       py::arg("path"), py::arg("output_dir") = "", py::arg("overrides") = std::vector<std::string>{});
+
+  // ------------------------------------------------------------------------------------------ FMU export
+  m.def(
+      "export_fmu",
+      [](const std::string& config, const std::string& fmu_path, const std::vector<std::string>& inputs,
+         const std::vector<std::string>& outputs, const std::vector<std::string>& overrides,
+         const std::string& binary_dir, double step_size) {
+        fmi::ExportOptions o;
+        o.inputs = inputs;
+        o.outputs = outputs;
+        o.overrides = overrides;
+        o.binary_dir = binary_dir;
+        o.step_size = step_size;
+        const fmi::FmuDescription d = fmi::exportFmu(config, fmu_path, o);
+        return d.toJson().dump();
+      },
+      py::arg("config"), py::arg("fmu_path"), py::arg("inputs"), py::arg("outputs"), py::arg("overrides"),
+      py::arg("binary_dir"), py::arg("step_size"));
 
   // ------------------------------------------------------------------------------------------ simulator
   py::class_<PySimulator>(m, "Simulator")

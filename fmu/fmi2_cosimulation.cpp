@@ -1,0 +1,226 @@
+// The C functions of the FMI 2.0 Co-Simulation standard for the jointsim FMU binary: each forwards to
+// fmi::Instance (include/jointsim/fmi/fmu.hpp), which implements the state machine and never throws; this layer
+// adds the checks of the C interface (null instance, the resource URI) and catches anything left (out of memory),
+// so that no exception crosses into the importer.
+#include <cctype>
+#include <cstring>
+#include <memory>
+#include <new>
+#include <string>
+
+#include "fmi2Functions.h"
+#include "jointsim/common/error.hpp"
+#include "jointsim/fmi/fmu.hpp"
+
+namespace {
+
+using jointsim::fmi::Instance;
+using jointsim::fmi::Status;
+
+struct Component {
+  std::string name;
+  fmi2CallbackFunctions callbacks{};
+  bool logging = true;
+  std::unique_ptr<Instance> instance;
+};
+
+void emit(const fmi2CallbackFunctions& cb, const std::string& name, fmi2Status status, const char* category,
+          const std::string& message) {
+  if (cb.logger != nullptr) cb.logger(cb.componentEnvironment, name.c_str(), status, category, "%s", message.c_str());
+}
+
+fmi2Status toC(Status s) { return static_cast<fmi2Status>(static_cast<int>(s)); }
+
+/// file:///a/b, file:/a/b or file://localhost/a/b -> /a/b with %XX decoded; "" for another scheme.
+std::string pathFromUri(const char* uri) {
+  if (uri == nullptr) return {};
+  std::string u = uri;
+  if (u.rfind("file://localhost/", 0) == 0) u = u.substr(16);
+  else if (u.rfind("file:///", 0) == 0) u = u.substr(7);
+  else if (u.rfind("file:/", 0) == 0) u = u.substr(5);
+  else return {};
+  std::string out;
+  for (size_t i = 0; i < u.size(); ++i) {
+    if (u[i] == '%' && i + 2 < u.size() + 0 && std::isxdigit(static_cast<unsigned char>(u[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(u[i + 2]))) {
+      out += static_cast<char>(std::stoi(u.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      out += u[i];
+    }
+  }
+  while (out.size() > 1 && out.back() == '/') out.pop_back();
+  return out;
+}
+
+template <class F>
+fmi2Status call(fmi2Component c, const char* what, F&& f) {
+  auto* comp = static_cast<Component*>(c);
+  if (comp == nullptr || !comp->instance) return fmi2Error;
+  try {
+    return toC(f(*comp->instance));
+  } catch (const std::exception& e) {
+    emit(comp->callbacks, comp->name, fmi2Error, "logError", std::string(what) + ": " + e.what());
+  } catch (...) {
+    emit(comp->callbacks, comp->name, fmi2Error, "logError", std::string(what) + ": unknown error");
+  }
+  return fmi2Error;
+}
+
+fmi2Status unsupported(fmi2Component c, const char* what) {
+  auto* comp = static_cast<Component*>(c);
+  if (comp != nullptr)
+    emit(comp->callbacks, comp->name, fmi2Error, "logError", std::string(what) + " is not supported by this FMU");
+  return fmi2Error;
+}
+
+}  // namespace
+
+extern "C" {
+
+const char* fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char* fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation, const fmi2CallbackFunctions* functions,
+                              fmi2Boolean /*visible*/, fmi2Boolean loggingOn) {
+  fmi2CallbackFunctions cb{};
+  if (functions != nullptr) cb = *functions;
+  const std::string name = instanceName != nullptr ? instanceName : "";
+  try {
+    if (fmuType != fmi2CoSimulation) {
+      emit(cb, name, fmi2Error, "logError", "this FMU supports Co-Simulation only");
+      return nullptr;
+    }
+    const std::string resources = pathFromUri(fmuResourceLocation);
+    if (resources.empty()) {
+      emit(cb, name, fmi2Error, "logError",
+           std::string("fmuResourceLocation '") + (fmuResourceLocation ? fmuResourceLocation : "(null)") +
+               "' is not a file: URI");
+      return nullptr;
+    }
+    auto comp = std::make_unique<Component>();
+    comp->name = name;
+    comp->callbacks = cb;
+    comp->logging = loggingOn != fmi2False;
+    Component* raw = comp.get();
+    comp->instance = std::make_unique<Instance>(
+        name, resources, fmuGUID != nullptr ? fmuGUID : "",
+        [raw](Status s, const char* category, const std::string& message) {
+          if (raw->logging || s >= Status::Warning)
+            emit(raw->callbacks, raw->name, toC(s), category, message);
+        });
+    return comp.release();
+  } catch (const std::exception& e) {
+    emit(cb, name, fmi2Error, "logError", std::string("fmi2Instantiate: ") + e.what());
+  } catch (...) {
+    emit(cb, name, fmi2Error, "logError", "fmi2Instantiate: unknown error");
+  }
+  return nullptr;
+}
+
+void fmi2FreeInstance(fmi2Component c) { delete static_cast<Component*>(c); }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t, const fmi2String[]) {
+  auto* comp = static_cast<Component*>(c);
+  if (comp == nullptr) return fmi2Error;
+  comp->logging = loggingOn != fmi2False;
+  return fmi2OK;
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
+                               fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+  return call(c, "fmi2SetupExperiment", [&](Instance& i) {
+    return i.setupExperiment(toleranceDefined != fmi2False, tolerance, startTime, stopTimeDefined != fmi2False,
+                             stopTime);
+  });
+}
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+  return call(c, "fmi2EnterInitializationMode", [](Instance& i) { return i.enterInitializationMode(); });
+}
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+  return call(c, "fmi2ExitInitializationMode", [](Instance& i) { return i.exitInitializationMode(); });
+}
+fmi2Status fmi2Terminate(fmi2Component c) {
+  return call(c, "fmi2Terminate", [](Instance& i) { return i.terminate(); });
+}
+fmi2Status fmi2Reset(fmi2Component c) {
+  return call(c, "fmi2Reset", [](Instance& i) { return i.reset(); });
+}
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
+  return call(c, "fmi2GetReal", [&](Instance& i) { return i.getReal(vr, nvr, value); });
+}
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
+  return call(c, "fmi2SetReal", [&](Instance& i) { return i.setReal(vr, nvr, value); });
+}
+// The FMU has Real variables only: any value reference of another type is unknown.
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference[], size_t nvr, fmi2Integer[]) {
+  return nvr == 0 ? fmi2OK : unsupported(c, "fmi2GetInteger (the FMU has no Integer variables)");
+}
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference[], size_t nvr, fmi2Boolean[]) {
+  return nvr == 0 ? fmi2OK : unsupported(c, "fmi2GetBoolean (the FMU has no Boolean variables)");
+}
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference[], size_t nvr, fmi2String[]) {
+  return nvr == 0 ? fmi2OK : unsupported(c, "fmi2GetString (the FMU has no String variables)");
+}
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference[], size_t nvr, const fmi2Integer[]) {
+  return nvr == 0 ? fmi2OK : unsupported(c, "fmi2SetInteger (the FMU has no Integer variables)");
+}
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference[], size_t nvr, const fmi2Boolean[]) {
+  return nvr == 0 ? fmi2OK : unsupported(c, "fmi2SetBoolean (the FMU has no Boolean variables)");
+}
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference[], size_t nvr, const fmi2String[]) {
+  return nvr == 0 ? fmi2OK : unsupported(c, "fmi2SetString (the FMU has no String variables)");
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate*) { return unsupported(c, "fmi2GetFMUstate"); }
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate) { return unsupported(c, "fmi2SetFMUstate"); }
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate*) { return unsupported(c, "fmi2FreeFMUstate"); }
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate, size_t*) {
+  return unsupported(c, "fmi2SerializedFMUstateSize");
+}
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate, fmi2Byte[], size_t) {
+  return unsupported(c, "fmi2SerializeFMUstate");
+}
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte[], size_t, fmi2FMUstate*) {
+  return unsupported(c, "fmi2DeSerializeFMUstate");
+}
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference[], size_t,
+                                        const fmi2ValueReference[], size_t, const fmi2Real[], fmi2Real[]) {
+  return unsupported(c, "fmi2GetDirectionalDerivative");
+}
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2Integer[],
+                                       const fmi2Real[]) {
+  return unsupported(c, "fmi2SetRealInputDerivatives (canInterpolateInputs is false)");
+}
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2Integer[],
+                                        fmi2Real[]) {
+  return unsupported(c, "fmi2GetRealOutputDerivatives (maxOutputDerivativeOrder is 0)");
+}
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
+                      fmi2Boolean /*noSetFMUStatePriorToCurrentPoint*/) {
+  return call(c, "fmi2DoStep",
+              [&](Instance& i) { return i.doStep(currentCommunicationPoint, communicationStepSize); });
+}
+fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, "fmi2CancelStep (doStep is synchronous)"); }
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind, fmi2Status*) { return unsupported(c, "fmi2GetStatus"); }
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value) {
+  auto* comp = static_cast<Component*>(c);
+  if (comp == nullptr || !comp->instance || value == nullptr) return fmi2Error;
+  if (s != fmi2LastSuccessfulTime) return unsupported(c, "fmi2GetRealStatus for this status kind");
+  *value = comp->instance->time();
+  return fmi2OK;
+}
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind, fmi2Integer*) {
+  return unsupported(c, "fmi2GetIntegerStatus");
+}
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind, fmi2Boolean*) {
+  return unsupported(c, "fmi2GetBooleanStatus");
+}
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind, fmi2String*) {
+  return unsupported(c, "fmi2GetStringStatus");
+}
+
+}  // extern "C"

@@ -1,0 +1,134 @@
+#pragma once
+/// \file
+/// FMI 2.0 Co-Simulation export of an experiment (`jointsim fmu FILE.yaml -o NAME.fmu`).
+///
+/// An FMU is a zip archive: `modelDescription.xml` (the variables, FMI 2.0 schema), `binaries/linux64/NAME.so`
+/// (the generic jointsim FMU binary, built from fmu/fmi2_cosimulation.cpp, with every library it needs beside it
+/// and found through its RPATH $ORIGIN), and `resources/` with the experiment file, the files it reads (robot,
+/// drives, URDF, CSV inputs) in their relative layout, and `jointsim_fmu.json`, the FmuDescription the binary
+/// reads at fmi2Instantiate.
+///
+/// Variables (FmuDescription::variables; value references are their indices):
+/// - inputs: command ports (`--inputs`): for an experiment of type `tracking`, `PORT` (every joint) or
+///   `JOINT:PORT` with PORT one of voltage [V], current [A], motor_torque [N·m], motor_velocity [rad/s]
+///   (systems::CommandPort) named `cmd_<port>_<joint>`, or `setpoint` giving `cmd_q_<joint>` [rad] and
+///   `cmd_qd_<joint>` [rad/s]; for a `joint_rig`, `command`: the rig's configured input (motor torque [N·m],
+///   voltage [V] or velocity reference [rad/s]) named `cmd_input`. Inputs are held over each communication step.
+/// - outputs: the plant's signals (`--outputs NAME,...`; default all), named without their `[unit]`.
+/// - parameters: every number of the experiment file outside lists of lists (key path as name, e.g.
+///   `transmission.stiffness`, `solver.rtol`), variability fixed: a value set before fmi2ExitInitializationMode
+///   that differs from its start is applied as `--set key.path=value` when the FMU loads the experiment, exactly
+///   as on the command line.
+///
+/// fmi2DoStep integrates with sim::Simulator (CVODE's own step control, events and samples inside the step) and
+/// ends exactly at the communication point. Every error is returned as fmi2Error (after a failed step the
+/// instance only accepts fmi2Reset, fmi2Terminate and fmi2FreeInstance) and logged through the importer's
+/// logger with the simulated time and the component; nothing throws across the C interface.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+namespace jointsim::experiments {
+class Experiment;
+}
+
+namespace jointsim::fmi {
+
+enum class Causality { Input, Output, Parameter };
+
+struct Variable {
+  std::string name;
+  Causality causality = Causality::Output;
+  std::string unit;         ///< SI unit ("" for a dimensionless number or an unknown unit)
+  std::string description;  ///< one line
+  double start = 0.0;       ///< start value (inputs, parameters)
+  /// Inputs: the joint (index in the robot's joint list; -1 for a joint rig) and the port ("voltage", ...,
+  /// "q" and "qd" for the setpoint port, "input" for a rig). Outputs: the signal's index in the plant's
+  /// signalNames(). Parameters: the key path of the experiment file.
+  int joint = -1;
+  std::string port;
+  int signal = -1;
+  std::string key;
+};
+
+/// What the FMU binary needs to rebuild the experiment: written to resources/jointsim_fmu.json by the exporter.
+struct FmuDescription {
+  std::string model_identifier;  ///< the binary's name (NAME.so) and the model name
+  std::string guid;              ///< "{...}" from the content hashes of the description and the input files
+  std::string experiment_file;   ///< the experiment file, relative to resources/
+  std::string experiment_type;   ///< "tracking" or "joint_rig"
+  std::string description;       ///< the experiment's description
+  double stop_time = 1.0;        ///< the experiment's duration [s] (DefaultExperiment)
+  double step_size = 1e-3;       ///< suggested communication step [s] (DefaultExperiment)
+  std::vector<std::string> overrides;  ///< "key.path=value" given at export (applied before the parameters')
+  std::vector<Variable> variables;
+
+  nlohmann::ordered_json toJson() const;
+  /// InputError naming `where` and the key for a malformed document.
+  static FmuDescription fromJson(const nlohmann::ordered_json& j, const std::string& where);
+  /// modelDescription.xml (FMI 2.0 Co-Simulation).
+  std::string modelDescriptionXml() const;
+};
+
+struct ExportOptions {
+  std::vector<std::string> inputs;   ///< see the file comment (empty: none; the experiment drives itself)
+  std::vector<std::string> outputs;  ///< signal names with or without unit (empty: all)
+  std::vector<std::string> overrides;  ///< "key.path=value" applied to the experiment before export (as --set)
+  /// Folder with the FMU binary jointsim_fmu.so and the libraries it carries (empty: defaultBinaryDir()).
+  std::string binary_dir;
+  double step_size = 1e-3;  ///< DefaultExperiment stepSize [s]
+};
+
+/// The variables of a loaded experiment (types `tracking` and `joint_rig`; InputError for others, for an unknown
+/// port or joint, or an unknown output).
+FmuDescription describe(const experiments::Experiment& experiment, const ExportOptions& options,
+                        const std::string& model_identifier);
+
+/// Writes the FMU `fmu_path` (its model identifier: the file name without .fmu, which must be a C identifier)
+/// for the experiment file `config`. Written to a temporary name and renamed into place. InputError for bad
+/// input (nothing written); Error when the FMU binary is missing.
+FmuDescription exportFmu(const std::string& config, const std::string& fmu_path, const ExportOptions& options);
+
+/// The FMU binary's folder: $JOINTSIM_FMU_BINARY_DIR, else `fmu/linux64` beside the running executable (the build
+/// tree), else `../lib/jointsim/fmu/linux64` from it (an installation), else the build folder of this library.
+std::string defaultBinaryDir();
+
+/// FMI 2.0 status values (fmi2OK ... fmi2Pending).
+enum class Status { OK = 0, Warning = 1, Discard = 2, Error = 3, Fatal = 4 };
+
+/// Messages to the importer: status, category ("logError", "logWarning", "logInfo") and text.
+using Logger = std::function<void(Status, const char* category, const std::string& message)>;
+
+/// The FMI 2.0 Co-Simulation semantics of one FMU instance, in C++ (the C functions of the binary forward here).
+/// Every method returns a Status and logs the reason of any error; none throws.
+class Instance {
+ public:
+  /// Reads `resource_dir`/jointsim_fmu.json and checks `guid`. Throws InputError (the C layer returns NULL).
+  Instance(std::string instance_name, const std::string& resource_dir, const std::string& guid, Logger logger);
+  ~Instance();
+  Instance(const Instance&) = delete;
+  Instance& operator=(const Instance&) = delete;
+
+  const FmuDescription& description() const;
+  Status setupExperiment(bool tolerance_defined, double tolerance, double start_time, bool stop_defined,
+                         double stop_time);
+  Status enterInitializationMode();
+  Status exitInitializationMode();
+  Status terminate();
+  Status reset();
+  Status getReal(const unsigned* vr, size_t n, double* values);
+  Status setReal(const unsigned* vr, size_t n, const double* values);
+  Status doStep(double current_communication_point, double step_size);
+  /// Simulated time [s] (fmi2LastSuccessfulTime).
+  double time() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace jointsim::fmi

@@ -1,0 +1,371 @@
+// FMU description: the variables of an experiment, their JSON form (resources/jointsim_fmu.json) and
+// modelDescription.xml (FMI 2.0 Co-Simulation).
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/experiments/experiment.hpp"
+#include "jointsim/fmi/fmu.hpp"
+#include "jointsim/systems/joint_rig.hpp"
+#include "jointsim/systems/robot_system.hpp"
+
+namespace jointsim::fmi {
+
+namespace {
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+std::string xmlEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20 && c != '\t') out += ' ';
+        else out += c;
+    }
+  }
+  return out;
+}
+
+const char* causalityName(Causality c) {
+  switch (c) {
+    case Causality::Input: return "input";
+    case Causality::Output: return "output";
+    case Causality::Parameter: return "parameter";
+  }
+  return "output";
+}
+
+Causality parseCausality(const std::string& s, const std::string& where) {
+  if (s == "input") return Causality::Input;
+  if (s == "output") return Causality::Output;
+  if (s == "parameter") return Causality::Parameter;
+  throw InputError(where + ": causality '" + s + "', expected input, output or parameter");
+}
+
+/// SI base-unit exponents (kg, m, s, A, rad) of the units jointsim's signals use.
+struct BaseUnit {
+  int kg = 0, m = 0, s = 0, A = 0, rad = 0;
+};
+bool baseUnit(const std::string& unit, BaseUnit& b) {
+  static const std::map<std::string, BaseUnit> units = {
+      {"rad", {0, 0, 0, 0, 1}},       {"rad/s", {0, 0, -1, 0, 1}},   {"rad/s²", {0, 0, -2, 0, 1}},
+      {"m", {0, 1, 0, 0, 0}},         {"m/s", {0, 1, -1, 0, 0}},     {"s", {0, 0, 1, 0, 0}},
+      {"A", {0, 0, 0, 1, 0}},         {"V", {1, 2, -3, -1, 0}},      {"N·m", {1, 2, -2, 0, 0}},
+      {"N", {1, 1, -2, 0, 0}},        {"W", {1, 2, -3, 0, 0}},       {"J", {1, 2, -2, 0, 0}},
+      {"kg·m²", {1, 2, 0, 0, 0}},     {"Hz", {0, 0, -1, 0, 0}},      {"N·m/rad", {1, 2, -2, 0, -1}},
+      {"N·m·s/rad", {1, 2, -1, 0, -1}}};
+  auto it = units.find(unit);
+  if (it == units.end()) return false;
+  b = it->second;
+  return true;
+}
+
+/// "name[unit]" -> name, unit.
+void splitSignal(const std::string& s, std::string& name, std::string& unit) {
+  const auto open = s.rfind('[');
+  if (open != std::string::npos && !s.empty() && s.back() == ']') {
+    name = s.substr(0, open);
+    unit = s.substr(open + 1, s.size() - open - 2);
+  } else {
+    name = s;
+    unit.clear();
+  }
+}
+
+// Every number of the document with its key path (a.b, a[0], a[0][1]) and its FMI name under the structured
+// naming convention (a.b, a[0], a[0,1]).
+void collectNumbers(const nlohmann::ordered_json& j, const std::string& path, const std::string& name,
+                    std::vector<Variable>& out) {
+  if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end(); ++it)
+      collectNumbers(it.value(), path.empty() ? it.key() : path + "." + it.key(),
+                     name.empty() ? it.key() : name + "." + it.key(), out);
+  } else if (j.is_array()) {
+    const bool nested = !name.empty() && name.back() == ']';
+    for (size_t i = 0; i < j.size(); ++i) {
+      const std::string index = std::to_string(i);
+      collectNumbers(j[i], path + "[" + index + "]",
+                     nested ? name.substr(0, name.size() - 1) + "," + index + "]" : name + "[" + index + "]", out);
+    }
+  } else if (j.is_number()) {
+    Variable v;
+    v.name = name;
+    v.causality = Causality::Parameter;
+    v.key = path;
+    v.start = j.get<double>();
+    v.description = "experiment file key " + path + " (as --set " + path + "=VALUE)";
+    out.push_back(v);
+  }
+}
+
+struct PortInfo {
+  const char* unit;
+  const char* what;
+};
+PortInfo portInfo(systems::CommandPort p) {
+  switch (p) {
+    case systems::CommandPort::Voltage: return {"V", "motor voltage command"};
+    case systems::CommandPort::Current: return {"A", "current reference into the current loop"};
+    case systems::CommandPort::MotorTorque: return {"N·m", "electromagnetic motor torque"};
+    case systems::CommandPort::MotorVelocity: return {"rad/s", "motor speed reference into the velocity loop"};
+    case systems::CommandPort::Setpoint: return {"rad", "joint position reference"};
+  }
+  return {"", ""};
+}
+
+}  // namespace
+
+FmuDescription describe(const experiments::Experiment& experiment_const, const ExportOptions& options,
+                        const std::string& model_identifier) {
+  auto& experiment = const_cast<experiments::Experiment&>(experiment_const);  // plant() is non-const
+  FmuDescription d;
+  d.model_identifier = model_identifier;
+  d.experiment_type = experiment.type();
+  if (d.experiment_type != "tracking" && d.experiment_type != "joint_rig")
+    throw InputError("FMU export: experiment type '" + d.experiment_type +
+                     "' is not supported (expected tracking or joint_rig)");
+  d.stop_time = experiment.simulateOptions().t_end;
+  d.step_size = options.step_size;
+  if (experiment.config().contains("experiment") && experiment.config()["experiment"].contains("description") &&
+      experiment.config()["experiment"]["description"].is_string())
+    d.description = experiment.config()["experiment"]["description"].get<std::string>();
+
+  sim::Plant& plant = experiment.plant();
+  std::set<std::string> names;
+  auto add = [&](Variable v) {
+    if (!names.insert(v.name).second) throw InputError("FMU export: variable '" + v.name + "' given twice");
+    d.variables.push_back(std::move(v));
+  };
+
+  // Inputs.
+  if (auto* robot = dynamic_cast<systems::RobotSystem*>(&plant)) {
+    const Eigen::VectorXd y0 = robot->initialState();
+    std::vector<std::string> port_of(static_cast<size_t>(robot->dof()));
+    for (const std::string& spec : options.inputs) {
+      const auto colon = spec.find(':');
+      std::vector<int> joints;
+      std::string port_text = spec;
+      if (colon != std::string::npos) {
+        joints.push_back(robot->model().jointIndex(spec.substr(0, colon)));
+        port_text = spec.substr(colon + 1);
+      } else {
+        for (int k = 0; k < robot->dof(); ++k) joints.push_back(k);
+      }
+      const systems::CommandPort port = systems::parsePort(port_text);
+      for (int k : joints) {
+        const std::string& joint = robot->model().joint_names[k];
+        std::string& given = port_of[static_cast<size_t>(k)];
+        if (!given.empty())
+          throw InputError("FMU export: joint " + joint + " has two command ports as inputs (" + given + " and " +
+                           port_text + ")");
+        given = port_text;
+        if (port == systems::CommandPort::Setpoint) {
+          Variable q;
+          q.name = "cmd_q_" + joint;
+          q.causality = Causality::Input;
+          q.unit = "rad";
+          q.description = "joint position reference of " + joint + " (setpoint port)";
+          q.start = y0[k];
+          q.joint = k;
+          q.port = "q";
+          add(q);
+          Variable qd = q;
+          qd.name = "cmd_qd_" + joint;
+          qd.unit = "rad/s";
+          qd.description = "joint velocity reference of " + joint + " (setpoint port)";
+          qd.start = 0.0;
+          qd.port = "qd";
+          add(qd);
+        } else {
+          const PortInfo info = portInfo(port);
+          Variable v;
+          v.name = std::string("cmd_") + systems::portName(port) + "_" + joint;
+          v.causality = Causality::Input;
+          v.unit = info.unit;
+          v.description = std::string(info.what) + " of " + joint + " (" + systems::portName(port) + " port)";
+          v.joint = k;
+          v.port = systems::portName(port);
+          add(v);
+        }
+      }
+    }
+  } else if (auto* rig = dynamic_cast<systems::JointRig*>(&plant)) {
+    for (const std::string& spec : options.inputs) {
+      if (spec != "command")
+        throw InputError("FMU export: input '" + spec + "' of a joint rig, expected 'command' (the rig's input)");
+      Variable v;
+      v.name = "cmd_input";
+      v.causality = Causality::Input;
+      v.port = "input";
+      switch (rig->setup().input) {
+        case systems::RigInput::MotorTorque: v.unit = "N·m"; v.description = "motor torque"; break;
+        case systems::RigInput::Voltage: v.unit = "V"; v.description = "motor voltage"; break;
+        case systems::RigInput::VelocityPI: v.unit = "rad/s"; v.description = "velocity reference of the PI loop"; break;
+      }
+      v.description += " (held in place of the input profile)";
+      add(v);
+    }
+  } else {
+    throw InputError("FMU export: the experiment's plant has no command ports");
+  }
+
+  // Outputs.
+  const auto& signals = plant.signalNames();
+  std::vector<int> chosen;
+  if (options.outputs.empty()) {
+    for (size_t i = 0; i < signals.size(); ++i) chosen.push_back(static_cast<int>(i));
+  } else {
+    for (const std::string& o : options.outputs) chosen.push_back(sim::signalIndex(plant, o));
+  }
+  for (int i : chosen) {
+    Variable v;
+    splitSignal(signals[static_cast<size_t>(i)], v.name, v.unit);
+    v.causality = Causality::Output;
+    v.signal = i;
+    v.description = "signal " + signals[static_cast<size_t>(i)];
+    add(v);
+  }
+
+  // Parameters.
+  std::vector<Variable> params;
+  collectNumbers(experiment.config(), "", "", params);
+  for (auto& p : params) add(std::move(p));
+  return d;
+}
+
+nlohmann::ordered_json FmuDescription::toJson() const {
+  nlohmann::ordered_json j;
+  j["format"] = "jointsim FMU description 1";
+  j["model_identifier"] = model_identifier;
+  j["guid"] = guid;
+  j["experiment_file"] = experiment_file;
+  j["experiment_type"] = experiment_type;
+  j["description"] = description;
+  j["stop_time"] = stop_time;
+  j["step_size"] = step_size;
+  j["overrides"] = overrides;
+  auto& vars = j["variables"] = nlohmann::ordered_json::array();
+  for (const Variable& v : variables) {
+    nlohmann::ordered_json x;
+    x["name"] = v.name;
+    x["causality"] = causalityName(v.causality);
+    x["unit"] = v.unit;
+    x["description"] = v.description;
+    x["start"] = v.start;
+    x["joint"] = v.joint;
+    x["port"] = v.port;
+    x["signal"] = v.signal;
+    x["key"] = v.key;
+    vars.push_back(std::move(x));
+  }
+  return j;
+}
+
+FmuDescription FmuDescription::fromJson(const nlohmann::ordered_json& j, const std::string& where) {
+  FmuDescription d;
+  try {
+    if (j.value("format", "") != "jointsim FMU description 1")
+      throw InputError(where + ": not a jointsim FMU description (key format)");
+    d.model_identifier = j.at("model_identifier").get<std::string>();
+    d.guid = j.at("guid").get<std::string>();
+    d.experiment_file = j.at("experiment_file").get<std::string>();
+    d.experiment_type = j.at("experiment_type").get<std::string>();
+    d.description = j.at("description").get<std::string>();
+    d.stop_time = j.at("stop_time").get<double>();
+    d.step_size = j.at("step_size").get<double>();
+    d.overrides = j.at("overrides").get<std::vector<std::string>>();
+    for (const auto& x : j.at("variables")) {
+      Variable v;
+      v.name = x.at("name").get<std::string>();
+      v.causality = parseCausality(x.at("causality").get<std::string>(), where);
+      v.unit = x.at("unit").get<std::string>();
+      v.description = x.at("description").get<std::string>();
+      v.start = x.at("start").get<double>();
+      v.joint = x.at("joint").get<int>();
+      v.port = x.at("port").get<std::string>();
+      v.signal = x.at("signal").get<int>();
+      v.key = x.at("key").get<std::string>();
+      d.variables.push_back(std::move(v));
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(where + ": malformed FMU description: " + e.what());
+  }
+  return d;
+}
+
+std::string FmuDescription::modelDescriptionXml() const {
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << xmlEscape(model_identifier) << "\" guid=\""
+    << xmlEscape(guid) << "\" description=\"" << xmlEscape(description)
+    << "\" generationTool=\"jointsim\" variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n"
+    << "  <CoSimulation modelIdentifier=\"" << xmlEscape(model_identifier)
+    << "\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\""
+       " maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\""
+       " canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"false\" canSerializeFMUstate=\"false\""
+       " providesDirectionalDerivative=\"false\"/>\n";
+  std::set<std::string> units;
+  for (const Variable& v : variables)
+    if (!v.unit.empty()) units.insert(v.unit);
+  if (!units.empty()) {
+    x << "  <UnitDefinitions>\n";
+    for (const std::string& u : units) {
+      BaseUnit b;
+      x << "    <Unit name=\"" << xmlEscape(u) << "\"";
+      if (baseUnit(u, b)) {
+        x << "><BaseUnit";
+        if (b.kg) x << " kg=\"" << b.kg << "\"";
+        if (b.m) x << " m=\"" << b.m << "\"";
+        if (b.s) x << " s=\"" << b.s << "\"";
+        if (b.A) x << " A=\"" << b.A << "\"";
+        if (b.rad) x << " rad=\"" << b.rad << "\"";
+        x << "/></Unit>\n";
+      } else {
+        x << "/>\n";
+      }
+    }
+    x << "  </UnitDefinitions>\n";
+  }
+  x << "  <DefaultExperiment startTime=\"0\" stopTime=\"" << number(stop_time) << "\" stepSize=\""
+    << number(step_size) << "\"/>\n  <ModelVariables>\n";
+  for (size_t i = 0; i < variables.size(); ++i) {
+    const Variable& v = variables[i];
+    x << "    <ScalarVariable name=\"" << xmlEscape(v.name) << "\" valueReference=\"" << i << "\" description=\""
+      << xmlEscape(v.description) << "\" causality=\"" << causalityName(v.causality) << "\"";
+    switch (v.causality) {
+      case Causality::Input: x << " variability=\"continuous\">\n      <Real start=\"" << number(v.start) << "\""; break;
+      case Causality::Output: x << " variability=\"continuous\" initial=\"calculated\">\n      <Real"; break;
+      case Causality::Parameter:
+        x << " variability=\"fixed\" initial=\"exact\">\n      <Real start=\"" << number(v.start) << "\"";
+        break;
+    }
+    if (!v.unit.empty()) x << " unit=\"" << xmlEscape(v.unit) << "\"";
+    x << "/>\n    </ScalarVariable>\n";
+  }
+  x << "  </ModelVariables>\n  <ModelStructure>\n";
+  std::ostringstream outputs;
+  for (size_t i = 0; i < variables.size(); ++i)
+    if (variables[i].causality == Causality::Output) outputs << "      <Unknown index=\"" << i + 1 << "\"/>\n";
+  if (!outputs.str().empty()) {
+    x << "    <Outputs>\n" << outputs.str() << "    </Outputs>\n";
+    x << "    <InitialUnknowns>\n" << outputs.str() << "    </InitialUnknowns>\n";
+  }
+  x << "  </ModelStructure>\n</fmiModelDescription>\n";
+  return x.str();
+}
+
+}  // namespace jointsim::fmi

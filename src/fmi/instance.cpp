@@ -1,0 +1,281 @@
+// One FMI 2.0 Co-Simulation instance: the state machine of the standard over experiments::loadExperiment and
+// sim::Simulator. Nothing throws out of the public methods: errors become Status::Error and a log message.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/experiments/experiment.hpp"
+#include "jointsim/fmi/fmu.hpp"
+#include "jointsim/systems/joint_rig.hpp"
+#include "jointsim/systems/robot_system.hpp"
+
+namespace jointsim::fmi {
+
+namespace {
+enum class Phase { Instantiated, Initialization, StepComplete, Failed, Terminated };
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+}  // namespace
+
+struct Instance::Impl {
+  std::string name;
+  std::string resources;
+  FmuDescription d;
+  Logger logger;
+  Phase phase = Phase::Instantiated;
+  std::vector<double> values;  // inputs and parameters as set; outputs unused
+  double start_time = 0.0;
+  std::shared_ptr<experiments::Experiment> experiment;
+  std::unique_ptr<sim::Simulator> sim;
+  bool params_changed = true;  // the experiment must be (re)loaded before use
+
+  void log(Status s, const std::string& msg) {
+    if (!logger) return;
+    try {
+      logger(s, s == Status::OK ? "logInfo" : s == Status::Warning ? "logWarning" : "logError",
+             "jointsim FMU '" + name + "': " + msg);
+    } catch (...) {
+    }
+  }
+  Status error(const std::string& msg) {
+    log(Status::Error, msg);
+    return Status::Error;
+  }
+  Status wrongPhase(const char* call) {
+    static const char* names[] = {"instantiated", "initialization mode", "step complete", "failed (after an error)",
+                                  "terminated"};
+    return error(std::string(call) + " is not allowed in state " + names[static_cast<int>(phase)]);
+  }
+
+  /// Loads the experiment with the export's overrides and the changed parameters, builds the simulator, sets the
+  /// command ports and the inputs' values.
+  void build() {
+    std::vector<std::string> overrides = d.overrides;
+    for (size_t i = 0; i < d.variables.size(); ++i) {
+      const Variable& v = d.variables[i];
+      if (v.causality == Causality::Parameter && values[i] != v.start) overrides.push_back(v.key + "=" + number(values[i]));
+    }
+    sim.reset();
+    experiment = std::shared_ptr<experiments::Experiment>(
+        experiments::loadExperiment(resources + "/" + d.experiment_file, overrides));
+    if (experiment->type() != d.experiment_type)
+      throw InputError("the experiment's type changed to '" + experiment->type() + "'");
+    sim = experiments::makeSimulator(experiment);
+    if (auto* robot = dynamic_cast<systems::RobotSystem*>(&sim->plant())) {
+      for (const Variable& v : d.variables)
+        if (v.causality == Causality::Input && v.port != "q" && v.port != "qd")
+          robot->setCommandPort(v.joint, systems::parsePort(v.port));
+    }
+    applyInputs();
+    if (start_time != 0.0) sim->reset(start_time, sim->plant().initialState());
+    params_changed = false;
+  }
+
+  void applyInputs() {
+    sim::Plant& plant = sim->plant();
+    auto* robot = dynamic_cast<systems::RobotSystem*>(&plant);
+    auto* rig = dynamic_cast<systems::JointRig*>(&plant);
+    for (size_t i = 0; i < d.variables.size(); ++i) {
+      const Variable& v = d.variables[i];
+      if (v.causality != Causality::Input) continue;
+      if (rig != nullptr) {
+        rig->setCommand(values[i]);
+      } else if (robot != nullptr) {
+        if (v.port == "q") {
+          double qd = 0.0;
+          for (size_t k = 0; k < d.variables.size(); ++k)
+            if (d.variables[k].causality == Causality::Input && d.variables[k].port == "qd" &&
+                d.variables[k].joint == v.joint)
+              qd = values[k];
+          if (robot->commandPort(v.joint) != systems::CommandPort::Setpoint)
+            robot->setCommandPort(v.joint, systems::CommandPort::Setpoint);
+          robot->setSetpoint(v.joint, values[i], qd);
+        } else if (v.port != "qd") {
+          robot->setCommand(v.joint, values[i]);
+        }
+      }
+    }
+  }
+
+  /// Runs `f`, turning every exception into a logged error (a solver failure names the time and component).
+  /// `fatal`: the instance is failed afterwards (only reset, terminate and free remain).
+  template <class F>
+  Status guarded(const char* call, F&& f, bool fatal = true) {
+    try {
+      f();
+      return Status::OK;
+    } catch (const SolverError& e) {
+      if (fatal) phase = Phase::Failed;
+      return error(std::string(call) + ": solver failure at t = " + number(e.time()) + " s in " + e.component() +
+                   ": " + e.what());
+    } catch (const std::exception& e) {
+      if (fatal) phase = Phase::Failed;
+      return error(std::string(call) + ": " + e.what());
+    } catch (...) {
+      if (fatal) phase = Phase::Failed;
+      return error(std::string(call) + ": unknown error");
+    }
+  }
+};
+
+Instance::Instance(std::string instance_name, const std::string& resource_dir, const std::string& guid, Logger logger)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.name = std::move(instance_name);
+  m.logger = std::move(logger);
+  m.resources = resource_dir;
+  const std::string path = resource_dir + "/jointsim_fmu.json";
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot read the FMU description");
+  std::stringstream text;
+  text << in.rdbuf();
+  nlohmann::ordered_json j;
+  try {
+    j = nlohmann::ordered_json::parse(text.str());
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": " + e.what());
+  }
+  m.d = FmuDescription::fromJson(j, path);
+  if (guid != m.d.guid)
+    throw InputError(path + ": GUID '" + guid + "' given by the importer, the FMU's is '" + m.d.guid + "'");
+  m.values.resize(m.d.variables.size());
+  for (size_t i = 0; i < m.values.size(); ++i) m.values[i] = m.d.variables[i].start;
+}
+
+Instance::~Instance() = default;
+
+const FmuDescription& Instance::description() const { return impl_->d; }
+
+double Instance::time() const { return impl_->sim ? impl_->sim->time() : impl_->start_time; }
+
+Status Instance::setupExperiment(bool tolerance_defined, double tolerance, double start_time, bool /*stop_defined*/,
+                                 double /*stop_time*/) {
+  Impl& m = *impl_;
+  if (m.phase != Phase::Instantiated) return m.wrongPhase("fmi2SetupExperiment");
+  if (!std::isfinite(start_time)) return m.error("fmi2SetupExperiment: start time " + number(start_time));
+  m.start_time = start_time;
+  if (tolerance_defined)
+    m.log(Status::Warning, "fmi2SetupExperiment: tolerance " + number(tolerance) +
+                               " ignored: the experiment file's solver settings (parameters solver.rtol, "
+                               "solver.atol) apply");
+  return Status::OK;
+}
+
+Status Instance::enterInitializationMode() {
+  Impl& m = *impl_;
+  if (m.phase != Phase::Instantiated) return m.wrongPhase("fmi2EnterInitializationMode");
+  const Status s = m.guarded("fmi2EnterInitializationMode", [&] {
+    if (m.params_changed || !m.sim) m.build();
+  });
+  if (s == Status::OK) m.phase = Phase::Initialization;
+  return s;
+}
+
+Status Instance::exitInitializationMode() {
+  Impl& m = *impl_;
+  if (m.phase != Phase::Initialization) return m.wrongPhase("fmi2ExitInitializationMode");
+  const Status s = m.guarded("fmi2ExitInitializationMode", [&] {
+    if (m.params_changed) m.build();
+  });
+  if (s == Status::OK) m.phase = Phase::StepComplete;
+  return s;
+}
+
+Status Instance::terminate() {
+  Impl& m = *impl_;
+  if (m.phase != Phase::StepComplete && m.phase != Phase::Failed) return m.wrongPhase("fmi2Terminate");
+  m.phase = Phase::Terminated;
+  return Status::OK;
+}
+
+Status Instance::reset() {
+  Impl& m = *impl_;
+  m.sim.reset();
+  m.experiment.reset();
+  for (size_t i = 0; i < m.values.size(); ++i) m.values[i] = m.d.variables[i].start;
+  m.start_time = 0.0;
+  m.params_changed = true;
+  m.phase = Phase::Instantiated;
+  return Status::OK;
+}
+
+Status Instance::getReal(const unsigned* vr, size_t n, double* values) {
+  Impl& m = *impl_;
+  if (n > 0 && (vr == nullptr || values == nullptr)) return m.error("fmi2GetReal: null array");
+  if (m.phase == Phase::Terminated && !m.sim) return m.wrongPhase("fmi2GetReal");
+  for (size_t k = 0; k < n; ++k)
+    if (vr[k] >= m.d.variables.size()) return m.error("fmi2GetReal: unknown value reference " + std::to_string(vr[k]));
+  return m.guarded("fmi2GetReal", [&] {
+    const Eigen::VectorXd* sig = nullptr;
+    for (size_t k = 0; k < n; ++k) {
+      const Variable& v = m.d.variables[vr[k]];
+      if (v.causality == Causality::Output) {
+        if (!m.sim) throw Error("output " + v.name + " is not available before fmi2EnterInitializationMode");
+        if (sig == nullptr) sig = &m.sim->signals();
+        values[k] = (*sig)[v.signal];
+      } else {
+        values[k] = m.values[vr[k]];
+      }
+    }
+  });
+}
+
+Status Instance::setReal(const unsigned* vr, size_t n, const double* values) {
+  Impl& m = *impl_;
+  if (n > 0 && (vr == nullptr || values == nullptr)) return m.error("fmi2SetReal: null array");
+  if (m.phase == Phase::Failed || m.phase == Phase::Terminated) return m.wrongPhase("fmi2SetReal");
+  for (size_t k = 0; k < n; ++k) {  // check everything first: nothing is changed by a rejected call
+    if (vr[k] >= m.d.variables.size()) return m.error("fmi2SetReal: unknown value reference " + std::to_string(vr[k]));
+    const Variable& v = m.d.variables[vr[k]];
+    if (v.causality == Causality::Output) return m.error("fmi2SetReal: " + v.name + " is an output");
+    if (v.causality == Causality::Parameter && m.phase == Phase::StepComplete)
+      return m.error("fmi2SetReal: parameter " + v.name +
+                     " is fixed: it may be set only before fmi2ExitInitializationMode (then fmi2Reset)");
+    if (!std::isfinite(values[k])) return m.error("fmi2SetReal: " + v.name + " = " + number(values[k]) + " is not finite");
+  }
+  const std::vector<double> before = m.values;
+  bool params = false;
+  for (size_t k = 0; k < n; ++k) {
+    const Variable& v = m.d.variables[vr[k]];
+    if (v.causality == Causality::Parameter && m.values[vr[k]] != values[k]) params = true;
+    m.values[vr[k]] = values[k];
+  }
+  if (params) {
+    // Load the experiment with the new parameters now, so that a bad value is rejected by this call with the
+    // loader's message (as --set would be) and outputs in initialization mode reflect it.
+    m.params_changed = true;
+    if (m.guarded("fmi2SetReal", [&] { m.build(); }, false) != Status::OK) {
+      m.values = before;  // rejected: back to the previous values and experiment
+      m.guarded("fmi2SetReal", [&] { m.build(); }, false);
+      return Status::Error;
+    }
+    return Status::OK;
+  }
+  if (m.sim && m.phase == Phase::Initialization) return m.guarded("fmi2SetReal", [&] { m.applyInputs(); }, false);
+  return Status::OK;
+}
+
+Status Instance::doStep(double t, double h) {
+  Impl& m = *impl_;
+  if (m.phase != Phase::StepComplete) return m.wrongPhase("fmi2DoStep");
+  if (!std::isfinite(t) || !std::isfinite(h) || !(h > 0.0))
+    return m.error("fmi2DoStep: communication step size " + number(h) + " at " + number(t) +
+                   " s (expected a finite step > 0)");
+  const double now = m.sim->time();
+  if (std::abs(t - now) > 1e-9 * std::max(1.0, std::abs(now)))
+    return m.error("fmi2DoStep: communication point " + number(t) + " s, but the FMU is at " + number(now) + " s");
+  return m.guarded("fmi2DoStep", [&] {
+    m.applyInputs();
+    m.sim->advanceTo(now + h);
+  });
+}
+
+}  // namespace jointsim::fmi
