@@ -11,6 +11,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
+#include "jointsim/systems/faults.hpp"
 #include "jointsim/systems/joint_rig.hpp"
 #include "jointsim/systems/robot_system.hpp"
 
@@ -240,6 +241,35 @@ FmuDescription describe(const experiments::Experiment& experiment_const, const E
     add(v);
   }
 
+  // Drive parameters of a robot with drives: the faults that apply to each drive, at their neutral values.
+  if (auto* robot = dynamic_cast<systems::RobotSystem*>(&plant)) {
+    for (int k = 0; k < robot->dof(); ++k) {
+      const systems::DriveSpec& drive = robot->drives()[static_cast<size_t>(k)];
+      for (const std::string& type_name : systems::faultTypeNames()) {
+        systems::Fault f;
+        f.type = systems::faultTypeFromString(type_name);
+        f.joint = drive.joint;
+        const bool offset = f.type == systems::FaultType::BacklashAdd || f.type == systems::FaultType::SensorBias;
+        f.value = offset ? 1e-4 : 1.1;  // a non-neutral value: does the fault apply to this drive?
+        systems::DriveSpec copy = drive;
+        try {
+          systems::applyFault(copy, f);
+        } catch (const InputError&) {
+          continue;
+        }
+        Variable v;
+        v.name = "drives." + drive.joint + "." + type_name;
+        v.causality = Causality::Parameter;
+        v.unit = offset ? "rad" : "";
+        v.start = offset ? 0.0 : 1.0;
+        v.joint = k;
+        v.fault = type_name;
+        v.description = "drive of " + drive.joint + ": " + type_name + (offset ? " [rad]" : " (factor on the robot file's value)");
+        add(v);
+      }
+    }
+  }
+
   // Parameters.
   std::vector<Variable> params;
   collectNumbers(experiment.config(), "", "", params);
@@ -270,6 +300,7 @@ nlohmann::ordered_json FmuDescription::toJson() const {
     x["port"] = v.port;
     x["signal"] = v.signal;
     x["key"] = v.key;
+    x["fault"] = v.fault;
     vars.push_back(std::move(x));
   }
   return j;
@@ -299,6 +330,7 @@ FmuDescription FmuDescription::fromJson(const nlohmann::ordered_json& j, const s
       v.port = x.at("port").get<std::string>();
       v.signal = x.at("signal").get<int>();
       v.key = x.at("key").get<std::string>();
+      v.fault = x.at("fault").get<std::string>();
       d.variables.push_back(std::move(v));
     }
   } catch (const nlohmann::json::exception& e) {

@@ -10,6 +10,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
+#include "jointsim/systems/faults.hpp"
 #include "jointsim/systems/joint_rig.hpp"
 #include "jointsim/systems/robot_system.hpp"
 
@@ -59,13 +60,23 @@ struct Instance::Impl {
   /// command ports and the inputs' values.
   void build() {
     std::vector<std::string> overrides = d.overrides;
+    std::vector<systems::Fault> faults;
     for (size_t i = 0; i < d.variables.size(); ++i) {
       const Variable& v = d.variables[i];
-      if (v.causality == Causality::Parameter && values[i] != v.start) overrides.push_back(v.key + "=" + number(values[i]));
+      if (v.causality != Causality::Parameter || values[i] == v.start) continue;
+      if (!v.fault.empty()) {
+        systems::Fault f;
+        f.type = systems::faultTypeFromString(v.fault);
+        f.joint = v.name.substr(7, v.name.size() - 7 - v.fault.size() - 1);  // drives.<joint>.<fault>
+        f.value = values[i];
+        faults.push_back(f);
+      } else {
+        overrides.push_back(v.key + "=" + number(values[i]));
+      }
     }
     sim.reset();
     experiment = std::shared_ptr<experiments::Experiment>(
-        experiments::loadExperiment(resources + "/" + d.experiment_file, overrides));
+        experiments::loadExperiment(resources + "/" + d.experiment_file, overrides, faults));
     if (experiment->type() != d.experiment_type)
       throw InputError("the experiment's type changed to '" + experiment->type() + "'");
     sim = experiments::makeSimulator(experiment);

@@ -3,8 +3,10 @@
 // paths of the state machine. The FMU archive itself is tested with FMPy (tests/python/test_fmu.py).
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -13,6 +15,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
+#include "jointsim/systems/faults.hpp"
 #include "jointsim/systems/robot_system.hpp"
 
 namespace fs = std::filesystem;
@@ -227,4 +230,91 @@ TEST(FmuDescription, JsonRoundTripAndModelDescription) {
   wrong.inputs = {};
   wrong.outputs = {"no_such_signal"};
   EXPECT_THROW(fmi::describe(*e, wrong, "m"), InputError);
+}
+
+// A solver failure inside fmi2DoStep: fmi2Error, a log naming the simulated time and the component, and then
+// only reset, terminate and free. The rig's own file with a step budget of 20 per call (solver.max_num_steps).
+TEST(FmuInstance, SolverFailureIsReportedWithTimeAndComponent) {
+  const fs::path dir = fs::temp_directory_path() / "jointsim_fmu_test_fail_cfg";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  {
+    std::ifstream in(kRig);
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string yaml = text.str();
+    const std::string from = "solver: {method: bdf,";
+    const auto at = yaml.find(from);
+    ASSERT_NE(at, std::string::npos);
+    yaml.replace(at, from.size(), "solver: {max_num_steps: 20, method: bdf,");
+    std::ofstream(dir / "rig.yaml") << yaml;
+  }
+  fmi::ExportOptions o;
+  Resources r((dir / "rig.yaml").string(), o, "fail");
+  Log log;
+  fmi::Instance inst("fail", r.dir.string(), r.d.guid, log.logger());
+  ASSERT_EQ(inst.enterInitializationMode(), fmi::Status::OK);
+  ASSERT_EQ(inst.exitInitializationMode(), fmi::Status::OK);
+  fmi::Status s = fmi::Status::OK;
+  double t = 0.0;
+  for (int k = 0; k < 2000 && s == fmi::Status::OK; ++k) {
+    s = inst.doStep(t, 1e-3);
+    t += 1e-3;
+  }
+  ASSERT_EQ(s, fmi::Status::Error) << "20 steps per communication step cannot follow the velocity ramp";
+  EXPECT_TRUE(log.mentions("fmi2DoStep: solver failure at t = ")) << log.lines.back();
+  std::printf("%s\n", log.lines.back().c_str());
+  EXPECT_TRUE(log.mentions("joint rig")) << log.lines.back();
+  EXPECT_EQ(inst.doStep(inst.time(), 1e-3), fmi::Status::Error);
+  EXPECT_TRUE(log.mentions("not allowed in state failed"));
+  EXPECT_EQ(inst.reset(), fmi::Status::OK);
+  const unsigned vr = vrOf(r.d, "solver.max_num_steps");
+  const double many = 100000;
+  ASSERT_EQ(inst.setReal(&vr, 1, &many), fmi::Status::OK);
+  ASSERT_EQ(inst.enterInitializationMode(), fmi::Status::OK);
+  ASSERT_EQ(inst.exitInitializationMode(), fmi::Status::OK);
+  for (int k = 0; k < 1500; ++k) ASSERT_EQ(inst.doStep(k * 1e-3, 1e-3), fmi::Status::OK) << k;
+  fs::remove_all(dir);
+}
+
+// Drive parameters of the UR5 twin's robot file as FMU parameters: the friction factor of one drive acts as the
+// fault of the same value (systems::Fault), and only the factors that apply to the drive are offered.
+TEST(FmuInstance, DriveParameterActsAsTheSameFault) {
+  fmi::ExportOptions o;
+  o.outputs = {"friction_torque_elbow_joint", "q_elbow_joint"};
+  Resources r(kUr5, o, "drive");
+  bool has_backlash = false;
+  for (const auto& v : r.d.variables) has_backlash |= v.fault == "backlash_add";
+  EXPECT_FALSE(has_backlash) << "strain-wave gears take no added backlash";
+  const unsigned vr = vrOf(r.d, "drives.elbow_joint.coulomb_friction_scale");
+  EXPECT_EQ(r.d.variables[vr].start, 1.0);
+  Log log;
+  fmi::Instance inst("drive", r.dir.string(), r.d.guid, log.logger());
+  const double two = 2.0;
+  ASSERT_EQ(inst.setReal(&vr, 1, &two), fmi::Status::OK) << (log.lines.empty() ? "" : log.lines.back());
+  ASSERT_EQ(inst.enterInitializationMode(), fmi::Status::OK);
+  ASSERT_EQ(inst.exitInitializationMode(), fmi::Status::OK);
+  systems::Fault f;
+  f.type = systems::FaultType::CoulombFrictionScale;
+  f.joint = "elbow_joint";
+  f.value = 2.0;
+  auto faulty = experiments::makeSimulator(std::shared_ptr<experiments::Experiment>(experiments::loadExperiment(kUr5, {}, {f})));
+  auto nominal = experiments::makeSimulator(std::shared_ptr<experiments::Experiment>(experiments::loadExperiment(kUr5)));
+  const unsigned out = vrOf(r.d, "friction_torque_elbow_joint");
+  double dev = 0.0, diff = 0.0, t = 0.0;
+  for (int k = 0; k < 300; ++k) {
+    ASSERT_EQ(inst.doStep(t, 1e-3), fmi::Status::OK);
+    t = faulty->advance(1e-3);
+    nominal->advance(1e-3);
+    double tau = 0.0;
+    ASSERT_EQ(inst.getReal(&out, 1, &tau), fmi::Status::OK);
+    dev = std::max(dev, std::abs(tau - faulty->signal("friction_torque_elbow_joint")));
+    diff = std::max(diff, std::abs(tau - nominal->signal("friction_torque_elbow_joint")));
+  }
+  EXPECT_LE(dev, 1e-12);
+  EXPECT_GT(diff, 0.1) << "twice the Coulomb friction changes the friction torque [N·m]";
+  const double bad = -1.0;
+  EXPECT_EQ(inst.reset(), fmi::Status::OK);
+  EXPECT_EQ(inst.setReal(&vr, 1, &bad), fmi::Status::Error);
+  EXPECT_TRUE(log.mentions("coulomb_friction_scale")) << log.lines.back();
 }

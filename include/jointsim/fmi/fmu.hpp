@@ -15,10 +15,12 @@
 ///   `cmd_qd_<joint>` [rad/s]; for a `joint_rig`, `command`: the rig's configured input (motor torque [N·m],
 ///   voltage [V] or velocity reference [rad/s]) named `cmd_input`. Inputs are held over each communication step.
 /// - outputs: the plant's signals (`--outputs NAME,...`; default all), named without their `[unit]`.
-/// - parameters: every number of the experiment file outside lists of lists (key path as name, e.g.
-///   `transmission.stiffness`, `solver.rtol`), variability fixed: a value set before fmi2ExitInitializationMode
-///   that differs from its start is applied as `--set key.path=value` when the FMU loads the experiment, exactly
-///   as on the command line.
+/// - parameters (variability fixed: set before fmi2ExitInitializationMode): every number of the experiment file
+///   by its key path (e.g. `load.inertia`, `solver.rtol`, `trajectory.a[0,1]`), applied as `--set key.path=value`
+///   when it differs from its start, exactly as on the command line; and for a robot with drives, the drive
+///   parameters of its robot file as the factors and offsets of systems::Fault (`drives.<joint>.gear_stiffness_scale`,
+///   `coulomb_friction_scale`, `sigma0_scale`, `torque_constant_scale` [-], `backlash_add`, `sensor_bias` [rad],
+///   those that apply to the drive's components), applied as the same fault of `jointsim batch`.
 ///
 /// fmi2DoStep integrates with sim::Simulator (CVODE's own step control, events and samples inside the step) and
 /// ends exactly at the communication point. Every error is returned as fmi2Error (after a failed step the
@@ -53,6 +55,9 @@ struct Variable {
   std::string port;
   int signal = -1;
   std::string key;
+  /// Drive parameters of a robot with drives: the systems::FaultType name (e.g. "gear_stiffness_scale") applied
+  /// to the drive of `joint` when the value differs from its neutral start (1 for a scale, 0 otherwise).
+  std::string fault;
 };
 
 /// What the FMU binary needs to rebuild the experiment: written to resources/jointsim_fmu.json by the exporter.
