@@ -19,6 +19,9 @@
 #ifndef JOINTSIM_FMU_BUILD_DIR
 #define JOINTSIM_FMU_BUILD_DIR ""
 #endif
+#ifndef JOINTSIM_FMU_INSTALL_DIR
+#define JOINTSIM_FMU_INSTALL_DIR "lib/jointsim/fmu/linux64"
+#endif
 
 namespace fs = std::filesystem;
 
@@ -78,8 +81,9 @@ std::string defaultBinaryDir() {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (!ec) {
+    const fs::path install_dir(JOINTSIM_FMU_INSTALL_DIR);  // the installation's lib folder (may be absolute)
     for (const fs::path& dir : {exe.parent_path() / "fmu" / "linux64",
-                                exe.parent_path().parent_path() / "lib" / "jointsim" / "fmu" / "linux64"}) {
+                                install_dir.is_absolute() ? install_dir : exe.parent_path().parent_path() / install_dir}) {
       if (io::isRegularFile((dir / "jointsim_fmu.so").string())) return dir.string();
     }
   }

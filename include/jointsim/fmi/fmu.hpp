@@ -99,7 +99,7 @@ FmuDescription describe(const experiments::Experiment& experiment, const ExportO
 FmuDescription exportFmu(const std::string& config, const std::string& fmu_path, const ExportOptions& options);
 
 /// The FMU binary's folder: $JOINTSIM_FMU_BINARY_DIR, else `fmu/linux64` beside the running executable (the build
-/// tree), else `../lib/jointsim/fmu/linux64` from it (an installation), else the build folder of this library.
+/// tree), else `../<libdir>/jointsim/fmu/linux64` from it (an installation), else the build folder of this library.
 std::string defaultBinaryDir();
 
 /// FMI 2.0 status values (fmi2OK ... fmi2Pending).
