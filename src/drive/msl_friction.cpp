@@ -35,6 +35,10 @@ FrictionEventFlags frictionEventFlags(const std::vector<int>& fired, size_t k) {
   return {fired[2 * k] != 0, fired[2 * k] > 0, fired[2 * k + 1] < 0, fired[2 * k + 1] != 0};
 }
 
+namespace {
+constexpr double kStartExitMargin = 1e-9;  // [-], relative to τ0max, see the start phases below
+}  // namespace
+
 FrictionMode nextFrictionMode(FrictionMode m, bool free, double S, double w, double a, double t0, double t0max,
                               const FrictionEventFlags& fired) {
   if (free) return FrictionMode::Free;
@@ -45,13 +49,20 @@ FrictionMode nextFrictionMode(FrictionMode m, bool free, double S, double w, dou
       if (S > t0max || fired.up) return w > 0 ? FrictionMode::Forward : FrictionMode::StartForward;
       if (S < -t0max || fired.down) return w < 0 ? FrictionMode::Backward : FrictionMode::StartBackward;
       return m;
+    // A start phase locks again when its acceleration leaves the starting direction: MSL keeps startForward while
+    // sa = a + τ0max > τ0. A start entered at a located root sits on the threshold S = ±τ0max to rounding; with
+    // τ0max = τ0 (no breakaway peak) its acceleration is then zero to rounding, of either sign. So the comparison
+    // without a reported crossing needs a margin beyond rounding (kStartExitMargin), and of the crossings of the
+    // exit function only one out of the start region locks: a crossing into it is the start going on (its
+    // acceleration growing in the starting direction). Without both, such a start locked again at once, and a
+    // change of rounding elsewhere (e.g. in the mass matrix) decided whether an axis broke away or stayed stuck.
     case FrictionMode::StartForward:
       if (w > 0 || (fired.w && w >= 0)) return FrictionMode::Forward;
-      if (a + t0max < t0 || fired.second) return FrictionMode::Stuck;  // MSL: sa = a + τ0max must stay > τ0
+      if (a + t0max < t0 - kStartExitMargin * t0max || (fired.second && fired.down)) return FrictionMode::Stuck;
       return m;
     case FrictionMode::StartBackward:
       if (w < 0 || (fired.w && w <= 0)) return FrictionMode::Backward;
-      if (a - t0max > -t0 || fired.second) return FrictionMode::Stuck;
+      if (a - t0max > -t0 + kStartExitMargin * t0max || (fired.second && !fired.down)) return FrictionMode::Stuck;
       return m;
     case FrictionMode::Forward: return (fired.w || w <= 0) ? FrictionMode::Stuck : m;
     case FrictionMode::Backward: return (fired.w || w >= 0) ? FrictionMode::Stuck : m;
