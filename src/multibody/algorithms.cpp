@@ -287,11 +287,17 @@ const Eigen::MatrixXd& crba(const Model& model, Data& data, const VecRef& q) {
       const Placement& X = data.liMi[i];
       const double m = data.Yc_m[i];
       const Vector3d Rh = X.R * data.Yc_h[i];
-      const Matrix3d P = skew(X.p), H = skew(Rh);
+      const Vector3d& p = X.p;
       data.Yc_m[pp] += m;
-      data.Yc_h[pp] += Rh + m * X.p;
-      data.Yc_I[pp].noalias() += X.R * data.Yc_I[i] * X.R.transpose();
-      data.Yc_I[pp].noalias() -= H * P + P * H + m * P * P;
+      data.Yc_h[pp] += Rh + m * p;
+      // With [a][b] = b aᵀ − (a·b) 1:  −[Rh][p] − [p][Rh] − m[p]² = −(p Rhᵀ + Rh pᵀ + m p pᵀ) + (2 Rh·p + m p·p) 1.
+      const Matrix3d T = X.R * data.Yc_I[i];
+      const Vector3d w = Rh + 0.5 * m * p;  // p Rhᵀ + Rh pᵀ + m p pᵀ = p wᵀ + w pᵀ
+      const double d = 2.0 * Rh.dot(p) + m * p.squaredNorm();
+      Matrix3d& Ip = data.Yc_I[pp];
+      Ip.noalias() += T * X.R.transpose();
+      Ip.noalias() -= p * w.transpose() + w * p.transpose();
+      Ip.diagonal().array() += d;
     }
   }
   return data.M;
