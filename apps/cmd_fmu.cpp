@@ -24,7 +24,8 @@ void addFmuCommand(CLI::App& app) {
                   "current, motor_torque, motor_velocity, setpoint (tracking); command (joint_rig). Default: none")
       ->delimiter(',');
   cmd->add_option("--outputs", opt->fmu.outputs, "Signals as outputs, comma-separated (default: all)")->delimiter(',');
-  cmd->add_option("--set", opt->fmu.overrides, "Override a scalar of the experiment file: key.path=value (repeatable)");
+  cmd->add_option("--set", opt->fmu.overrides,
+                  "Override a scalar of the experiment file: key.path=value, or +key.path=value to add a key (repeatable)");
   cmd->add_option("--step-size", opt->fmu.step_size, "Suggested communication step [s] (default 1e-3)");
   cmd->callback([opt] {
     const fmi::FmuDescription d = fmi::exportFmu(opt->config, opt->output, opt->fmu);

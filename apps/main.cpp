@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
   jointsim::cli::addCompareCommand(app);
   jointsim::cli::addPlotCommand(app);
   jointsim::cli::addFmuCommand(app);
+  jointsim::cli::addValidateCommand(app);
   installStopHandlers();
   try {
     app.parse(argc, argv);

@@ -55,7 +55,7 @@ __all__ = [
     "Model", "SolverError", "UnidentifiableError", "Experiment", "Simulator", "aba", "aba_derivatives", "crba",
     "fit_friction_map",
     "frame_jacobian", "frame_placement", "gravity_torques", "identify_clamping", "load_experiment", "load_robot",
-    "rnea", "rnea_derivatives", "run_experiment", "run_experiment_file", "PORTS", "export_fmu",
+    "rnea", "rnea_derivatives", "run_experiment", "run_experiment_file", "PORTS", "export_fmu", "validate_file",
 ]
 
 #: The command ports of a drive (Simulator.set_port).
@@ -163,6 +163,14 @@ def run_experiment_file(path: str, output_dir: Optional[str] = None, overrides: 
     """As `jointsim run`: writes DIR/<name>.csv and DIR/summary.json (each renamed into place when complete; bad
     input writes nothing). Returns status, csv_path, summary_path, sim_time_s, wall_time_s, real_time_factor."""
     return dict(_core.run_experiment_file(str(path), "" if output_dir is None else str(output_dir), _overrides(overrides)))
+
+
+def validate_file(path: str, overrides: Overrides = None) -> Dict[str, Any]:
+    """As `jointsim validate`: checks an experiment or sweep file completely (every key, every referenced file,
+    every run of a sweep with its settings) without running it; raises ValueError (the C++ InputError: file, line,
+    key path) for the first problem. Returns kind ("experiment"/"sweep"), name, type, runs, states, signals,
+    duration [s] and files (every file read)."""
+    return dict(_core.validate_file(str(path), _overrides(overrides)))
 
 
 def export_fmu(config: str, fmu_path: str, inputs: Sequence[str] = (), outputs: Sequence[str] = (),

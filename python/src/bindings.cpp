@@ -16,6 +16,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/version.hpp"
+#include "jointsim/experiments/batch.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
 
@@ -294,6 +295,23 @@ PYBIND11_MODULE(_core, m) {
         return d;
       },
       py::arg("path"), py::arg("output_dir") = "", py::arg("overrides") = std::vector<std::string>{});
+
+  m.def(
+      "validate_file",
+      [](const std::string& path, const std::vector<std::string>& overrides) {
+        const experiments::ValidationReport r = experiments::validateFile(path, overrides);
+        py::dict d;
+        d["kind"] = r.kind;
+        d["name"] = r.name;
+        d["type"] = r.type;
+        d["runs"] = r.runs;
+        d["states"] = r.states;
+        d["signals"] = r.signals;
+        d["duration"] = r.duration;
+        d["files"] = r.files;
+        return d;
+      },
+      py::arg("path"), py::arg("overrides") = std::vector<std::string>{});
 
   // ------------------------------------------------------------------------------------------ FMU export
   m.def(

@@ -446,4 +446,48 @@ BatchResult collectBatch(const Sweep& sweep, const BatchOptions& options) {
   return res;
 }
 
+ValidationReport validateFile(const std::string& path, const std::vector<std::string>& overrides) {
+  ValidationReport r;
+  std::set<std::string> seen;
+  auto note = [&](const Experiment& e) {
+    for (const io::InputFile& f : e.inputs())
+      if (seen.insert(f.path).second) r.files.push_back(f.path);
+  };
+  auto describeBase = [&](Experiment& e) {
+    r.type = e.type();
+    r.states = e.plant().stateSize();
+    r.signals = static_cast<int>(e.plant().signalNames().size());
+    r.duration = e.simulateOptions().t_end;
+  };
+  const YamlValue root = YamlValue::loadFile(path);
+  if (root.isMap() && root.has("sweep")) {
+    const Sweep sweep = loadSweep(path);
+    r.kind = "sweep";
+    r.name = sweep.name;
+    if (seen.insert(std::filesystem::absolute(path).lexically_normal().string()).second)
+      r.files.push_back(std::filesystem::absolute(path).lexically_normal().string());
+    for (const BatchRun& run : sweep.runs) {
+      std::vector<std::string> o = run.overrides;
+      o.insert(o.end(), overrides.begin(), overrides.end());
+      std::unique_ptr<Experiment> e;
+      try {
+        e = loadExperiment(sweep.experiment, o, run.faults);
+      } catch (const InputError& err) {
+        throw InputError(sweep.file + ": run '" + run.name + "': " + err.what());
+      }
+      if (r.runs == 0) describeBase(*e);
+      note(*e);
+      ++r.runs;
+    }
+    return r;
+  }
+  std::unique_ptr<Experiment> e = loadExperiment(path, overrides);
+  r.kind = "experiment";
+  r.name = e->name();
+  r.runs = 1;
+  describeBase(*e);
+  note(*e);
+  return r;
+}
+
 }  // namespace jointsim::experiments

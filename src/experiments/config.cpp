@@ -182,9 +182,13 @@ namespace detail {
 void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& overrides) {
   const std::string& file = root.file();
   for (const std::string& o : overrides) {
-    const size_t eq = o.find('=');
-    if (eq == std::string::npos || eq == 0) throw InputError("--set " + o + ": expected key.path=value");
-    const std::string path = o.substr(0, eq), value = o.substr(eq + 1);
+    // "+key.path=value" may add mapping keys the file lacks (the experiment's loader then checks them as if they
+    // were written in the file); "key.path=value" only replaces an existing scalar.
+    const bool add = !o.empty() && o[0] == '+';
+    const std::string spec = add ? o.substr(1) : o;
+    const size_t eq = spec.find('=');
+    if (eq == std::string::npos || eq == 0) throw InputError("--set " + o + ": expected key.path=value or +key.path=value");
+    const std::string path = spec.substr(0, eq), value = spec.substr(eq + 1);
     // Split "a.b[2].c" into a, b, 2, c.
     std::vector<std::string> parts;
     std::string cur;
@@ -197,18 +201,26 @@ void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& o
       }
     }
     if (!cur.empty()) parts.push_back(cur);
+    if (parts.empty()) throw InputError("--set " + o + ": expected key.path=value or +key.path=value");
     YAML::Node node = io::yamlNode(root);
     std::string walked;
     for (const std::string& p : parts) {
       walked += (walked.empty() ? "" : ".") + p;
+      const bool index = !p.empty() && p.size() < 10 && p.find_first_not_of("0123456789") == std::string::npos;
       YAML::Node child;
       if (node.IsMap() && node[p].IsDefined()) {
         child = node[p];
-      } else if (node.IsSequence() && !p.empty() && p.size() < 10 &&
-                 p.find_first_not_of("0123456789") == std::string::npos && std::stoul(p) < node.size()) {
+      } else if (node.IsSequence() && index && std::stoul(p) < node.size()) {
         child = node[std::stoul(p)];
+      } else if (add && !index && (node.IsMap() || node.IsNull())) {
+        node[p] = YAML::Node(YAML::NodeType::Null);  // a null node becomes a mapping
+        child = node[p];
+      } else if (add) {
+        throw InputError("--set " + o + ": cannot add '" + walked + "' to " + file +
+                         (index ? " (list entries cannot be added)" : " (its parent is not a mapping)"));
       } else {
-        throw InputError("--set " + o + ": " + file + " has no key '" + walked + "'");
+        throw InputError("--set " + o + ": " + file + " has no key '" + walked + "'" +
+                         (node.IsMap() || node.IsNull() ? " (to add it: --set +" + spec + ")" : ""));
       }
       node.reset(child);
     }

@@ -239,3 +239,17 @@ def test_bad_input_raises_with_a_clear_message_and_writes_nothing(root, planar2,
     rig = jointsim.Simulator.from_experiment(str(root / "config/experiments/kr300_joint1_clamping.yaml"))
     with pytest.raises(ValueError, match="no per-joint command ports"):
         rig.set_port(0, "voltage")
+
+
+def test_validate_file_and_added_keys(root):
+    """validate_file checks without running; '+key=value' adds a key the file lacks (here a solver block)."""
+    report = jointsim.validate_file(root / "config" / "sweeps" / "ur5_faults.yaml")
+    assert report["kind"] == "sweep" and report["runs"] == 25 and report["type"] == "tracking"
+    assert any(f.endswith("ur5_drives_elastic.yaml") for f in report["files"])
+    fall = root / "config" / "experiments" / "ur5_fall.yaml"
+    with pytest.raises(ValueError, match=r"to add it: --set \+solver.max_step=0.002"):
+        jointsim.validate_file(fall, ["solver.max_step=0.002"])
+    base = jointsim.run_experiment(fall, {"duration": 0.1})
+    added = jointsim.run_experiment(fall, ["duration=0.1", "+solver.max_step=0.002"])
+    steps = lambda r: r["summary"]["solver_stats"]["steps"]  # noqa: E731
+    assert steps(added) >= 50 > steps(base)

@@ -72,4 +72,20 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options);
 /// runs not finished yet), e.g. after the shards of a job array have finished.
 BatchResult collectBatch(const Sweep& sweep, const BatchOptions& options);
 
+/// What `jointsim validate FILE` found: an experiment or sweep file checked completely without running it.
+struct ValidationReport {
+  std::string kind;  ///< "experiment" or "sweep"
+  std::string name;  ///< experiment.name or sweep.name
+  std::string type;  ///< the experiment type (of the sweep's base experiment for a sweep)
+  int runs = 0;      ///< runs of a sweep, each loaded with its overrides and faults (1 for an experiment)
+  int states = 0, signals = 0;      ///< of the (base) experiment's plant
+  double duration = 0.0;            ///< [s], of the (base) experiment
+  std::vector<std::string> files;   ///< every file read (absolute paths, each once)
+};
+/// Checks `path` fully: an experiment file is loaded as `jointsim run` would load it (every key, every referenced
+/// file; `overrides` as --set); a sweep file (top-level `sweep:`) is read and every one of its runs is loaded with
+/// its overrides (then `overrides`) and faults. Nothing is simulated or written. InputError (naming the run of a
+/// sweep, the file, the line and the key path) for the first problem found.
+ValidationReport validateFile(const std::string& path, const std::vector<std::string>& overrides = {});
+
 }  // namespace jointsim::experiments
