@@ -51,6 +51,7 @@
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/experiments/figures.hpp"
 #include "jointsim/experiments/registry.hpp"
+#include "jointsim/experiments/sampling.hpp"
 #include "jointsim/experiments/types.hpp"
 #include "jointsim/identify/clamping_curve.hpp"
 #include "jointsim/identify/clamping_fit.hpp"

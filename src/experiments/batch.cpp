@@ -24,6 +24,7 @@
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/experiments/experiment.hpp"
+#include "jointsim/experiments/sampling.hpp"
 #include "jointsim/io/input_files.hpp"
 #include "jointsim/io/json.hpp"
 #include "jointsim/io/output.hpp"
@@ -210,8 +211,8 @@ std::string BatchRun::describe() const {
 
 Sweep loadSweep(const std::string& path) {
   const YamlValue root = YamlValue::loadFile(path);
-  root.expectMap("a sweep mapping {sweep, runs, grid, faults}");
-  root.allowKeys({"sweep", "runs", "grid", "faults"});
+  root.expectMap("a sweep mapping {sweep, runs, grid, sample, faults}");
+  root.allowKeys({"sweep", "runs", "grid", "sample", "faults"});
   Sweep s;
   s.file = path;
   const YamlValue head = root.required("sweep", "mapping {name, experiment, set}");
@@ -275,6 +276,68 @@ Sweep loadSweep(const std::string& path) {
       size_t a = 0;
       while (a < axes.size() && ++idx[a] == axes[a].second.size()) idx[a++] = 0;
       if (a == axes.size()) break;
+    }
+  }
+  if (const YamlValue sample = root["sample"]; sample.defined()) {
+    // Seeded random designs (experiments/sampling.hpp): runs sample-0 ... sample-(n-1), each with the sampled
+    // values as overrides (%.17g: the run reads back exactly the sampled double).
+    sample.expectMap("a mapping {design, runs, seed, parameters}");
+    sample.allowKeys({"design", "runs", "seed", "parameters"});
+    const YamlValue design_node = sample.required("design", "monte_carlo or latin_hypercube");
+    SamplingDesign design{};
+    try {
+      design = samplingDesignFromString(design_node.asString("monte_carlo or latin_hypercube"));
+    } catch (const InputError& e) {
+      design_node.fail(e.what());
+    }
+    const YamlValue runs_node = sample.required("runs", "the number of runs");
+    const long n = runs_node.asInt("a number of runs >= 1");
+    if (n < 1 || n > 100000) runs_node.failExpected("a number of runs from 1 to 100000");
+    const YamlValue seed_node = sample.required("seed", "an integer seed (the design is reproducible from it)");
+    const long seed = seed_node.asInt("an integer seed >= 0");
+    if (seed < 0) seed_node.failExpected("an integer seed >= 0");
+    const YamlValue params = sample.required("parameters", "a mapping {key.path: {distribution, ...}}");
+    params.expectMap("a mapping {key.path: {distribution, ...}}");
+    std::vector<std::string> keys = params.keys();
+    if (keys.empty()) params.failExpected("at least one parameter");
+    std::vector<ParameterDistribution> dists;
+    for (const std::string& k : keys) {
+      const YamlValue d = params[k];
+      d.expectMap("{distribution: uniform|log_uniform, low, high} or {distribution: normal, mean, std}");
+      const YamlValue kind = d.required("distribution", "uniform, normal or log_uniform");
+      const std::string kind_text = kind.asString("uniform, normal or log_uniform");
+      ParameterDistribution p;
+      if (kind_text == "uniform" || kind_text == "log_uniform") {
+        d.allowKeys({"distribution", "low", "high"});
+        p.kind = kind_text == "uniform" ? ParameterDistribution::Kind::Uniform : ParameterDistribution::Kind::LogUniform;
+        p.a = d.required("low", "the lower bound").asDouble("a number");
+        p.b = d.required("high", "the upper bound").asDouble("a number");
+        if (!(p.b > p.a)) d["high"].failExpected("an upper bound above low = " + formatNumber(p.a));
+        if (p.kind == ParameterDistribution::Kind::LogUniform && !(p.a > 0.0))
+          d["low"].failExpected("a lower bound > 0 (log-uniform)");
+      } else if (kind_text == "normal") {
+        d.allowKeys({"distribution", "mean", "std"});
+        p.kind = ParameterDistribution::Kind::Normal;
+        p.a = d.required("mean", "the mean").asDouble("a number");
+        p.b = d.required("std", "the standard deviation").asDouble("a number");
+        if (!(p.b > 0.0)) d["std"].failExpected("a standard deviation > 0");
+      } else {
+        kind.failExpected("uniform, normal or log_uniform");
+      }
+      dists.push_back(p);
+    }
+    const auto values = sampleDesign(design, static_cast<int>(n), dists, static_cast<std::uint64_t>(seed));
+    const int width = static_cast<int>(std::to_string(n - 1).size());
+    for (long i = 0; i < n; ++i) {
+      BatchRun r;
+      std::string index = std::to_string(i);
+      r.name = "sample-" + std::string(static_cast<size_t>(width) - index.size(), '0') + index;
+      for (size_t j = 0; j < keys.size(); ++j) {
+        char buf[40];
+        std::snprintf(buf, sizeof buf, "%.17g", values[static_cast<size_t>(i)][j]);
+        r.overrides.push_back(keys[j] + "=" + buf);
+      }
+      add(std::move(r), sample);
     }
   }
   if (const YamlValue faults = root["faults"]; faults.defined()) {
