@@ -139,12 +139,13 @@ std::string csvQuote(const std::string& s) {
 void writeManifest(const std::string& path, const std::vector<BatchRecord>& records) {
   std::ostringstream os;
   os << "run,status,wall_time_s,sim_time_s,real_time_factor,output_dir,overrides,jointsim_version,git_commit,started_utc,"
-        "inputs\n";
+        "inputs,fault_type,fault_joint,fault_severity,fault_onset_s,design,seed\n";
   os.precision(6);
   for (const auto& r : records)
     os << r.run << ',' << r.status << ',' << r.wall_time_s << ',' << r.sim_time_s << ',' << r.real_time_factor << ','
        << r.output_dir << ',' << csvQuote(r.overrides) << ',' << r.jointsim_version << ',' << r.git_commit << ','
-       << r.started_utc << ',' << csvQuote(r.inputs) << '\n';
+       << r.started_utc << ',' << csvQuote(r.inputs) << ',' << r.fault_type << ',' << r.fault_joint << ','
+       << r.fault_severity << ',' << r.fault_onset_s << ',' << r.design << ',' << r.seed << '\n';
   io::writeFileAtomically(path, os.str());
 }
 
@@ -158,6 +159,17 @@ BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
   r.run = run.name;
   r.output_dir = run.name;
   r.overrides = run.describe();
+  for (const systems::Fault& f : run.faults) {
+    const std::string sep = r.fault_type.empty() ? "" : ";";
+    char value[40];
+    std::snprintf(value, sizeof value, "%.17g", f.value);
+    r.fault_type += sep + systems::toString(f.type);
+    r.fault_joint += sep + f.joint;
+    r.fault_severity += sep + value;
+    r.fault_onset_s += sep + "0";  // constant faults act from the start
+  }
+  r.design = run.design;
+  if (run.seed >= 0) r.seed = std::to_string(run.seed);
   const SummaryInfo s = readSummary(fs::path(dir) / run.name / "summary.json");
   r.status = s.exists ? (s.status.empty() ? "error" : s.status) : "pending";
   r.sim_time_s = s.sim;
@@ -332,6 +344,8 @@ Sweep loadSweep(const std::string& path) {
       BatchRun r;
       std::string index = std::to_string(i);
       r.name = "sample-" + std::string(static_cast<size_t>(width) - index.size(), '0') + index;
+      r.design = design == SamplingDesign::LatinHypercube ? "latin_hypercube" : "monte_carlo";
+      r.seed = seed;
       for (size_t j = 0; j < keys.size(); ++j) {
         char buf[40];
         std::snprintf(buf, sizeof buf, "%.17g", values[static_cast<size_t>(i)][j]);

@@ -78,7 +78,7 @@ std::map<std::string, std::string> manifest(const fs::path& p) {
   std::string line;
   std::getline(in, line);
   EXPECT_EQ(line, "run,status,wall_time_s,sim_time_s,real_time_factor,output_dir,overrides,jointsim_version,git_commit,"
-                  "started_utc,inputs");
+                  "started_utc,inputs,fault_type,fault_joint,fault_severity,fault_onset_s,design,seed");
   std::map<std::string, std::string> rows;
   while (std::getline(in, line)) {
     const size_t a = line.find(','), b = line.find(',', a + 1);
@@ -113,6 +113,16 @@ TEST(CliBatch, FaultSweepWithEveryFaultTypeCompletesItsManifest) {
                         "torque_constant_scale", "sensor_bias", "nominal"})
     EXPECT_TRUE(types.count(t)) << t;
   EXPECT_THAT(slurp(dir / "out" / "manifest.csv"), HasSubstr("fault backlash_add@elbow_joint=0.001"));
+  // Label columns at the end of each line: fault_type, fault_joint, fault_severity, fault_onset_s, design, seed.
+  const std::string text = slurp(dir / "out" / "manifest.csv");
+  EXPECT_THAT(text.substr(0, text.find('\n')),
+              ::testing::EndsWith(",inputs,fault_type,fault_joint,fault_severity,fault_onset_s,design,seed"));
+  auto lineOf = [&](const std::string& run) {
+    const auto at = text.find("\n" + run + ",");
+    return text.substr(at + 1, text.find('\n', at + 1) - at - 1);
+  };
+  EXPECT_THAT(lineOf("backlash_add-elbow_joint-0.001"), ::testing::EndsWith(",backlash_add,elbow_joint,0.001,0,,"));
+  EXPECT_THAT(lineOf("nominal"), ::testing::EndsWith("\",,,,,,"));
   // Faults change the run: the faulty logs differ from the nominal one.
   EXPECT_NE(slurp(dir / "out" / "nominal" / "ur5_excitation.csv"),
             slurp(dir / "out" / "backlash_add-elbow_joint-0.001" / "ur5_excitation.csv"));
@@ -294,5 +304,31 @@ TEST(CliBatch, EditedRobotFileRecomputesTheRunsThatReadIt) {
   // And reused again once the results match the edited file.
   r = run(args, dir);
   EXPECT_THAT(r.out, HasSubstr("2 skipped"));
+  fs::remove_all(dir);
+}
+
+// A sampled sweep runs and labels its runs with the design and the seed; the sampled value reaches the run.
+TEST(CliBatch, SampledRunsCarryDesignAndSeedAndTheirValues) {
+  const fs::path dir = freshDir("sampled");
+  const std::string exp = std::string(JOINTSIM_SOURCE_DIR) + "/config/experiments/ur5_swg_joint_velocity.yaml";
+  std::ofstream(dir / "s.yaml") << "sweep: {name: s, experiment: " << exp << ", set: {duration: 0.05}}\n"
+                                << "sample:\n  design: latin_hypercube\n  runs: 3\n  seed: 5\n  parameters:\n"
+                                << "    load.inertia: {distribution: uniform, low: 1.0, high: 2.0}\n";
+  const Result r = run("batch " + (dir / "s.yaml").string() + " -o " + (dir / "out").string(), dir);
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  const std::string text = slurp(dir / "out" / "manifest.csv");
+  for (const char* name : {"sample-0", "sample-1", "sample-2"}) {
+    const auto at = text.find(std::string("\n") + name + ",ok,");
+    ASSERT_NE(at, std::string::npos) << name << "\n" << text;
+    const std::string line = text.substr(at + 1, text.find('\n', at + 1) - at - 1);
+    EXPECT_THAT(line, ::testing::EndsWith(",,,,,latin_hypercube,5")) << line;
+    // The run's summary holds the sampled inertia given in its overrides.
+    const auto o = line.find("load.inertia=");
+    ASSERT_NE(o, std::string::npos);
+    const double inertia = std::stod(line.substr(o + 13));
+    EXPECT_GT(inertia, 1.0);
+    EXPECT_LT(inertia, 2.0);
+    EXPECT_THAT(slurp(dir / "out" / name / "summary.json"), HasSubstr("\"inertia\": " + line.substr(o + 13, 6)));
+  }
   fs::remove_all(dir);
 }

@@ -23,6 +23,8 @@ struct BatchRun {
   std::string name;                    ///< unique; also the run's folder name
   std::vector<std::string> overrides;  ///< "key.path=value", the sweep's common overrides first
   std::vector<systems::Fault> faults;
+  std::string design;  ///< sampled runs: "monte_carlo" or "latin_hypercube" (empty otherwise)
+  long seed = -1;      ///< sampled runs: the design's seed (-1 otherwise)
   std::string describe() const;  ///< overrides and faults joined by "; "
 };
 
@@ -51,6 +53,10 @@ struct BatchRecord {
   std::string output_dir, overrides;
   std::string jointsim_version, git_commit, started_utc;  ///< from the run's summary.json
   std::string inputs;                                     ///< "path=hash;..." of every input file the run read
+  /// Labels for learning from a sweep (manifest columns fault_type, fault_joint, fault_severity, fault_onset_s,
+  /// design, seed): the run's faults (several joined by ';'; a constant fault acts from t = 0 s) and, for a
+  /// sampled run, its design and seed. Empty for a nominal run.
+  std::string fault_type, fault_joint, fault_severity, fault_onset_s, design, seed;
   bool skipped = false;                                   ///< finished in an earlier invocation
 };
 
