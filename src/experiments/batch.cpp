@@ -161,11 +161,9 @@ BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
   r.overrides = run.describe();
   for (const systems::Fault& f : run.faults) {
     const std::string sep = r.fault_type.empty() ? "" : ";";
-    char value[40];
-    std::snprintf(value, sizeof value, "%.17g", f.value);
     r.fault_type += sep + systems::toString(f.type);
     r.fault_joint += sep + f.joint;
-    r.fault_severity += sep + value;
+    r.fault_severity += sep + formatNumber(f.value, 17);
     r.fault_onset_s += sep + "0";  // constant faults act from the start
   }
   r.design = run.design;
@@ -346,11 +344,8 @@ Sweep loadSweep(const std::string& path) {
       r.name = "sample-" + std::string(static_cast<size_t>(width) - index.size(), '0') + index;
       r.design = design == SamplingDesign::LatinHypercube ? "latin_hypercube" : "monte_carlo";
       r.seed = seed;
-      for (size_t j = 0; j < keys.size(); ++j) {
-        char buf[40];
-        std::snprintf(buf, sizeof buf, "%.17g", values[static_cast<size_t>(i)][j]);
-        r.overrides.push_back(keys[j] + "=" + buf);
-      }
+      for (size_t j = 0; j < keys.size(); ++j)
+        r.overrides.push_back(keys[j] + "=" + formatNumber(values[static_cast<size_t>(i)][j], 17));
       add(std::move(r), sample);
     }
   }

@@ -1,14 +1,15 @@
 // FMU description: the variables of an experiment, their JSON form (resources/jointsim_fmu.json) and
 // modelDescription.xml (FMI 2.0 Co-Simulation).
 #include <cmath>
-#include <cstdio>
 #include <map>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
 #include "jointsim/systems/faults.hpp"
@@ -19,11 +20,8 @@ namespace jointsim::fmi {
 
 namespace {
 
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
+/// All 17 significant digits: the XML start values read back as the same doubles.
+std::string number(double v) { return formatNumber(v, 17); }
 
 std::string xmlEscape(const std::string& s) {
   std::string out;
@@ -75,18 +73,6 @@ bool baseUnit(const std::string& unit, BaseUnit& b) {
   return true;
 }
 
-/// "name[unit]" -> name, unit.
-void splitSignal(const std::string& s, std::string& name, std::string& unit) {
-  const auto open = s.rfind('[');
-  if (open != std::string::npos && !s.empty() && s.back() == ']') {
-    name = s.substr(0, open);
-    unit = s.substr(open + 1, s.size() - open - 2);
-  } else {
-    name = s;
-    unit.clear();
-  }
-}
-
 // Every number of the document with its key path (a.b, a[0], a[0][1]) and its FMI name under the structured
 // naming convention (a.b, a[0], a[0,1]).
 void collectNumbers(const nlohmann::ordered_json& j, const std::string& path, const std::string& name,
@@ -130,9 +116,8 @@ PortInfo portInfo(systems::CommandPort p) {
 
 }  // namespace
 
-FmuDescription describe(const experiments::Experiment& experiment_const, const ExportOptions& options,
+FmuDescription describe(experiments::Experiment& experiment, const ExportOptions& options,
                         const std::string& model_identifier) {
-  auto& experiment = const_cast<experiments::Experiment&>(experiment_const);  // plant() is non-const
   FmuDescription d;
   d.model_identifier = model_identifier;
   d.experiment_type = experiment.type();
@@ -234,7 +219,7 @@ FmuDescription describe(const experiments::Experiment& experiment_const, const E
   }
   for (int i : chosen) {
     Variable v;
-    splitSignal(signals[static_cast<size_t>(i)], v.name, v.unit);
+    std::tie(v.name, v.unit) = splitColumn(signals[static_cast<size_t>(i)]);
     v.causality = Causality::Output;
     v.signal = i;
     v.description = "signal " + signals[static_cast<size_t>(i)];

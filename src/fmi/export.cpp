@@ -7,7 +7,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -36,12 +35,11 @@ bool isIdentifier(const std::string& s) {
   return true;
 }
 
+/// The bytes of a file the FMU carries (io::readBoundedFile; none of them is empty).
 std::string readAll(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  if (!in) throw Error("FMU export: cannot read " + p.string());
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
+  std::string bytes = io::readBoundedFile(p.string());
+  if (bytes.empty()) throw Error("FMU export: cannot read " + p.string());
+  return bytes;
 }
 
 /// The zip archive being written; discarded (and its temporary file removed) unless closed.

@@ -1,15 +1,14 @@
 // One FMI 2.0 Co-Simulation instance: the state machine of the standard over experiments::loadExperiment and
 // sim::Simulator. Nothing throws out of the public methods: errors become Status::Error and a log message.
 #include <cmath>
-#include <cstdio>
-#include <fstream>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
+#include "jointsim/io/input_files.hpp"
 #include "jointsim/systems/faults.hpp"
 #include "jointsim/systems/joint_rig.hpp"
 #include "jointsim/systems/robot_system.hpp"
@@ -19,11 +18,7 @@ namespace jointsim::fmi {
 namespace {
 enum class Phase { Instantiated, Initialization, StepComplete, Failed, Terminated };
 
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
+std::string number(double v) { return formatNumber(v, 17); }
 }  // namespace
 
 struct Instance::Impl {
@@ -33,6 +28,7 @@ struct Instance::Impl {
   Logger logger;
   Phase phase = Phase::Instantiated;
   std::vector<double> values;  // inputs and parameters as set; outputs unused
+  std::vector<int> qd_of;      // for a "q" (setpoint) input, the index of its joint's "qd" input (-1: none)
   double start_time = 0.0;
   std::shared_ptr<experiments::Experiment> experiment;
   std::unique_ptr<sim::Simulator> sim;
@@ -101,11 +97,7 @@ struct Instance::Impl {
         rig->setCommand(values[i]);
       } else if (robot != nullptr) {
         if (v.port == "q") {
-          double qd = 0.0;
-          for (size_t k = 0; k < d.variables.size(); ++k)
-            if (d.variables[k].causality == Causality::Input && d.variables[k].port == "qd" &&
-                d.variables[k].joint == v.joint)
-              qd = values[k];
+          const double qd = qd_of[i] >= 0 ? values[static_cast<size_t>(qd_of[i])] : 0.0;
           if (robot->commandPort(v.joint) != systems::CommandPort::Setpoint)
             robot->setCommandPort(v.joint, systems::CommandPort::Setpoint);
           robot->setSetpoint(v.joint, values[i], qd);
@@ -144,13 +136,11 @@ Instance::Instance(std::string instance_name, const std::string& resource_dir, c
   m.logger = std::move(logger);
   m.resources = resource_dir;
   const std::string path = resource_dir + "/jointsim_fmu.json";
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot read the FMU description");
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::string text = io::readBoundedFile(path);
+  if (text.empty()) throw InputError(path + ": cannot read the FMU description");
   nlohmann::ordered_json j;
   try {
-    j = nlohmann::ordered_json::parse(text.str());
+    j = nlohmann::ordered_json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path + ": " + e.what());
   }
@@ -158,7 +148,16 @@ Instance::Instance(std::string instance_name, const std::string& resource_dir, c
   if (guid != m.d.guid)
     throw InputError(path + ": GUID '" + guid + "' given by the importer, the FMU's is '" + m.d.guid + "'");
   m.values.resize(m.d.variables.size());
-  for (size_t i = 0; i < m.values.size(); ++i) m.values[i] = m.d.variables[i].start;
+  m.qd_of.assign(m.d.variables.size(), -1);
+  for (size_t i = 0; i < m.values.size(); ++i) {
+    m.values[i] = m.d.variables[i].start;
+    const Variable& v = m.d.variables[i];
+    if (v.causality == Causality::Input && v.port == "q")
+      for (size_t k = 0; k < m.d.variables.size(); ++k)
+        if (m.d.variables[k].causality == Causality::Input && m.d.variables[k].port == "qd" &&
+            m.d.variables[k].joint == v.joint)
+          m.qd_of[i] = static_cast<int>(k);
+  }
 }
 
 Instance::~Instance() = default;

@@ -90,7 +90,7 @@ struct ExportOptions {
 
 /// The variables of a loaded experiment (types `tracking` and `joint_rig`; InputError for others, for an unknown
 /// port or joint, or an unknown output).
-FmuDescription describe(const experiments::Experiment& experiment, const ExportOptions& options,
+FmuDescription describe(experiments::Experiment& experiment, const ExportOptions& options,
                         const std::string& model_identifier);
 
 /// Writes the FMU `fmu_path` (its model identifier: the file name without .fmu, which must be a C identifier)
