@@ -1,6 +1,11 @@
 #pragma once
 // Shared test helpers: matrix comparison with an explanatory failure message, seeded random states,
 // and paths to the source tree.
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <random>
 #include <sstream>
 #include <string>
@@ -15,6 +20,27 @@
 namespace jointsim::test {
 
 inline std::string sourcePath(const std::string& relative) { return std::string(JOINTSIM_SOURCE_DIR) + "/" + relative; }
+
+/// The whole content of a file ("" when it cannot be read).
+inline std::string readText(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// Exit status (-1 when not a normal exit), stdout and stderr of one `jointsim` command.
+struct CliResult {
+  int status;
+  std::string out, err;
+};
+/// Runs the CLI with `args` (shell words), its output captured in `<tag>.out` / `<tag>.err` in the temp folder.
+inline CliResult runCli(const std::string& args, const std::string& tag) {
+  const auto base = std::filesystem::temp_directory_path() / tag;
+  const std::string out = base.string() + ".out", err = base.string() + ".err";
+  const int rc = std::system((std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + out + " 2>" + err).c_str());
+  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, readText(out), readText(err)};
+}
 
 /// Index in a simulate() row (time first) of the plant's signal `name` ("time": 0).
 inline int rowIndex(const sim::Plant& plant, const std::string& name) {

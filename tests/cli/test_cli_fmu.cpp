@@ -1,38 +1,20 @@
 // `jointsim fmu`: a good export writes one archive with the FMU's parts; bad input gives exit status 2, a message
 // naming what was wrong, and no file (also no temporary one). The FMU's behaviour under an importer is tested in
 // tests/fmi (the instance) and tests/python/test_fmu.py (FMPy).
-#include <sys/wait.h>
-
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "test_util.hpp"
+
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
 
 namespace {
-struct Result {
-  int status;
-  std::string out, err;
-};
-Result run(const std::string& args) {
-  const auto base = fs::temp_directory_path() / "jointsim_fmu_cli";
-  const std::string cmd = std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + base.string() + ".out 2>" +
-                          base.string() + ".err";
-  const int rc = std::system(cmd.c_str());
-  auto slurp = [](const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  };
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurp(base.string() + ".out"), slurp(base.string() + ".err")};
-}
+using Result = jointsim::test::CliResult;
+Result run(const std::string& args) { return jointsim::test::runCli(args, "jointsim_fmu_cli"); }
 const std::string kConfig = std::string(JOINTSIM_SOURCE_DIR) + "/config/experiments/";
 }  // namespace
 
@@ -48,11 +30,8 @@ TEST(CliFmu, ExportsAnArchiveWithDescriptionBinaryAndResources) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("'ur5_twin' with 6 inputs, 2 outputs"));
   ASSERT_TRUE(fs::exists(dir / "ur5_twin.fmu"));
-  // The archive's table of contents (unzip -Z1 from Debian's unzip when present, else the zip's own bytes).
-  std::ifstream in(dir / "ur5_twin.fmu", std::ios::binary);
-  std::stringstream bytes;
-  bytes << in.rdbuf();
-  const std::string zip = bytes.str();
+  // The entry names stand in the zip's local headers and central directory (stored uncompressed).
+  const std::string zip = jointsim::test::readText(dir / "ur5_twin.fmu");
   for (const char* part : {"modelDescription.xml", "binaries/linux64/ur5_twin.so", "resources/jointsim_fmu.json",
                            "resources/experiments/ur5_excitation.yaml", "resources/robots/ur5_drives.yaml",
                            "resources/robots/ur5.yaml", "binaries/linux64/libsundials_cvode.so"})

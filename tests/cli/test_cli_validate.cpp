@@ -1,37 +1,20 @@
 // `jointsim validate` and `--set +key.path=value`: a file is checked completely without a run (every run of a
 // sweep loaded with its settings); `+` adds a key the file lacks, which the loader then checks as if written.
-#include <sys/wait.h>
-
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "test_util.hpp"
+
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
 
 namespace {
-struct Result {
-  int status;
-  std::string out, err;
-};
-Result run(const std::string& args) {
-  const auto base = fs::temp_directory_path() / "jointsim_validate_cli";
-  const std::string cmd = std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + base.string() + ".out 2>" +
-                          base.string() + ".err";
-  const int rc = std::system(cmd.c_str());
-  auto slurp = [](const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  };
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurp(base.string() + ".out"), slurp(base.string() + ".err")};
-}
+using Result = jointsim::test::CliResult;
+Result run(const std::string& args) { return jointsim::test::runCli(args, "jointsim_validate_cli"); }
 const std::string kRoot = JOINTSIM_SOURCE_DIR;
 }  // namespace
 
@@ -76,14 +59,12 @@ TEST(CliSetAdd, PlusAddsAKeyTheFileLacksAndTheLoaderChecksIt) {
   EXPECT_THAT(r.err, HasSubstr("has no key 'solver.max_step' (to add it: --set +solver.max_step=0.001)"));
   r = run("run " + fall + " --set duration=0.05 --set +solver.max_step=0.001 -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
-  std::ifstream summary(out / "summary.json");
-  std::stringstream text;
-  text << summary.rdbuf();
-  EXPECT_THAT(text.str(), HasSubstr("\"max_step\": 0.001"));
+  const std::string text = jointsim::test::readText(out / "summary.json");
+  EXPECT_THAT(text, HasSubstr("\"max_step\": 0.001"));
   // Steps of at most 1 ms: at least 50 for 0.05 s.
-  const auto at = text.str().find("\"steps\": ");
+  const auto at = text.find("\"steps\": ");
   ASSERT_NE(at, std::string::npos);
-  EXPECT_GE(std::stol(text.str().substr(at + 9)), 50);
+  EXPECT_GE(std::stol(text.substr(at + 9)), 50);
   r = run("validate " + fall + " --set +solver.bogus=1");
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("unknown key 'bogus'"));
