@@ -1,4 +1,5 @@
-// `jointsim batch SWEEP.yaml [-j N] [--shard I/N] [-o DIR] [--collect]`: parallel runs of a sweep.
+// `jointsim batch SWEEP.yaml [-j N] [--shard I/N] [-o DIR] [--collect] [--dataset FILE.h5]`: parallel runs of a
+// sweep, and the results as one HDF5 data set.
 #include <cstdio>
 #include <memory>
 
@@ -7,13 +8,14 @@
 #include "cli_common.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/batch.hpp"
+#include "jointsim/report/dataset.hpp"
 #include "jointsim/sim/simulate.hpp"
 
 namespace jointsim::cli {
 
 void addBatchCommand(CLI::App& app) {
   struct Options {
-    std::string sweep, output_dir, shard = "0/1";
+    std::string sweep, output_dir, shard = "0/1", dataset;
     int jobs = 1;
     bool collect = false;
   };
@@ -26,6 +28,9 @@ void addBatchCommand(CLI::App& app) {
   cmd->add_option("--shard", opt->shard, "Run only every N-th run starting at I (I/N, 0 <= I < N), for job arrays");
   cmd->add_option("-o,--output-dir", opt->output_dir, "Output directory (default: out/<sweep name>/)");
   cmd->add_flag("--collect", opt->collect, "Run nothing; rebuild DIR/manifest.csv over all runs from their folders");
+  cmd->add_option("--dataset", opt->dataset,
+                  "Also write every run's log and the labels to one HDF5 file (FILE.h5, docs/batch.md); the whole "
+                  "sweep: without --shard, or with --collect after the shards");
   cmd->callback([opt] {
     experiments::BatchOptions o;
     o.output_dir = opt->output_dir;
@@ -44,6 +49,13 @@ void addBatchCommand(CLI::App& app) {
     }
     o.progress = ::isatty(2) != 0;
     const experiments::Sweep sweep = experiments::loadSweep(opt->sweep);
+    experiments::shardRuns(sweep.runs.size(), o.shard_index, o.shard_count);  // a bad shard fails before any run
+    if (!opt->dataset.empty()) {
+      report::checkDatasetPath(opt->dataset);  // a missing folder fails before any run
+      if (o.shard_count > 1 && !opt->collect)
+        throw InputError("--dataset needs the whole sweep: use it with --collect once the shards are done, not with --shard " +
+                         opt->shard);
+    }
     const experiments::BatchResult r =
         opt->collect ? experiments::collectBatch(sweep, o) : experiments::runBatch(sweep, o);
     std::printf("%s: %zu runs%s: %d ok, %d failed or in error, %d skipped (already ok)%s\n  manifest: %s\n",
@@ -52,6 +64,11 @@ void addBatchCommand(CLI::App& app) {
                                   : "",
                 r.ok - r.skipped, r.failed, r.skipped, opt->collect ? " (collected)" : "", r.manifest_path.c_str());
     if (!opt->collect) std::printf("  wall time %.3g s with %d job(s)\n", r.wall_time_s, o.jobs);
+    if (!opt->dataset.empty() && !r.interrupted) {
+      const report::DatasetSummary d = report::writeDataset(sweep, o.output_dir, opt->dataset);
+      std::printf("  dataset: %s (%d runs, %d with logs, %ld samples)\n", d.path.c_str(), d.runs, d.runs_with_data,
+                  d.samples);
+    }
     if (r.interrupted)
       throw sim::Interrupted(SolverError("batch interrupted (signal " + std::to_string(r.interrupted) +
                                              "); the interrupted runs run again when the batch is resumed",

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import json
 import math
-from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -55,7 +55,7 @@ __all__ = [
     "Model", "SolverError", "UnidentifiableError", "Experiment", "Simulator", "aba", "aba_derivatives", "crba",
     "fit_friction_map",
     "frame_jacobian", "frame_placement", "gravity_torques", "identify_clamping", "load_experiment", "load_robot",
-    "rnea", "rnea_derivatives", "run_experiment", "run_experiment_file", "PORTS", "export_fmu", "validate_file",
+    "rnea", "rnea_derivatives", "run_experiment", "run_experiment_file", "PORTS", "export_fmu", "validate_file", "run_batch", "write_dataset",
 ]
 
 #: The command ports of a drive (Simulator.set_port).
@@ -171,6 +171,25 @@ def validate_file(path: str, overrides: Overrides = None) -> Dict[str, Any]:
     key path) for the first problem. Returns kind ("experiment"/"sweep"), name, type, runs, states, signals,
     duration [s] and files (every file read)."""
     return dict(_core.validate_file(str(path), _overrides(overrides)))
+
+
+def run_batch(sweep: str, output_dir: Optional[str] = None, jobs: int = 1, shard: Tuple[int, int] = (0, 1),
+              collect: bool = False) -> Dict[str, Any]:
+    """As `jointsim batch SWEEP [-j JOBS] [--shard I/N] [-o DIR] [--collect]`: runs a sweep, each run in its own child
+    process, into DIR/<run>/ with DIR/manifest.csv (docs/batch.md); finished runs are skipped (resume). Returns
+    manifest_path, ok, failed, skipped, wall_time_s [s] and records (one dict per run: run, status, labels, ...).
+    Bad sweep input raises ValueError; failed runs are reported in the records, not raised. While it runs, Ctrl-C
+    reaches Python only when it returns."""
+    index, count = shard
+    return dict(_core.run_batch(str(sweep), "" if output_dir is None else str(output_dir), int(jobs), int(index),
+                                int(count), bool(collect)))
+
+
+def write_dataset(sweep: str, path: str, output_dir: Optional[str] = None) -> Dict[str, Any]:
+    """As `jointsim batch SWEEP --collect -o DIR --dataset PATH` without rewriting the manifest: every run's log and
+    the labels of the sweep's results in DIR as one HDF5 file (layout in docs/batch.md; read it with h5py). Written
+    under a temporary name and renamed into place. Returns path, runs, runs_with_data, samples."""
+    return dict(_core.write_dataset(str(sweep), str(path), "" if output_dir is None else str(output_dir)))
 
 
 def export_fmu(config: str, fmu_path: str, inputs: Sequence[str] = (), outputs: Sequence[str] = (),

@@ -19,6 +19,7 @@
 #include "jointsim/experiments/batch.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
+#include "jointsim/report/dataset.hpp"
 
 #include <nlohmann/json.hpp>
 #include "jointsim/identify/clamping_fit.hpp"
@@ -312,6 +313,71 @@ PYBIND11_MODULE(_core, m) {
         return d;
       },
       py::arg("path"), py::arg("overrides") = std::vector<std::string>{});
+
+  // ------------------------------------------------------------------------------------------ sweeps
+  m.def(
+      "run_batch",
+      [](const std::string& sweep_file, const std::string& output_dir, int jobs, int shard_index, int shard_count,
+         bool collect) {
+        const experiments::Sweep sweep = experiments::loadSweep(sweep_file);
+        experiments::BatchOptions o;
+        o.output_dir = output_dir;
+        o.jobs = jobs;
+        o.shard_index = shard_index;
+        o.shard_count = shard_count;
+        experiments::BatchResult r;
+        {
+          py::gil_scoped_release release;
+          r = collect ? experiments::collectBatch(sweep, o) : experiments::runBatch(sweep, o);
+        }
+        py::list records;
+        for (const auto& x : r.records) {
+          py::dict d;
+          d["run"] = x.run;
+          d["status"] = x.status;
+          d["output_dir"] = x.output_dir;
+          d["overrides"] = x.overrides;
+          d["wall_time_s"] = x.wall_time_s;
+          d["sim_time_s"] = x.sim_time_s;
+          d["real_time_factor"] = x.real_time_factor;
+          d["fault_type"] = x.fault_type;
+          d["fault_joint"] = x.fault_joint;
+          d["fault_severity"] = x.fault_severity;
+          d["fault_onset_s"] = x.fault_onset_s;
+          d["design"] = x.design;
+          d["seed"] = x.seed;
+          d["skipped"] = x.skipped;
+          records.append(d);
+        }
+        py::dict d;
+        d["manifest_path"] = r.manifest_path;
+        d["ok"] = r.ok;
+        d["failed"] = r.failed;
+        d["skipped"] = r.skipped;
+        d["wall_time_s"] = r.wall_time_s;
+        d["records"] = records;
+        return d;
+      },
+      py::arg("sweep"), py::arg("output_dir") = "", py::arg("jobs") = 1, py::arg("shard_index") = 0,
+      py::arg("shard_count") = 1, py::arg("collect") = false);
+
+  m.def(
+      "write_dataset",
+      [](const std::string& sweep_file, const std::string& path, const std::string& output_dir) {
+        const experiments::Sweep sweep = experiments::loadSweep(sweep_file);
+        report::DatasetSummary r;
+        {
+          py::gil_scoped_release release;
+          r = report::writeDataset(sweep, output_dir, path);
+        }
+        py::dict d;
+        d["path"] = r.path;
+        d["runs"] = r.runs;
+        d["runs_with_data"] = r.runs_with_data;
+        d["samples"] = r.samples;
+        return d;
+      },
+      py::arg("sweep"), py::arg("path"), py::arg("output_dir") = "");
 
   // ------------------------------------------------------------------------------------------ FMU export
   m.def(

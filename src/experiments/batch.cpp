@@ -126,9 +126,13 @@ bool inputsUnchanged(const SummaryInfo& s) {
 // What a run's results depend on besides its input files, as stored in <run>/run.settings: the base experiment
 // file and the run's overrides and faults. A finished run is reused only if its stamp matches and its inputs
 // are unchanged (docs/batch.md).
-std::string settingsStamp(const Sweep& sweep, const BatchRun& run) {
+}  // namespace
+
+std::string runSettings(const Sweep& sweep, const BatchRun& run) {
   return "experiment: " + sweep.experiment + "\nrun: " + run.describe() + "\n";
 }
+
+namespace {
 
 std::string csvQuote(const std::string& s) {
   std::string out = "\"";
@@ -149,9 +153,7 @@ void writeManifest(const std::string& path, const std::vector<BatchRecord>& reco
   io::writeFileAtomically(path, os.str());
 }
 
-std::string outputDir(const Sweep& s, const BatchOptions& o) {
-  return o.output_dir.empty() ? (fs::path("out") / s.name).string() : o.output_dir;
-}
+std::string outputDir(const Sweep& s, const BatchOptions& o) { return batchOutputDir(s, o.output_dir); }
 
 // The record of a run from its folder (status "pending" when there is no summary).
 BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
@@ -406,7 +408,7 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
   for (size_t k = 0; k < mine.size(); ++k) {
     const BatchRun& run = sweep.runs[mine[k]];
     BatchRecord r = recordFromFolder(run, dir);
-    const bool same = slurpFile(fs::path(dir) / run.name / "run.settings") == settingsStamp(sweep, run) &&
+    const bool same = slurpFile(fs::path(dir) / run.name / "run.settings") == runSettings(sweep, run) &&
                       inputsUnchanged(readSummary(fs::path(dir) / run.name / "summary.json"));
     if (r.status == "ok" && same) {
       r.skipped = true;
@@ -452,7 +454,7 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
         if (e.path().extension() == ".csv" || f == "summary.json" || f.find(".tmp.") != std::string::npos)
           fs::remove(e.path(), ec);
       }
-      io::writeFileAtomically((fs::path(folder) / "run.settings").string(), settingsStamp(sweep, run));
+      io::writeFileAtomically((fs::path(folder) / "run.settings").string(), runSettings(sweep, run));
       std::fflush(nullptr);
       const pid_t pid = ::fork();
       if (pid < 0) {
@@ -501,12 +503,22 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
   return res;
 }
 
+std::string batchOutputDir(const Sweep& sweep, const std::string& output_dir) {
+  return output_dir.empty() ? (fs::path("out") / sweep.name).string() : output_dir;
+}
+
+std::vector<BatchRecord> batchRecords(const Sweep& sweep, const std::string& output_dir) {
+  const std::string dir = batchOutputDir(sweep, output_dir);
+  std::vector<BatchRecord> out;
+  for (const auto& run : sweep.runs) out.push_back(recordFromFolder(run, dir));
+  return out;
+}
+
 BatchResult collectBatch(const Sweep& sweep, const BatchOptions& options) {
   const std::string dir = outputDir(sweep, options);
   BatchResult res;
   res.manifest_path = (fs::path(dir) / "manifest.csv").string();
-  for (const auto& run : sweep.runs) {
-    BatchRecord r = recordFromFolder(run, dir);
+  for (BatchRecord& r : batchRecords(sweep, dir)) {
     if (r.status == "ok")
       ++res.ok;
     else if (r.status != "pending")

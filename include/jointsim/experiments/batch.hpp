@@ -78,6 +78,14 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options);
 /// runs not finished yet), e.g. after the shards of a job array have finished.
 BatchResult collectBatch(const Sweep& sweep, const BatchOptions& options);
 
+/// The batch's output folder for `output_dir` (empty: out/<sweep name>/).
+std::string batchOutputDir(const Sweep& sweep, const std::string& output_dir);
+/// The record of every run of the sweep from its folder under `output_dir` (as collectBatch, writing nothing).
+std::vector<BatchRecord> batchRecords(const Sweep& sweep, const std::string& output_dir);
+/// What a run's results depend on besides its input files (stored in <run>/run.settings; resume compares it):
+/// "experiment: PATH\nrun: OVERRIDES; FAULTS\n".
+std::string runSettings(const Sweep& sweep, const BatchRun& run);
+
 /// What `jointsim validate FILE` found: an experiment or sweep file checked completely without running it.
 struct ValidationReport {
   std::string kind;  ///< "experiment" or "sweep"

@@ -1,0 +1,318 @@
+#include "jointsim/report/dataset.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <memory>
+#include <type_traits>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <hdf5.h>
+#include <unistd.h>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
+#include "jointsim/common/version.hpp"
+#include "jointsim/io/csv_reader.hpp"
+#include "jointsim/io/input_files.hpp"
+
+namespace jointsim::report {
+namespace {
+
+namespace fs = std::filesystem;
+
+// An HDF5 identifier closed by its own close function when it goes out of scope; a negative id is HDF5's error.
+class Handle {
+ public:
+  Handle(hid_t id, herr_t (*close)(hid_t), const std::string& what) : id_(id), close_(close) {
+    if (id_ < 0) throw Error("HDF5: cannot " + what);
+  }
+  ~Handle() {
+    if (id_ >= 0) close_(id_);
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  operator hid_t() const { return id_; }
+
+ private:
+  hid_t id_;
+  herr_t (*close_)(hid_t);
+};
+
+void check(herr_t status, const std::string& what) {
+  if (status < 0) throw Error("HDF5: cannot " + what);
+}
+
+// A variable-length UTF-8 string attribute (h5py reads it as str).
+void attribute(hid_t object, const char* name, const std::string& value) {
+  const Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy a string type");
+  check(H5Tset_size(type, H5T_VARIABLE), "size a string type");
+  check(H5Tset_cset(type, H5T_CSET_UTF8), "set UTF-8");
+  const Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create a scalar space");
+  const Handle attr(H5Acreate2(object, name, type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                    std::string("create attribute ") + name);
+  const char* text = value.c_str();
+  check(H5Awrite(attr, type, &text), std::string("write attribute ") + name);
+}
+
+template <typename T>
+void numberAttribute(hid_t object, const char* name, T value) {
+  const hid_t file_type = std::is_floating_point_v<T> ? H5T_IEEE_F64LE : H5T_STD_I64LE;
+  const hid_t mem_type = std::is_floating_point_v<T> ? H5T_NATIVE_DOUBLE : H5T_NATIVE_LLONG;
+  const Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create a scalar space");
+  const Handle attr(H5Acreate2(object, name, file_type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                    std::string("create attribute ") + name);
+  if constexpr (std::is_floating_point_v<T>) {
+    const double v = value;
+    check(H5Awrite(attr, mem_type, &v), std::string("write attribute ") + name);
+  } else {
+    const long long v = value;
+    check(H5Awrite(attr, mem_type, &v), std::string("write attribute ") + name);
+  }
+}
+
+// A 1-D float64 data set, chunked and compressed (shuffle + deflate) when long enough to gain from it.
+void doubles(hid_t group, const std::string& name, const double* data, hsize_t n, const std::string& unit) {
+  const Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose, "create a data space");
+  const Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create a property list");
+  if (n >= 64) {
+    const hsize_t chunk = std::min<hsize_t>(n, 16384);
+    check(H5Pset_chunk(dcpl, 1, &chunk), "set chunks");
+    check(H5Pset_shuffle(dcpl), "set shuffle");
+    check(H5Pset_deflate(dcpl, 4), "set deflate");
+  }
+  const Handle set(H5Dcreate2(group, name.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT), H5Dclose,
+                   "create data set " + name);
+  if (n > 0) check(H5Dwrite(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), "write data set " + name);
+  attribute(set, "unit", unit);
+}
+
+// "gear_torque_elbow_joint[N·m]" → ("gear_torque_elbow_joint", "N·m"); a name without brackets has unit "".
+std::pair<std::string, std::string> splitUnit(const std::string& column) {
+  const size_t open = column.rfind('[');
+  if (open == std::string::npos || column.empty() || column.back() != ']') return {column, ""};
+  return {column.substr(0, open), column.substr(open + 1, column.size() - open - 2)};
+}
+
+// HDF5 link names may not contain '/' and '.' alone is the group itself.
+std::string linkName(const std::string& s) {
+  std::string out = s;
+  for (char& c : out)
+    if (c == '/') c = '_';
+  return out == "." || out.empty() ? "_" + out : out;
+}
+
+double firstNumber(const std::string& joined) {
+  if (joined.empty()) return std::nan("");
+  return std::stod(joined.substr(0, joined.find(';')));
+}
+
+int countFaults(const std::string& joined_types) {
+  if (joined_types.empty()) return 0;
+  int n = 1;
+  for (char c : joined_types) n += c == ';';
+  return n;
+}
+
+// Fixed-length string fields of the label table: each as long as its longest value (at least 1 byte).
+struct LabelTable {
+  std::vector<std::string> run, status, type, joint, design;
+  std::vector<double> severity, onset;
+  std::vector<int> count;
+  std::vector<long long> seed;
+};
+
+size_t longest(const std::vector<std::string>& v) {
+  size_t n = 1;
+  for (const auto& s : v) n = std::max(n, s.size());
+  return n;
+}
+
+void writeLabels(hid_t file, const LabelTable& t) {
+  const std::vector<std::pair<const char*, const std::vector<std::string>*>> strings = {
+      {"run", &t.run}, {"status", &t.status}, {"fault_type", &t.type}, {"fault_joint", &t.joint}};
+  // Row layout in memory: the string fields, then the numbers (packed; HDF5 converts to the file type).
+  std::vector<size_t> width;
+  size_t offset = 0;
+  std::vector<size_t> offsets;
+  for (const auto& [name, v] : strings) {
+    width.push_back(longest(*v));
+    offsets.push_back(offset);
+    offset += width.back();
+  }
+  const size_t o_sev = offset, o_onset = o_sev + sizeof(double), o_count = o_onset + sizeof(double),
+               o_design = o_count + sizeof(int), w_design = longest(t.design), o_seed = o_design + w_design,
+               row = o_seed + sizeof(long long);
+  const Handle type(H5Tcreate(H5T_COMPOUND, row), H5Tclose, "create the label type");
+  std::vector<hid_t> string_types;
+  auto stringType = [&](size_t n) {
+    const hid_t s = H5Tcopy(H5T_C_S1);
+    check(s < 0 ? -1 : H5Tset_size(s, n), "size a string field");
+    check(H5Tset_strpad(s, H5T_STR_NULLPAD), "pad a string field");
+    check(H5Tset_cset(s, H5T_CSET_UTF8), "set UTF-8");
+    string_types.push_back(s);
+    return s;
+  };
+  try {
+    for (size_t i = 0; i < strings.size(); ++i)
+      check(H5Tinsert(type, strings[i].first, offsets[i], stringType(width[i])), "insert a label field");
+    check(H5Tinsert(type, "fault_severity", o_sev, H5T_NATIVE_DOUBLE), "insert fault_severity");
+    check(H5Tinsert(type, "fault_onset_s", o_onset, H5T_NATIVE_DOUBLE), "insert fault_onset_s");
+    check(H5Tinsert(type, "fault_count", o_count, H5T_NATIVE_INT), "insert fault_count");
+    check(H5Tinsert(type, "design", o_design, stringType(w_design)), "insert design");
+    check(H5Tinsert(type, "seed", o_seed, H5T_NATIVE_LLONG), "insert seed");
+    const size_t n = t.run.size();
+    std::vector<char> buffer(n * row, '\0');
+    for (size_t r = 0; r < n; ++r) {
+      char* p = buffer.data() + r * row;
+      for (size_t i = 0; i < strings.size(); ++i) {
+        const std::string& s = (*strings[i].second)[r];
+        std::memcpy(p + offsets[i], s.data(), s.size());
+      }
+      std::memcpy(p + o_sev, &t.severity[r], sizeof(double));
+      std::memcpy(p + o_onset, &t.onset[r], sizeof(double));
+      std::memcpy(p + o_count, &t.count[r], sizeof(int));
+      std::memcpy(p + o_design, t.design[r].data(), t.design[r].size());
+      std::memcpy(p + o_seed, &t.seed[r], sizeof(long long));
+    }
+    const hsize_t dims = n;
+    const Handle space(H5Screate_simple(1, &dims, nullptr), H5Sclose, "create the label space");
+    const Handle set(H5Dcreate2(file, "labels", type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+                     "create /labels");
+    if (n > 0) check(H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()), "write /labels");
+  } catch (...) {
+    for (hid_t s : string_types) H5Tclose(s);
+    throw;
+  }
+  for (hid_t s : string_types) H5Tclose(s);
+}
+
+// Removes the temporary file unless committed.
+struct TemporaryFile {
+  std::string path;
+  bool keep = false;
+  ~TemporaryFile() {
+    if (!keep) std::remove(path.c_str());
+  }
+};
+
+}  // namespace
+
+void checkDatasetPath(const std::string& path) {
+  if (path.empty()) throw InputError("--dataset: expected a file name (FILE.h5)");
+  const fs::path folder = fs::path(path).parent_path();
+  std::error_code ec;
+  if (!folder.empty() && !fs::is_directory(folder, ec))
+    throw InputError("--dataset " + path + ": folder '" + folder.string() + "' does not exist");
+  if (fs::is_directory(path, ec)) throw InputError("--dataset " + path + ": is a folder, expected a file name");
+}
+
+DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& output_dir, const std::string& path) {
+  checkDatasetPath(path);
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become exceptions, not HDF5's stack dumps on stderr
+  const std::string dir = experiments::batchOutputDir(sweep, output_dir);
+  const std::vector<experiments::BatchRecord> records = experiments::batchRecords(sweep, dir);
+
+  DatasetSummary summary;
+  summary.path = path;
+  TemporaryFile tmp{path + ".tmp." + std::to_string(static_cast<long>(::getpid()))};
+  {
+    // The HDF5 1.10 file format: compact object headers and single-chunk indexes (several thousand small data sets per file).
+    const Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create a file access list");
+    check(H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_V110), "set the file format version");
+    const Handle file(H5Fcreate(tmp.path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl), H5Fclose,
+                      "create " + tmp.path);
+    attribute(file, "format", "jointsim-dataset");
+    numberAttribute(file, "format_version", 1L);
+    attribute(file, "sweep", sweep.name);
+    attribute(file, "sweep_file", sweep.file);
+    attribute(file, "experiment", sweep.experiment);
+    attribute(file, "jointsim_version", version());
+    attribute(file, "created_utc", utcNow());
+    numberAttribute(file, "runs", static_cast<long>(records.size()));
+
+    LabelTable labels;
+    const Handle runs(H5Gcreate2(file, "runs", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create /runs");
+    for (size_t i = 0; i < records.size(); ++i) {
+      const experiments::BatchRecord& r = records[i];
+      const experiments::BatchRun& run = sweep.runs[i];
+      labels.run.push_back(r.run);
+      labels.status.push_back(r.status);
+      labels.type.push_back(r.fault_type);
+      labels.joint.push_back(r.fault_joint);
+      labels.severity.push_back(firstNumber(r.fault_severity));
+      labels.onset.push_back(firstNumber(r.fault_onset_s));
+      labels.count.push_back(countFaults(r.fault_type));
+      labels.design.push_back(r.design);
+      labels.seed.push_back(run.seed);
+
+      const Handle group(H5Gcreate2(runs, linkName(r.run).c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose,
+                         "create group /runs/" + r.run);
+      attribute(group, "status", r.status);
+      attribute(group, "settings", experiments::runSettings(sweep, run));
+      attribute(group, "overrides", r.overrides);
+      std::string faults;
+      for (const auto& f : run.faults) faults += (faults.empty() ? "" : "; ") + systems::describe(f);
+      attribute(group, "faults", faults);
+      attribute(group, "inputs", r.inputs);
+      attribute(group, "jointsim_version", r.jointsim_version);
+      attribute(group, "git_commit", r.git_commit);
+      attribute(group, "started_utc", r.started_utc);
+      numberAttribute(group, "sim_time_s", r.sim_time_s);
+      numberAttribute(group, "wall_time_s", r.wall_time_s);
+      attribute(group, "fault_type", r.fault_type);
+      attribute(group, "fault_joint", r.fault_joint);
+      attribute(group, "fault_severity", r.fault_severity);
+      attribute(group, "fault_onset_s", r.fault_onset_s);
+      attribute(group, "design", r.design);
+      numberAttribute(group, "seed", run.seed);
+      const fs::path folder = fs::path(dir) / run.name;
+      const fs::path summary_file = folder / "summary.json";
+      attribute(group, "summary_json", io::pathExists(summary_file.string())
+                                           ? io::readBoundedFile(summary_file.string())
+                                           : std::string());
+      // The run's log: the CSV files of its folder (one per experiment; several are stored in subgroups).
+      std::vector<fs::path> logs;
+      std::error_code ec;
+      for (const auto& e : fs::directory_iterator(folder, ec))
+        if (e.path().extension() == ".csv") logs.push_back(e.path());
+      std::sort(logs.begin(), logs.end());
+      std::string columns;
+      for (const fs::path& log : logs) {
+        const io::CsvTable table = io::readCsv(log.string(), false);
+        std::unique_ptr<Handle> sub;
+        hid_t target = group;
+        if (logs.size() > 1) {
+          sub = std::make_unique<Handle>(
+              H5Gcreate2(group, linkName(log.stem().string()).c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+              H5Gclose, "create a group for " + log.string());
+          target = *sub;
+        }
+        const Eigen::Index n = table.rows();
+        std::vector<double> column(static_cast<size_t>(n));
+        for (size_t c = 0; c < table.header.size(); ++c) {
+          auto [name, unit] = splitUnit(table.header[c]);
+          for (Eigen::Index k = 0; k < n; ++k) column[static_cast<size_t>(k)] = table.data(k, static_cast<Eigen::Index>(c));
+          doubles(target, linkName(name), column.data(), static_cast<hsize_t>(n), unit);
+          columns += (columns.empty() ? "" : ",") + name;
+        }
+        summary.samples += static_cast<long>(n);
+      }
+      attribute(group, "columns", columns);
+      if (!logs.empty()) ++summary.runs_with_data;
+      ++summary.runs;
+    }
+    writeLabels(file, labels);
+    check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush " + tmp.path);
+  }  // closed here: the file is complete on disk
+  if (std::rename(tmp.path.c_str(), path.c_str()) != 0)
+    throw Error(path + ": cannot move the data set into place: " + std::strerror(errno));
+  tmp.keep = true;
+  return summary;
+}
+
+}  // namespace jointsim::report
