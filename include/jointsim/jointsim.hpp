@@ -57,5 +57,6 @@
 #include "jointsim/identify/clamping_fit.hpp"
 #include "jointsim/identify/friction_fit.hpp"
 #include "jointsim/report/compare.hpp"
+#include "jointsim/report/dataset.hpp"
 #include "jointsim/report/plot.hpp"
 #include "jointsim/fmi/fmu.hpp"

@@ -1,6 +1,7 @@
 #include "jointsim/experiments/batch.hpp"
 
 #include <cerrno>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -50,6 +51,13 @@ std::string number(double v) {
   return buf;
 }
 
+// The shortest text that reads back as exactly `v` (manifest labels: 0.8, not 0.80000000000000004).
+std::string exact(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
 // `set: {key.path: value, ...}` as "key.path=value" strings, in file order.
 std::vector<std::string> readSet(const YamlValue& node) {
   std::vector<std::string> out;
@@ -59,18 +67,53 @@ std::vector<std::string> readSet(const YamlValue& node) {
   return out;
 }
 
-systems::Fault readFault(const YamlValue& n) {
-  n.expectMap("a fault {type, joint, value}");
-  n.allowKeys({"type", "joint", "value"});
-  systems::Fault f;
-  const YamlValue t = n.required("type", "a fault type");
+// The time law of a fault (onset, progression, episodes, ripple order) from the keys of `n`; checked with its
+// severity (systems::checkFault), an error located at the node.
+#define JOINTSIM_TIME_LAW_KEYS "onset", "progression", "ramp_time", "rate", "steps", "period", "count", "width", "order"
+
+void readTimeLaw(const YamlValue& n, systems::Fault& f) {
+  f.onset = n["onset"].asDouble(0.0, "an onset time in s");
+  const std::string p = n["progression"].asString("step", "step, linear or exponential");
+  if (p == "linear")
+    f.progression = systems::Progression::Linear;
+  else if (p == "exponential")
+    f.progression = systems::Progression::Exponential;
+  else if (p != "step")
+    n["progression"].failExpected("step, linear or exponential");
+  f.ramp_time = n["ramp_time"].asDouble(0.0, "a ramp time in s");
+  f.rate = n["rate"].asDouble(0.0, "a rate in 1/s");
+  if (n["steps"].defined()) f.steps = static_cast<int>(std::clamp(n["steps"].asInt("a number of steps"), -1L, 1000000L));
+  f.period = n["period"].asDouble(0.0, "a period in s");
+  if (n["count"].defined()) f.count = static_cast<int>(std::clamp(n["count"].asInt("a number of episodes"), -1L, 1000000000L));
+  f.width = n["width"].asDouble(f.width, "a spike width in s");
+  f.order = n["order"].asDouble(1.0, "an order (cycles per revolution)");
+}
+
+void checkAt(const YamlValue& n, const systems::Fault& f) {
   try {
-    f.type = systems::faultTypeFromString(t.asString("a fault type"));
+    systems::checkFault(f);
+  } catch (const InputError& e) {
+    n.fail(e.what());
+  }
+}
+
+systems::FaultType readFaultType(const YamlValue& t) {
+  try {
+    return systems::faultTypeFromString(t.asString("a fault type"));
   } catch (const InputError& e) {
     t.fail(e.what());
   }
+}
+
+systems::Fault readFault(const YamlValue& n) {
+  n.expectMap("a fault {type, joint, value}");
+  n.allowKeys({"type", "joint", "value", JOINTSIM_TIME_LAW_KEYS});
+  systems::Fault f;
+  f.type = readFaultType(n.required("type", "a fault type"));
   f.joint = n.required("joint", "the joint whose drive is affected").asString("a joint name");
-  f.value = n.required("value", "the fault's factor or amount").asDouble("a number");
+  f.value = n.required("value", "the fault's severity").asDouble("a number");
+  readTimeLaw(n, f);
+  checkAt(n, f);
   return f;
 }
 
@@ -165,8 +208,8 @@ BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
     const std::string sep = r.fault_type.empty() ? "" : ";";
     r.fault_type += sep + systems::toString(f.type);
     r.fault_joint += sep + f.joint;
-    r.fault_severity += sep + formatNumber(f.value, 17);
-    r.fault_onset_s += sep + "0";  // constant faults act from the start
+    r.fault_severity += sep + exact(f.value);
+    r.fault_onset_s += sep + exact(f.onset);
   }
   r.design = run.design;
   if (run.seed >= 0) r.seed = std::to_string(run.seed);
@@ -356,24 +399,30 @@ Sweep loadSweep(const std::string& path) {
     for (size_t i = 0; i < faults.size(); ++i) {
       const YamlValue n = faults.at(i);
       n.expectMap("a fault scenario {type, joints, values}");
-      n.allowKeys({"type", "joints", "values"});
-      const YamlValue t = n.required("type", "a fault type");
-      systems::FaultType type{};
-      try {
-        type = systems::faultTypeFromString(t.asString("a fault type"));
-      } catch (const InputError& e) {
-        t.fail(e.what());
-      }
+      n.allowKeys({"type", "joints", "values", JOINTSIM_TIME_LAW_KEYS});
+      systems::Fault proto;
+      proto.type = readFaultType(n.required("type", "a fault type"));
+      readTimeLaw(n, proto);
       const YamlValue joints = n.required("joints", "a list of joint names");
       joints.expectSequence("a list of joint names");
-      const auto values = n.required("values", "a list of factors or amounts").asDoubles(0, "a list of numbers");
+      const auto values = n.required("values", "a list of severities").asDoubles(0, "a list of numbers");
       if (values.empty()) n["values"].failExpected("at least one value");
+      // Run names: <type>-<joint>-<value>, with the onset and progression when given (so that scenarios differing
+      // only in their time law get distinct names).
+      std::string law;
+      if (proto.onset > 0.0) law += "-at" + number(proto.onset);
+      if (proto.progression != systems::Progression::Step)
+        law += proto.progression == systems::Progression::Linear ? "-linear" : "-exponential";
       for (size_t j = 0; j < joints.size(); ++j) {
         const std::string joint = joints.at(j).asString("a joint name");
         for (double v : values) {
+          systems::Fault f = proto;
+          f.joint = joint;
+          f.value = v;
+          checkAt(n, f);  // a severity out of range fails the sweep, not only its run
           BatchRun r;
-          r.name = sanitize(std::string(systems::toString(type)) + "-" + joint + "-" + number(v));
-          r.faults.push_back({type, joint, v});
+          r.name = sanitize(std::string(systems::toString(f.type)) + "-" + joint + "-" + number(v) + law);
+          r.faults.push_back(f);
           add(std::move(r), n);
         }
       }

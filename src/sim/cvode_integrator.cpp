@@ -732,9 +732,13 @@ double CvodeIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out)
   if (!std::isfinite(t_out)) throw InputError(m.prefix() + ": output time must be finite");
 
   Eigen::Map<const Eigen::VectorXd> ym(N_VGetArrayPointer(m.y), m.n);
-  if (m.fresh && t_out == m.t0) {  // CVODE would reject tout == t0 (CV_TOO_CLOSE)
+  // CVODE rejects a first output time within rounding of t0 (CV_TOO_CLOSE: |tout − t0| <= 2 u max(|t0|, |tout|)), as
+  // when a time event and an output time computed differently meet (0.2 + 0.5·69/100 against 545/1000): the state
+  // at t0 is the state at t_out to rounding.
+  if (m.fresh && std::abs(t_out - m.t0) <= 8.0 * std::numeric_limits<double>::epsilon() *
+                                                std::max({std::abs(m.t0), std::abs(t_out), 1e-300})) {
     y_out = ym;
-    return m.t0;
+    return t_out;
   }
 
   m.resetCapture();

@@ -1,5 +1,6 @@
 #include "jointsim/systems/faults.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <sstream>
@@ -13,28 +14,37 @@
 namespace jointsim::systems {
 namespace {
 
-const char* const kNames[] = {"gear_stiffness_scale", "backlash_add",          "coulomb_friction_scale",
-                              "sigma0_scale",         "torque_constant_scale", "sensor_bias"};
+const char* const kNames[] = {"gear_stiffness_scale",  "backlash_add",   "coulomb_friction_scale", "sigma0_scale",
+                              "torque_constant_scale", "sensor_bias",    "sensor_dropout",         "sensor_stuck",
+                              "sensor_spike",          "bearing_ripple"};
+constexpr int kTypes = sizeof(kNames) / sizeof(kNames[0]);
+
+bool factorType(FaultType t) {
+  return t == FaultType::GearStiffnessScale || t == FaultType::CoulombFrictionScale || t == FaultType::Sigma0Scale ||
+         t == FaultType::TorqueConstantScale;
+}
+
+[[noreturn]] void bad(const Fault& f, const std::string& what) { throw InputError("fault " + describe(f) + ": " + what); }
 
 [[noreturn]] void notApplicable(const Fault& f, const std::string& component) {
   throw InputError("fault " + describe(f) + ": does not apply to " + component);
 }
 
-void transmissionFault(DriveSpec& d, const Fault& f) {
+void transmissionFault(DriveSpec& d, const Fault& f, double value) {
   const drive::Transmission* t = d.transmission.get();
   const std::string type = t ? t->type() : "no transmission";
   if (f.type == FaultType::GearStiffnessScale) {
     if (auto* e = dynamic_cast<const drive::ElasticGear*>(t)) {
       auto p = e->params();
-      p.stiffness *= f.value;
+      p.stiffness *= value;
       d.transmission = std::make_shared<drive::ElasticGear>(p);
     } else if (auto* b = dynamic_cast<const drive::ElastoBacklash*>(t)) {
       auto p = b->params();
-      p.stiffness *= f.value;
+      p.stiffness *= value;
       d.transmission = std::make_shared<drive::ElastoBacklash>(p);
     } else if (auto* s = dynamic_cast<const drive::StrainWaveGear*>(t)) {
       auto p = s->params();
-      for (double* k : {&p.K_WG, &p.K_b, &p.K_FS, &p.K_m, &p.K_CS}) *k *= f.value;
+      for (double* k : {&p.K_WG, &p.K_b, &p.K_FS, &p.K_m, &p.K_CS}) *k *= value;
       d.transmission = std::make_shared<drive::StrainWaveGear>(p);
     } else {
       notApplicable(f, "a " + type + " transmission (no stiffness)");
@@ -49,21 +59,21 @@ void transmissionFault(DriveSpec& d, const Fault& f) {
     p.stiffness = q.stiffness;
     p.damping = q.damping;
     p.side = q.side;
-    p.backlash = f.value;
+    p.backlash = value;
     d.transmission = std::make_shared<drive::ElastoBacklash>(p);
   } else if (auto* b = dynamic_cast<const drive::ElastoBacklash*>(t)) {
     auto p = b->params();
-    p.backlash += f.value;
+    p.backlash += value;
     d.transmission = std::make_shared<drive::ElastoBacklash>(p);
   } else {
     notApplicable(f, "a " + type + " transmission (backlash needs an elastic or elasto_backlash gear)");
   }
 }
 
-void frictionFault(DriveSpec& d, const Fault& f) {
+void frictionFault(DriveSpec& d, const Fault& f, double value) {
   const drive::Friction* fr = d.friction.get();
   if (!fr) notApplicable(f, "a drive without friction");
-  const double s = f.value;
+  const double s = value;
   if (f.type == FaultType::CoulombFrictionScale) {
     if (auto* m = dynamic_cast<const drive::CoulombViscousFriction*>(fr)) {
       auto p = m->params();
@@ -116,12 +126,20 @@ void frictionFault(DriveSpec& d, const Fault& f) {
 
 }  // namespace
 
+bool Fault::parameterFault() const { return static_cast<int>(type) <= static_cast<int>(FaultType::SensorBias); }
+
+bool Fault::intermittent() const {
+  return type == FaultType::SensorDropout || type == FaultType::SensorStuck || type == FaultType::SensorSpike;
+}
+
+bool Fault::timeVarying() const { return onset > 0.0 || progression != Progression::Step || !parameterFault(); }
+
 const char* toString(FaultType type) { return kNames[static_cast<int>(type)]; }
 
 std::vector<std::string> faultTypeNames() { return {std::begin(kNames), std::end(kNames)}; }
 
 FaultType faultTypeFromString(const std::string& name) {
-  for (int i = 0; i < 6; ++i)
+  for (int i = 0; i < kTypes; ++i)
     if (name == kNames[i]) return static_cast<FaultType>(i);
   std::string list;
   for (const char* n : kNames) list += (list.empty() ? "" : ", ") + std::string(n);
@@ -132,30 +150,143 @@ std::string describe(const Fault& f) {
   std::ostringstream os;
   os.precision(12);
   os << toString(f.type) << "@" << f.joint << "=" << f.value;
+  if (f.onset > 0.0) os << " from " << f.onset << " s";
+  if (f.progression != Progression::Step)
+    os << (f.progression == Progression::Linear ? " linear" : " exponential") << " over " << f.ramp_time << " s"
+       << (f.progression == Progression::Exponential ? " at rate " : "")
+       << (f.progression == Progression::Exponential ? std::to_string(f.rate) + " 1/s" : "") << " (" << f.steps
+       << " steps)";
+  if (f.intermittent()) {
+    if (f.type == FaultType::SensorSpike) os << " width " << f.width << " s";
+    if (f.period > 0.0) os << " every " << f.period << " s" << (f.count > 0 ? " x" + std::to_string(f.count) : "");
+  }
+  if (f.type == FaultType::BearingRipple) os << " order " << f.order;
   return os.str();
 }
 
-void applyFault(DriveSpec& d, const Fault& f) {
-  if (!std::isfinite(f.value)) throw InputError("fault " + describe(f) + ": value must be finite");
-  const bool factor = f.type != FaultType::BacklashAdd && f.type != FaultType::SensorBias;
-  if (factor && !(f.value > 0.0)) throw InputError("fault " + describe(f) + ": the factor must be > 0");
-  if (f.type == FaultType::BacklashAdd && !(f.value >= 0.0))
-    throw InputError("fault " + describe(f) + ": the added backlash must be >= 0 rad");
+void checkFault(const Fault& f) {
+  const double v = f.value;
+  if (!std::isfinite(v)) bad(f, "the severity must be finite");
+  if (factorType(f.type) && !(v > 0.0 && v <= 100.0)) bad(f, "the factor must be > 0 and <= 100");
   switch (f.type) {
-    case FaultType::GearStiffnessScale:
-    case FaultType::BacklashAdd: transmissionFault(d, f); break;
-    case FaultType::CoulombFrictionScale:
-    case FaultType::Sigma0Scale: frictionFault(d, f); break;
-    case FaultType::TorqueConstantScale:
-      if (!d.electrics) notApplicable(f, "a torque-controlled motor without electrics (k_t and k_e are not used)");
-      d.motor.kt *= f.value;
-      d.motor.ke *= f.value;
+    case FaultType::BacklashAdd:
+      if (!(v >= 0.0 && v <= 0.5)) bad(f, "the added backlash must be >= 0 and <= 0.5 rad");
       break;
     case FaultType::SensorBias:
+    case FaultType::SensorSpike:
+      if (!(std::abs(v) <= M_PI)) bad(f, "the offset must be within ±π rad");
+      break;
+    case FaultType::SensorDropout:
+    case FaultType::SensorStuck:
+      if (!(v > 0.0)) bad(f, "the episode length must be > 0 s");
+      break;
+    case FaultType::BearingRipple:
+      if (!(v >= 0.0)) bad(f, "the ripple amplitude must be >= 0 N·m");
+      if (!(f.order > 0.0) || !std::isfinite(f.order)) bad(f, "order: expected a number > 0 (cycles per revolution)");
+      break;
+    default: break;
+  }
+  if (!(f.onset >= 0.0) || !std::isfinite(f.onset)) bad(f, "onset: expected a time >= 0 s");
+  if (f.progression != Progression::Step) {
+    if (f.intermittent()) bad(f, "an intermittent sensor fault has no progression (it acts in episodes)");
+    if (!(f.ramp_time > 0.0) || !std::isfinite(f.ramp_time)) bad(f, "ramp_time: expected a duration > 0 s");
+    if (f.steps < 1 || f.steps > 100000) bad(f, "steps: expected 1 to 100000 parameter updates");
+  }
+  if (f.progression == Progression::Exponential && !(f.rate > 0.0 && f.rate * f.ramp_time <= 700.0))
+    bad(f, "rate: expected λ > 0 1/s with λ·ramp_time <= 700");
+  if (f.intermittent()) {
+    if (!(f.period >= 0.0) || !std::isfinite(f.period)) bad(f, "period: expected a time >= 0 s (0: one episode)");
+    if (f.count < 0) bad(f, "count: expected a number of episodes >= 0 (0: unlimited)");
+    if (f.type == FaultType::SensorSpike && !(f.width > 0.0 && std::isfinite(f.width)))
+      bad(f, "width: expected a spike length > 0 s");
+    const double length = f.type == FaultType::SensorSpike ? f.width : v;
+    if (f.period > 0.0 && length > f.period) bad(f, "an episode must not be longer than the period");
+  }
+}
+
+double faultProgress(const Fault& f, double t) {
+  const double tau = t - f.onset;
+  if (tau < 0.0) return 0.0;
+  if (f.progression == Progression::Step || tau >= f.ramp_time) return 1.0;
+  if (f.progression == Progression::Linear) return tau / f.ramp_time;
+  return std::expm1(f.rate * tau) / std::expm1(f.rate * f.ramp_time);
+}
+
+double faultValue(const Fault& f, double t) {
+  const double nominal = factorType(f.type) ? 1.0 : 0.0;
+  return nominal + (f.value - nominal) * faultProgress(f, t);
+}
+
+double scheduledFaultValue(const Fault& f, double t) {
+  if (f.intermittent()) return f.value;
+  if (f.progression == Progression::Step || t < f.onset || t >= f.onset + f.ramp_time) return faultValue(f, t);
+  // Step k holds [t_k, t_k+1) with t_k = onset + T·k/steps computed exactly as faultEvents() does, so that the value
+  // changes at the event itself and not one rounding error later.
+  auto at = [&](int k) { return f.onset + f.ramp_time * k / f.steps; };
+  int k = static_cast<int>(std::clamp(std::floor((t - f.onset) * f.steps / f.ramp_time), 0.0, f.steps - 1.0));
+  while (k + 1 < f.steps && at(k + 1) <= t) ++k;
+  while (k > 0 && at(k) > t) --k;
+  return faultValue(f, f.onset + f.ramp_time * (k + 0.5) / f.steps);
+}
+
+std::vector<double> faultEvents(const Fault& f, double t_end) {
+  std::vector<double> out;
+  auto add = [&](double t) {
+    if (t > 0.0 && t < t_end) out.push_back(t);
+  };
+  if (f.intermittent()) {
+    const double length = f.type == FaultType::SensorSpike ? f.width : f.value;
+    for (long k = 0;; ++k) {
+      if (f.count > 0 && k >= f.count) break;
+      const double start = f.onset + static_cast<double>(k) * f.period;
+      if (start >= t_end || (f.period <= 0.0 && k > 0)) break;
+      add(start);
+      add(start + length);
+    }
+    return out;
+  }
+  add(f.onset);
+  if (f.progression != Progression::Step)
+    for (int k = 1; k <= f.steps; ++k) add(f.onset + f.ramp_time * k / f.steps);
+  return out;
+}
+
+bool faultEpisode(const Fault& f, double t, long* episode) {
+  if (!f.intermittent() || t < f.onset) return false;
+  const double length = f.type == FaultType::SensorSpike ? f.width : f.value;
+  long k = 0;
+  if (f.period > 0.0) {
+    k = static_cast<long>(std::floor((t - f.onset) / f.period));
+    if (f.count > 0 && k >= f.count) return false;
+  }
+  const double start = f.onset + static_cast<double>(k) * f.period;
+  if (t - start >= length) return false;
+  if (episode) *episode = k;
+  return true;
+}
+
+void applyFault(DriveSpec& d, const Fault& f, double value) {
+  checkFault(f);
+  if (std::isnan(value)) value = f.value;
+  switch (f.type) {
+    case FaultType::GearStiffnessScale:
+    case FaultType::BacklashAdd: transmissionFault(d, f, value); break;
+    case FaultType::CoulombFrictionScale:
+    case FaultType::Sigma0Scale: frictionFault(d, f, value); break;
+    case FaultType::TorqueConstantScale:
+      if (!d.electrics) notApplicable(f, "a torque-controlled motor without electrics (k_t and k_e are not used)");
+      d.motor.kt *= value;
+      d.motor.ke *= value;
+      break;
+    case FaultType::SensorBias:
+    case FaultType::SensorDropout:
+    case FaultType::SensorStuck:
+    case FaultType::SensorSpike:
       if (d.controller.type != control::ControllerType::Cascade002)
         notApplicable(f, "a drive whose controller does not read the joint angle (only cascade_002 does)");
-      d.sensors.joint_bias += f.value;
+      if (f.type == FaultType::SensorBias) d.sensors.joint_bias += value;
       break;
+    case FaultType::BearingRipple: break;  // acts in the right-hand side (RobotSystem::setFaults)
   }
 }
 
@@ -164,7 +295,12 @@ void applyFaults(std::vector<DriveSpec>& drives, const std::vector<Fault>& fault
     bool found = false;
     for (auto& d : drives)
       if (d.joint == f.joint) {
-        applyFault(d, f);
+        if (f.timeVarying()) {
+          DriveSpec probe = d;  // checked now against the drive; applied during the run
+          applyFault(probe, f);
+        } else {
+          applyFault(d, f);
+        }
         found = true;
       }
     if (!found) throw InputError("fault " + describe(f) + ": no drive moves joint '" + f.joint + "'");

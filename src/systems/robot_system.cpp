@@ -344,7 +344,7 @@ void RobotSystem::bumpless(int k, CommandPort from, double t, Eigen::Ref<Eigen::
   const CommandPort to = port_[kk];
   if (L.controller < 0 || !controllerDriven(to)) return;  // no integrators, or the controller is not in use
   setpointStage(t);
-  measurementStage(y);
+  measurementStage(t, y);
   double* x = sampled() ? ctrl_x_.data() + L.controller : y.data() + L.controller;
   const bool cascade = d.controller.type == control::ControllerType::Cascade002;
   // The actuator value applied just before the switch: the output of the controller under its old entry (held
@@ -423,13 +423,84 @@ Eigen::VectorXd RobotSystem::initialState() const {
   return initialState(q0);
 }
 
-std::vector<double> RobotSystem::timeEvents(double) const {
+std::vector<double> RobotSystem::timeEvents(double t_end) const {
   // Under sampled control the right-hand side does not read the reference (the held outputs do), and every
   // sample restarts the integrator anyway.
-  return sampled() ? std::vector<double>{} : setpoint_breaks_;
+  std::vector<double> events = sampled() ? std::vector<double>{} : setpoint_breaks_;
+  for (const Fault& f : faults_) {
+    const std::vector<double> e = faultEvents(f, t_end);
+    events.insert(events.end(), e.begin(), e.end());
+  }
+  return events;
+}
+
+void RobotSystem::setFaults(std::vector<Fault> faults) {
+  if (nominal_drives_.empty()) nominal_drives_ = drives_;
+  std::vector<int> drive;
+  for (const Fault& f : faults) {
+    const int k = model_.jointIndex(f.joint);  // InputError for an unknown joint
+    DriveSpec probe = nominal_drives_[static_cast<size_t>(k)];
+    applyFault(probe, f);  // applies to this drive? (InputError naming the fault and the component)
+    drive.push_back(k);
+  }
+  faults_ = std::move(faults);
+  fault_drive_ = std::move(drive);
+  fault_applied_.assign(faults_.size(), 0.0);
+  stuck_episode_.assign(faults_.size(), -1);
+  stuck_value_.assign(faults_.size(), 0.0);
+  updateFaults(0.0, Eigen::VectorXd::Zero(n_states_), true);
+}
+
+void RobotSystem::updateFaults(double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool restart) {
+  if (faults_.empty()) return;
+  std::vector<char> dirty(drives_.size(), restart ? 1 : 0);
+  for (size_t i = 0; i < faults_.size(); ++i) {
+    const Fault& f = faults_[i];
+    const int k = fault_drive_[i];
+    if (f.intermittent()) {
+      long episode = -1;
+      if (restart) stuck_episode_[i] = -1;
+      if (f.type == FaultType::SensorStuck && faultEpisode(f, t, &episode) && episode != stuck_episode_[i]) {
+        stuck_episode_[i] = episode;  // the reading at the episode's start, held through it
+        stuck_value_[i] = y[k] + drives_[static_cast<size_t>(k)].sensors.joint_bias;
+      }
+      continue;
+    }
+    const double v = t >= f.onset ? scheduledFaultValue(f, t) : std::numeric_limits<double>::quiet_NaN();
+    const double before = fault_applied_[i];
+    fault_applied_[i] = f.type == FaultType::BearingRipple ? (std::isnan(v) ? 0.0 : v) : v;
+    if (f.parameterFault() && !(v == before || (std::isnan(v) && std::isnan(before)))) dirty[static_cast<size_t>(k)] = 1;
+  }
+  for (size_t k = 0; k < drives_.size(); ++k) {
+    if (!dirty[k]) continue;
+    DriveSpec d = nominal_drives_[k];
+    for (size_t i = 0; i < faults_.size(); ++i)
+      if (static_cast<size_t>(fault_drive_[i]) == k && faults_[i].parameterFault() && !std::isnan(fault_applied_[i]))
+        applyFault(d, faults_[i], fault_applied_[i]);
+    drives_[k] = std::move(d);
+    motors_[k] = drive::DcMotor(drives_[k].motor);
+  }
+}
+
+double RobotSystem::faultySensor(int k, double t, double q_meas) const {
+  for (size_t i = 0; i < faults_.size(); ++i) {
+    if (fault_drive_[i] != k || !faults_[i].intermittent() || !faultEpisode(faults_[i], t)) continue;
+    switch (faults_[i].type) {
+      case FaultType::SensorDropout: q_meas = 0.0; break;
+      case FaultType::SensorStuck: q_meas = stuck_value_[i]; break;
+      case FaultType::SensorSpike: q_meas += faults_[i].value; break;
+      default: break;
+    }
+  }
+  return q_meas;
+}
+
+void RobotSystem::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>&) {
+  updateFaults(t, y, false);
 }
 
 void RobotSystem::start(double t0, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  updateFaults(t0, y, true);
   applied_port_ = port_;  // the state starts consistent with the ports as they are
   applied_cmd_ = cmd_;
   if (sampled()) {
@@ -564,15 +635,15 @@ Eigen::VectorXd RobotSystem::initialState(const Eigen::VectorXd& q0, double t0) 
   return y.head(n_states_);
 }
 
-RobotSystem::MotionMeasurement RobotSystem::measureMotion(int k, const Eigen::Ref<const Eigen::VectorXd>& y, double phi,
-                                                          double phid, double Ts) {
+RobotSystem::MotionMeasurement RobotSystem::measureMotion(int k, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                                          double phi, double phid, double Ts) {
   const DriveLayout& L = layout_[static_cast<size_t>(k)];
   const SensorSpec& S = drives_[static_cast<size_t>(k)].sensors;
   const double qm = L.rigid ? L.ratio * phi : y[L.motor];
   const double qdm = L.rigid ? L.ratio * phid : y[L.motor + 1];
   // Noise first, then the sensor's quantiser; encoder speed by differencing over Ts.
   MotionMeasurement m;
-  m.q = quantise(y[k] + S.joint_bias + rng_->gauss(S.joint_noise), S.joint_quantum);
+  m.q = faultySensor(k, t, quantise(y[k] + S.joint_bias + rng_->gauss(S.joint_noise), S.joint_quantum));
   m.qm = quantise(qm, S.motor_quantum);
   m.qdm = qdm;
   if (S.motor_quantum > 0.0) m.qdm = first_sample_ ? 0.0 : (m.qm - prev_qm_meas_[k]) / Ts;
@@ -603,7 +674,7 @@ void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>&
   for (int k = 0; k < n; ++k) {
     const DriveSpec& d = drives_[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
-    const MotionMeasurement m = measureMotion(k, y, phi[k], phid[k], Ts);
+    const MotionMeasurement m = measureMotion(k, t, y, phi[k], phid[k], Ts);
     const double i_meas = measureCurrent(k, y);
     const CommandPort port = port_[static_cast<size_t>(k)];
     if (!controllerDriven(port)) continue;  // voltage or torque command: the controller holds its state
@@ -638,7 +709,7 @@ void RobotSystem::multiRateStep(double t, const Eigen::Ref<const Eigen::VectorXd
     if (outer) {  // measure the joint and the motor, advance the outer loops over Ts_out
       const double phi = coupled_ ? Ginv_.row(k).dot(y.head(n)) : y[k];
       const double phid = coupled_ ? Ginv_.row(k).dot(y.segment(n, n)) : y[n + k];
-      const MotionMeasurement m = measureMotion(k, y, phi, phid, Ts_out);
+      const MotionMeasurement m = measureMotion(k, t, y, phi, phid, Ts_out);
       if (controllerDriven(port)) {
         control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], m.q,     m.qm,
                                      m.qdm,         i_meas,         L.ratio, d.motor.V_supply};
@@ -678,7 +749,7 @@ void RobotSystem::setpointStage(double t) const {
     }
 }
 
-void RobotSystem::measurementStage(const Eigen::Ref<const Eigen::VectorXd>& y) const {
+void RobotSystem::measurementStage(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   const int n = model_.nq;
   const auto q = y.head(n);
   const auto qd = y.segment(n, n);
@@ -695,7 +766,7 @@ void RobotSystem::measurementStage(const Eigen::Ref<const Eigen::VectorXd>& y) c
     sig_.qm[k] = L.rigid ? L.ratio * phi_[k] : y[L.motor];
     sig_.qdm[k] = L.rigid ? L.ratio * phid_[k] : y[L.motor + 1];
     sig_.current[k] = L.current >= 0 ? y[L.current] : 0.0;
-    sig_.q_fb[k] = sampled() ? held_q_fb_[k] : q[k] + drives_[static_cast<size_t>(k)].sensors.joint_bias;
+    sig_.q_fb[k] = sampled() ? held_q_fb_[k] : faultySensor(k, t, q[k] + drives_[static_cast<size_t>(k)].sensors.joint_bias);
   }
 }
 
@@ -784,6 +855,12 @@ void RobotSystem::frictionStage(const Eigen::Ref<const Eigen::VectorXd>& y, doub
                                                              L.friction >= 0 ? ydot + L.friction : nullptr)
                                       : 0.0;
   }
+  // A bearing defect of the output shaft: τ_b = A sin(order · φ_out), with the amplitude of its schedule.
+  for (size_t i = 0; i < faults_.size(); ++i)
+    if (faults_[i].type == FaultType::BearingRipple) {
+      const int k = fault_drive_[i];
+      sig_.tau_friction[k] += fault_applied_[i] * std::sin(faults_[i].order * phi_[k]);
+    }
 }
 
 void RobotSystem::jointTorqueStage() const {
@@ -847,7 +924,7 @@ void RobotSystem::rotorReactionStage() const {
 
 void RobotSystem::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
   setpointStage(t);
-  measurementStage(y);
+  measurementStage(t, y);
   controllerStage(y, ydot);
   powerElectronicsStage();
   motorElectricsStage(ydot);

@@ -123,9 +123,14 @@ RobotSystem loadRobotWithDrives(const std::string& path, const std::vector<Fault
       for (size_t col = 0; col < n; ++col) G(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(col)) = row[col];
     }
   }
-  applyFaults(specs, faults);  // InputError names the fault
+  applyFaults(specs, faults);  // the constant ones; InputError names the fault
+  std::vector<Fault> during;
+  for (const Fault& f : faults)
+    if (f.timeVarying()) during.push_back(f);
   try {
-    return RobotSystem(std::move(model), std::move(specs), G);
+    RobotSystem robot(std::move(model), std::move(specs), G);
+    if (!during.empty()) robot.setFaults(std::move(during));
+    return robot;
   } catch (const InputError& e) {
     root.relocate(e);
   }

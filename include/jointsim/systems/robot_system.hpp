@@ -29,6 +29,7 @@
 #include "jointsim/multibody/data.hpp"
 #include "jointsim/multibody/model.hpp"
 #include "jointsim/sim/plant.hpp"
+#include "jointsim/systems/faults.hpp"
 #include "jointsim/systems/joint_limits.hpp"
 
 namespace jointsim::systems {
@@ -149,6 +150,14 @@ class RobotSystem : public sim::Plant {
   /// Bumpless transfer for joints whose port changed since the last call (or the start).
   void applyInputs(double t, Eigen::Ref<Eigen::VectorXd> y) override;
 
+  /// Faults that act during the run (Fault::timeVarying(): a later onset, a progression, intermittent sensor
+  /// faults, bearing ripple; systems/faults.hpp for their laws). Parameter faults are applied by rebuilding the
+  /// drive's components from their values before these faults at the schedule's instants (time events); sensor
+  /// faults change the measured joint angle the controller reads (and the q_fb signal); the bearing ripple adds to
+  /// the friction torque. Each is checked against its drive now (InputError as applyFault). Replaces earlier ones.
+  void setFaults(std::vector<Fault> faults);
+  const std::vector<Fault>& faults() const { return faults_; }
+
   /// Joint positions [rad] at t = 0 for initialState() (default: the reference at t = 0, or zeros).
   void setInitialPositions(const Eigen::VectorXd& q0);
 
@@ -198,10 +207,13 @@ class RobotSystem : public sim::Plant {
   /// End stops (mode stop): q − q_upper and q_lower − q per limited joint.
   int rootCount() const override { return stops_.rootCount(); }
   void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
-  /// The trajectory's breakpoints under continuous control (sampled control restarts at every sample).
+  /// The trajectory's breakpoints under continuous control (sampled control restarts at every sample), and the
+  /// instants of the faults' schedules and episodes.
   std::vector<double> timeEvents(double t_end) const override;
-  /// Sampled control: the controllers' first sample at t0.
+  /// The faults' state at t0; sampled control: the controllers' first sample at t0.
   void start(double t0, const Eigen::Ref<const Eigen::VectorXd>& y) override;
+  /// At time events: the faults' parameter schedule and the value a stuck sensor holds.
+  void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
   double samplePeriod() const override { return sampled() ? 1.0 / currentRate() : 0.0; }
   void sample(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override { controlStep(t, y); }
   /// Per joint: q_set, q, q_fb, qd, motor_velocity, current, current_ref, voltage, gear_torque,
@@ -228,7 +240,13 @@ class RobotSystem : public sim::Plant {
   // The right-hand side, stage by stage as the signals flow (each fills sig_ and its part of ẏ).
   void evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
   void setpointStage(double t) const;
-  void measurementStage(const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  void measurementStage(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  // The faults at time t: rebuilds drives whose scheduled parameter values changed, captures stuck sensor values
+  // (`restart`: from the nominal drives, as at the start of a run).
+  void updateFaults(double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool restart);
+  // Measured joint angle of drive k at t from the sensor's reading `q_meas` (true angle plus bias): the intermittent
+  // sensor faults of the drive.
+  double faultySensor(int k, double t, double q_meas) const;
   void controllerStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
   void powerElectronicsStage() const;
   void motorElectricsStage(double* ydot) const;
@@ -245,7 +263,7 @@ class RobotSystem : public sim::Plant {
   struct MotionMeasurement {
     double q = 0.0, qm = 0.0, qdm = 0.0;
   };
-  MotionMeasurement measureMotion(int k, const Eigen::Ref<const Eigen::VectorXd>& y, double phi, double phid,
+  MotionMeasurement measureMotion(int k, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double phi, double phid,
                                   double Ts);
   double measureCurrent(int k, const Eigen::Ref<const Eigen::VectorXd>& y);
   control::ControllerInputs controllerInputs(int k) const;  // from sig_ (after the measurement stage)
@@ -282,6 +300,14 @@ class RobotSystem : public sim::Plant {
   Eigen::VectorXd ref_q_, ref_qd_, ref_qdd_;
   std::vector<std::pair<int, Eigen::Matrix<double, 6, 1>>> user_wrenches_;  // frame index, world wrench
   long revision_ = 0;
+  // Faults during the run (setFaults): per fault its drive, the parameter value applied now (parameter faults and
+  // bearing ripple) and, for a stuck sensor, the episode and the value it holds; the drives before these faults.
+  std::vector<Fault> faults_;
+  std::vector<int> fault_drive_;
+  std::vector<double> fault_applied_;
+  std::vector<long> stuck_episode_;
+  std::vector<double> stuck_value_;
+  std::vector<DriveSpec> nominal_drives_;
   // Logged signals.
   std::vector<std::string> signal_names_;
   multibody::Model id_model_;  // rotor inertias of every drive as armature (inverse-dynamics reference)
