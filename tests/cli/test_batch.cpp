@@ -1,6 +1,7 @@
 // `jointsim batch`: a fault-injection sweep of the UR5 twin with every fault type finishes with a complete
 // manifest; a batch killed midway resumes and runs only what is missing; two shards cover the sweep
 // exactly once; a failing run is recorded without stopping the others; bad sweep files exit 2.
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
@@ -228,6 +229,16 @@ TEST(CliBatch, BadSweepFilesExitTwoWithFileAndLine) {
       {head, "the sweep has no runs"},
       {"sweep:\n  name: s\n  experiment: nowhere.yaml\nruns: [{name: a}]\n", "no such file"},
       {head + "runs:\n  - {name: a, sets: {duration: 1}}\n", "did you mean 'set'"},
+      // Severities out of their type's range and bad time laws fail the sweep before any run.
+      {head + "faults:\n  - {type: gear_stiffness_scale, joints: [j], values: [0.8, -0.5]}\n", "> 0 and <= 100"},
+      {head + "faults:\n  - {type: backlash_add, joints: [j], values: [2.0]}\n", "<= 0.5 rad"},
+      {head + "runs:\n  - {name: a, faults: [{type: sensor_spike, joint: j, value: 9}]}\n", "within ±π rad"},
+      {head + "faults:\n  - {type: coulomb_friction_scale, joints: [j], values: [2], progression: cubic}\n",
+       "step, linear or exponential"},
+      {head + "faults:\n  - {type: coulomb_friction_scale, joints: [j], values: [2], progression: linear}\n",
+       "ramp_time"},
+      {head + "faults:\n  - {type: sensor_dropout, joints: [j], values: [0.5], period: 0.1}\n",
+       "longer than the period"},
   };
   for (size_t i = 0; i < cases.size(); ++i) {
     const fs::path p = dir / ("bad" + std::to_string(i) + ".yaml");
@@ -236,8 +247,22 @@ TEST(CliBatch, BadSweepFilesExitTwoWithFileAndLine) {
     EXPECT_EQ(r.status, 2) << cases[i].expected << ": " << r.err;
     EXPECT_THAT(r.err, HasSubstr(cases[i].expected));
     EXPECT_THAT(r.err, HasSubstr(p.filename().string() + ":"));
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
   }
   EXPECT_FALSE(fs::exists(dir / "out" / "manifest.csv"));
+  // Bad command lines: a shard beyond the count, a data set in a folder that does not exist, a data set of a shard.
+  const fs::path good = writeSweep(dir, 0.1);
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {" --shard 3/2", "0 <= I < N"},
+           {" --dataset " + (dir / "missing" / "d.h5").string(), "does not exist"},
+           {" --shard 0/2 --dataset " + (dir / "d.h5").string(), "needs the whole sweep"}}) {
+    const Result r = run("batch " + good.string() + " -o " + (dir / "out").string() + args, dir);
+    EXPECT_EQ(r.status, 2) << args << ": " << r.err;
+    EXPECT_THAT(r.err, HasSubstr(expected));
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir / "out"));  // nothing ran
+  EXPECT_FALSE(fs::exists(dir / "d.h5"));
   fs::remove_all(dir);
 }
 

@@ -18,7 +18,7 @@ def _text(column):
 
 @pytest.fixture(scope="module")
 def fault_dataset(cli, root, tmp_path_factory):
-    """The 54-run UR5 fault sweep, run by the CLI with -j 2 into one HDF5 file."""
+    """The 60-run UR5 fault sweep, run by the CLI with -j 2 into one HDF5 file."""
     out = tmp_path_factory.mktemp("dataset")
     h5 = out / "faults.h5"
     sweep = root / "config" / "sweeps" / "ur5_fault_dataset.yaml"
@@ -53,7 +53,10 @@ def test_dataset_labels_shapes_and_units_match_the_manifest_and_logs(fault_datas
                 assert lab["fault_count"] == 0
             assert lab["seed"] == (int(man["seed"]) if man["seed"] else -1)
         counts = labels["fault_type"].value_counts()
-        assert counts["gear_stiffness_scale"] == 4 and counts[""] == 30  # 2 nominal + 28 sampled
+        assert counts["gear_stiffness_scale"] == 5 and counts[""] == 30  # 2 nominal + 28 sampled
+        for t in ("sensor_dropout", "sensor_stuck", "sensor_spike", "bearing_ripple"):
+            assert counts[t] == 1
+        assert labels.loc[labels["fault_type"] == "sensor_stuck", "fault_onset_s"].item() == 0.2
         assert (labels["design"] == "latin_hypercube").sum() == 28
         # Every run: its log column by column (shape, unit, values to the bit) and its settings.
         for _, man in manifest.iterrows():

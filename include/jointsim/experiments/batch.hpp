@@ -2,7 +2,7 @@
 /// \file
 /// Batch runs and fault-injection sweeps (the library side of `jointsim batch`). A sweep file names a base
 /// experiment and a set of runs: an explicit list, a grid of `--set`-style overrides, and fault scenarios
-/// (sim/faults.hpp) applied to chosen joints. Each run executes in its own child process (a crash or a
+/// (systems/faults.hpp) applied to chosen joints. Each run executes in its own child process (a crash or a
 /// solver failure only fails that run) and writes into `<output_dir>/<run name>/`; `manifest.csv` lists
 /// every run with its overrides, status, wall time and output folder, and is rewritten atomically after
 /// each run, so an interrupted batch leaves a consistent manifest. Re-running skips runs whose folder
