@@ -4,6 +4,7 @@
 set -euo pipefail
 PACKAGES=(cmake ninja-build g++ pkg-config
           libeigen3-dev libsundials-dev liburdfdom-dev libtinyxml-dev libyaml-cpp-dev libcli11-dev libceres-dev nlohmann-json3-dev libxxhash-dev libzip-dev libhdf5-dev gnuplot-nox
+          slurm-wlm munge iproute2
           libgtest-dev libgmock-dev libbenchmark-dev
           clang-14 libclang-rt-14-dev libomp-14-dev libgoogle-glog-dev
           python3 python3-venv python3-dev)

@@ -46,12 +46,12 @@ live_pid() {
   if tr '\0' ' ' <"/proc/$pid/cmdline" 2>/dev/null | grep -qF -- "$dir/"; then echo "$pid"; fi
 }
 
-# Stops the daemon recorded in DIR/NAME.pid: SIGTERM, up to 10 s for it to exit, then SIGKILL.
+# Stops the daemon recorded in DIR/NAME.pid: SIGNAL (default TERM), up to 10 s for it to exit, then SIGKILL.
 stop_daemon() {
-  local name="$1" pid i
+  local name="$1" signal="${2:-TERM}" pid i
   pid="$(live_pid "$name")"
   if [ -n "$pid" ]; then
-    kill -TERM "$pid" 2>/dev/null || true
+    kill -"$signal" "$pid" 2>/dev/null || true
     for ((i = 0; i < 100; i++)); do
       [ -d "/proc/$pid" ] || break
       # A zombie child of this shell (only when start and stop run in one process) counts as gone.
@@ -59,7 +59,7 @@ stop_daemon() {
       sleep 0.1
     done
     if [ -d "/proc/$pid" ] && [ -n "$(live_pid "$name")" ]; then
-      log "$name (pid $pid) ignored SIGTERM for 10 s, sending SIGKILL"
+      log "$name (pid $pid) still running 10 s after SIG$signal, sending SIGKILL"
       kill -KILL "$pid" 2>/dev/null || true
       sleep 0.2
     fi
@@ -90,13 +90,17 @@ stop_cluster() {
 
 running() { [ -n "$(live_pid munged)" ] && [ -n "$(live_pid slurmctld)" ] && [ -n "$(live_pid slurmd)" ]; }
 
-node_state() { timeout 5 sinfo -h -n "$node" -o %T 2>/dev/null | head -n 1 || true; }
+node_state() { timeout 3 sinfo -h -n "$node" -o %T 2>/dev/null | head -n 1 || true; }
 
-# A TCP port in 20000-59999 that no socket on this machine uses (listening or not), not in $1.
+# A TCP port that no socket on this machine uses (listening or not), other than $1: from 20000 up to the start
+# of the kernel's ephemeral port range (32768 by default), from which outgoing connections take theirs.
 free_port() {
-  local p i
+  local p i low=32768 span
+  read -r low _ </proc/sys/net/ipv4/ip_local_port_range 2>/dev/null || true
+  span=$((low - 20000))
+  [ "$span" -ge 1000 ] || span=40000
   for ((i = 0; i < 200; i++)); do
-    p=$((20000 + (RANDOM * 32768 + RANDOM) % 40000))
+    p=$((20000 + (RANDOM * 32768 + RANDOM) % span))
     [ "$p" != "${1:-}" ] || continue
     if [ -z "$(ss -Htan "( sport = :$p )" 2>/dev/null)" ]; then echo "$p"; return 0; fi
   done
@@ -141,7 +145,33 @@ start_cluster() {
   munge -n -S "$dir/munge.sock" | unmunge -S "$dir/munge.sock" >/dev/null \
     || { show_logs; stop_cluster; die "munge credentials do not round-trip through $dir/munge.sock"; }
 
-  local host ctld_port slurmd_port
+  # slurmctld and slurmd on two free ports. Another program may take a port between the check and the bind:
+  # then a daemon exits with "Address already in use", and the next attempt uses other ports.
+  local attempt rc
+  for attempt in 1 2 3; do
+    rc=0
+    launch_slurm || rc=$?
+    [ "$rc" != 0 ] || break
+    if [ "$rc" = 2 ] && [ "$attempt" -lt 3 ]; then
+      log "port taken, retrying with other ports"
+      stop_daemon slurmd KILL           # (a slurmd without controller takes seconds to obey SIGTERM)
+      stop_daemon slurmctld KILL
+      continue
+    fi
+    show_logs
+    stop_cluster
+    [ "$rc" = 3 ] && die "node $node not idle after ${timeout} s (see the logs above)"
+    die "a daemon exited during start-up (see the logs above)"
+  done
+  log "cluster up in $dir (slurmctld port $ctld_port, slurmd port $slurmd_port, node $node idle)"
+  echo "export SLURM_CONF=$conf"
+}
+
+# Writes slurm.conf with two free ports (sets ctld_port, slurmd_port), starts slurmctld and slurmd and waits
+# until the node is idle. Returns 0 then; 2 if a daemon could not bind its port, 1 if a daemon exited for
+# another reason, 3 after the time-out.
+launch_slurm() {
+  local host
   host="$(hostname -s)"
   ctld_port="$(free_port)"
   slurmd_port="$(free_port "$ctld_port")"
@@ -194,27 +224,27 @@ PartitionName=local Nodes=$node Default=YES MaxTime=INFINITE State=UP
 EOF
   : >"$dir/plugstack.conf"            # no SPANK plugins (not the system's /etc/slurm/plugstack.conf)
 
-  # The daemons in the foreground (-D), each in its own session, detached from the caller's terminal and
-  # pipes; $! is the daemon itself (it also writes the same PID to its PidFile).
+  # The daemons in the foreground (-D), each in its own session (setsid: a Ctrl-C meant for the caller does not
+  # reach them), detached from the caller's terminal and pipes. In this non-interactive shell a background job
+  # is no process group leader, so setsid execs without forking: $! is the daemon itself (which also writes the
+  # same PID to its PidFile).
   setsid slurmctld -D -f "$conf" </dev/null >"$dir/slurmctld.stderr" 2>&1 &
   echo $! >"$dir/slurmctld.pid"
+  disown $!                           # (no "Killed" notice from this shell if it is stopped by SIGKILL)
   setsid slurmd -D -f "$conf" -N "$node" </dev/null >"$dir/slurmd.stderr" 2>&1 &
   echo $! >"$dir/slurmd.pid"
+  disown $!
 
-  local deadline=$((SECONDS + timeout)) state=""
+  local deadline=$((SECONDS + timeout))
   while :; do
-    state="$(node_state)"
-    [ "$state" = idle ] && break
-    if ! running; then
-      show_logs; stop_cluster; die "a daemon exited during start-up (see the logs above)"
-    fi
-    if [ "$SECONDS" -ge "$deadline" ]; then
-      show_logs; stop_cluster; die "node $node not idle after ${timeout} s (state: '${state:-no answer}')"
-    fi
+    # A taken port shows at once on stderr (slurmctld may keep trying for a while: no need to wait for it).
+    running || sleep 0.2                # (a daemon that just exited: its last words)
+    if grep -qi "address already in use" "$dir/slurmctld.stderr" "$dir/slurmd.stderr"; then return 2; fi
+    running || return 1
+    [ "$(node_state)" != idle ] || return 0
+    [ "$SECONDS" -lt "$deadline" ] || return 3
     sleep 0.2
   done
-  log "cluster up in $dir (slurmctld port $ctld_port, slurmd port $slurmd_port, node $node idle)"
-  echo "export SLURM_CONF=$conf"
 }
 
 case "$action" in

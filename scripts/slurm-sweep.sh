@@ -130,19 +130,19 @@ trap 'cancel 143' TERM
 
 # Wait until squeue lists no unfinished task of the array (by default squeue -j shows pending, running,
 # completing, ... tasks but not ended ones; a job purged after MinJobAge is an "Invalid job id").
-failures=0 last=""
+failing_since="" last=""
 while :; do
   if out="$(squeue -h -j "$jobid" -o %T 2>&1)"; then
-    failures=0
+    failing_since=""
     [ -n "$out" ] || break
     now="$(sort <<<"$out" | uniq -c | awk '{printf "%s%s %s", (NR > 1 ? ", " : ""), $1, tolower($2)}')"
     [ "$now" = "$last" ] || log "job $jobid: $now"
     last="$now"
   elif grep -qi "invalid job id" <<<"$out"; then
     break
-  else
-    failures=$((failures + 1))
-    [ "$failures" -lt 30 ] || die 3 "squeue keeps failing: $out"
+  else                                    # slurmctld unreachable: give it 2 minutes (a restart, a fail-over)
+    failing_since="${failing_since:-$SECONDS}"
+    [ $((SECONDS - failing_since)) -lt 120 ] || die 3 "squeue has failed for 2 minutes: $out"
   fi
   sleep "$poll" & wait $!                 # (in the background, so that a signal is handled at once)
 done

@@ -540,6 +540,16 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
       ++res.ok;
     } else {
       if (r.status != "failed" && r.status != "interrupted") r.status = "error";  // bad input, crash: see run.log
+      if (r.status == "error" && !io::pathExists((fs::path(dir) / run.name / "summary.json").string())) {
+        // The run ended before it could write its summary (bad input found when loading, a crash): say so in the
+        // folder, so that --collect (e.g. after the shards of a job array) reports it as an error, not as pending.
+        nlohmann::ordered_json j;
+        j["status"] = "error";
+        j["reason"] = WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status)) + "; see run.log"
+                                          : "exit status " + std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
+                                                " before a summary was written; see run.log";
+        io::writeFileAtomically((fs::path(dir) / run.name / "summary.json").string(), j.dump(2) + "\n");
+      }
       ++res.failed;
     }
     res.records[a.k] = r;

@@ -212,6 +212,13 @@ TEST(CliBatch, FailingRunIsRecordedAndTheOthersFinish) {
   int ok = 0;
   for (const auto& [name, status] : rows) ok += status == "ok";
   EXPECT_EQ(ok, 25);
+  // Collected from the folders (as after the shards of a job array), the runs that ended before writing a summary
+  // are still errors, not pending.
+  const Result c = run("batch " + (dir / "sweep.yaml").string() + " --collect -o " + (dir / "out").string(), dir);
+  EXPECT_EQ(c.status, 1);
+  const auto collected = manifest(dir / "out" / "manifest.csv");
+  EXPECT_EQ(collected.at("bad_key"), "error");
+  EXPECT_EQ(collected.at("swg_backlash"), "error");
   fs::remove_all(dir);
 }
 
