@@ -234,6 +234,7 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
         systems::Fault f;
         f.type = systems::faultTypeFromString(type_name);
         f.joint = drive.joint;
+        if (!f.parameterFault()) continue;  // intermittent sensor faults and bearing ripple have time laws, no neutral value
         const bool offset = f.type == systems::FaultType::BacklashAdd || f.type == systems::FaultType::SensorBias;
         f.value = offset ? 1e-4 : 1.1;  // a non-neutral value: does the fault apply to this drive?
         systems::DriveSpec copy = drive;

@@ -286,6 +286,8 @@ TEST(FmuInstance, DriveParameterActsAsTheSameFault) {
   bool has_backlash = false;
   for (const auto& v : r.d.variables) has_backlash |= v.fault == "backlash_add";
   EXPECT_FALSE(has_backlash) << "strain-wave gears take no added backlash";
+  for (const auto& v : r.d.variables)  // faults with time laws (episodes, ripple) have no neutral parameter value
+    EXPECT_TRUE(v.fault.empty() || systems::Fault{systems::faultTypeFromString(v.fault)}.parameterFault()) << v.name;
   const unsigned vr = vrOf(r.d, "drives.elbow_joint.coulomb_friction_scale");
   EXPECT_EQ(r.d.variables[vr].start, 1.0);
   Log log;
