@@ -49,12 +49,12 @@ void addBatchCommand(CLI::App& app) {
     }
     o.progress = ::isatty(2) != 0;
     const experiments::Sweep sweep = experiments::loadSweep(opt->sweep);
-    experiments::shardRuns(sweep.runs.size(), o.shard_index, o.shard_count);  // a bad shard fails before any run
     if (!opt->dataset.empty()) {
       report::checkDatasetPath(opt->dataset);  // a missing folder fails before any run
       if (o.shard_count > 1 && !opt->collect)
-        throw InputError("--dataset needs the whole sweep: use it with --collect once the shards are done, not with --shard " +
-                         opt->shard);
+        throw InputError(
+            "--dataset needs the whole sweep: use it with --collect once the shards are done, not with --shard " +
+            opt->shard);
     }
     const experiments::BatchResult r =
         opt->collect ? experiments::collectBatch(sweep, o) : experiments::runBatch(sweep, o);

@@ -1,6 +1,7 @@
 #include "jointsim/common/text.hpp"
 
 #include <cctype>
+#include <charconv>
 #include <cstdio>
 
 namespace jointsim {
@@ -9,6 +10,12 @@ std::string formatNumber(double value, int precision) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*g", precision, value);
   return buf;
+}
+
+std::string formatShortest(double value) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, value);
+  return std::string(buf, r.ptr);
 }
 
 std::string join(const std::vector<std::string>& items, const std::string& separator) {

@@ -1,7 +1,6 @@
 #include "jointsim/experiments/batch.hpp"
 
 #include <cerrno>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -49,13 +48,6 @@ std::string number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%g", v);
   return buf;
-}
-
-// The shortest text that reads back as exactly `v` (manifest labels: 0.8, not 0.80000000000000004).
-std::string exact(double v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
 }
 
 // `set: {key.path: value, ...}` as "key.path=value" strings, in file order.
@@ -208,8 +200,8 @@ BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
     const std::string sep = r.fault_type.empty() ? "" : ";";
     r.fault_type += sep + systems::toString(f.type);
     r.fault_joint += sep + f.joint;
-    r.fault_severity += sep + exact(f.value);
-    r.fault_onset_s += sep + exact(f.onset);
+    r.fault_severity += sep + formatShortest(f.value);
+    r.fault_onset_s += sep + formatShortest(f.onset);
   }
   r.design = run.design;
   if (run.seed >= 0) r.seed = std::to_string(run.seed);
@@ -444,9 +436,9 @@ std::vector<size_t> shardRuns(size_t n_runs, int index, int count) {
 BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
   if (options.jobs < 1) throw InputError("-j: expected at least 1 job, got " + std::to_string(options.jobs));
   const auto t0 = std::chrono::steady_clock::now();
-  const std::string dir = outputDir(sweep, options);
-  io::createDirectories(dir);
   const std::vector<size_t> mine = shardRuns(sweep.runs.size(), options.shard_index, options.shard_count);
+  const std::string dir = outputDir(sweep, options);
+  io::createDirectories(dir);  // after the checks: a bad shard leaves nothing behind
   BatchResult res;
   res.manifest_path =
       (fs::path(dir) / (options.shard_count > 1 ? "manifest.shard-" + std::to_string(options.shard_index) + "-of-" +

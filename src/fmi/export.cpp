@@ -14,6 +14,7 @@
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
 #include "jointsim/io/input_files.hpp"
+#include "jointsim/io/output.hpp"
 
 #ifndef JOINTSIM_FMU_BUILD_DIR
 #define JOINTSIM_FMU_BUILD_DIR ""
@@ -153,7 +154,7 @@ FmuDescription exportFmu(const std::string& config, const std::string& fmu_path,
     throw Error("FMU export: the FMU binary jointsim_fmu.so was not found in '" + bin_dir +
                 "' (build the target jointsim_fmu, or set JOINTSIM_FMU_BINARY_DIR)");
 
-  const std::string tmp = fmu_path + ".tmp" + std::to_string(::getpid());
+  const std::string tmp = io::temporaryName(fmu_path);
   {
     ZipWriter zip(tmp);
     zip.add("modelDescription.xml", d.modelDescriptionXml());
@@ -167,12 +168,7 @@ FmuDescription exportFmu(const std::string& config, const std::string& fmu_path,
     }
     zip.close();
   }
-  std::error_code ec;
-  fs::rename(tmp, fmu_path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw Error("FMU export: cannot rename the archive into place as " + fmu_path);
-  }
+  io::moveIntoPlace(tmp, fmu_path);
   return d;
 }
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -14,6 +13,7 @@
 #include <ceres/ceres.h>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/io/csv_reader.hpp"
 #include "quiet_ceres.hpp"
 
@@ -26,13 +26,6 @@ constexpr double kDeltaMax = 8.0;
 constexpr double kSignificance = 3.0;  // α1 must exceed this many standard errors
 constexpr double kDipFactor = 2.0;     // points slower than kDipFactor·v_S sample the Stribeck dip
 constexpr int kMinDipPoints = 3;
-
-/// Shortest text that reads back as the same double.
-std::string num(double x) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x);
-  return std::string(buf, r.ptr);
-}
 
 /// Residual of one point of one direction: α0 + α1·exp(−(w/v_S)^δ) + α2·w − y [N·m], w = |v| > 0.
 struct MapResidual {
@@ -261,25 +254,27 @@ bool wellConditioned(ceres::Problem& problem, const std::vector<double*>& blocks
 std::string singularReason(const Branch& br, const std::array<double, kNumParams>& p, double delta) {
   const double effect = p[1] * std::exp(-std::pow(br.w.front() / p[3], delta));  // Stribeck term at min |v|
   if (effect <= 1e-6 * (p[0] + p[1]))
-    return "no Stribeck dip: the best fit puts v_s = " + num(p[3]) + " rad/s far below the slowest point (" +
-           num(br.w.front()) +
+    return "no Stribeck dip: the best fit puts v_s = " + formatShortest(p[3]) + " rad/s far below the slowest point (" +
+           formatShortest(br.w.front()) +
            " rad/s), so alpha1 and v_s have no effect on the data (fit a Coulomb–viscous model "
            "instead, or measure slower speeds)";
-  return "the parameters are not determined by the data (singular covariance at alpha0 = " + num(p[0]) +
-         ", alpha1 = " + num(p[1]) + ", alpha2 = " + num(p[2]) + ", v_s = " + num(p[3]) + ")";
+  return "the parameters are not determined by the data (singular covariance at alpha0 = " + formatShortest(p[0]) +
+         ", alpha1 = " + formatShortest(p[1]) + ", alpha2 = " + formatShortest(p[2]) +
+         ", v_s = " + formatShortest(p[3]) + ")";
 }
 
 /// The checks of the header's step 5 that need the fitted values.
 void checkIdentifiable(const Branch& br, const DirectionFit& d, const FrictionFitOptions& o) {
   if (d.alpha1.value <= kSignificance * d.alpha1.std_error)
-    unidentifiable(br, "no significant Stribeck dip: alpha1 = " + num(d.alpha1.value) + " N·m with standard error " +
-                           num(d.alpha1.std_error) +
+    unidentifiable(br, "no significant Stribeck dip: alpha1 = " + formatShortest(d.alpha1.value) +
+                           " N·m with standard error " + formatShortest(d.alpha1.std_error) +
                            " N·m, so v_s cannot be determined (fit a Coulomb–viscous "
                            "model instead, or measure slower speeds)");
   int dip = 0;
   for (double w : br.w) dip += w < kDipFactor * d.v_s.value ? 1 : 0;
   if (dip < kMinDipPoints)
-    unidentifiable(br, "only " + std::to_string(dip) + " points slower than 2·v_s = " + num(kDipFactor * d.v_s.value) +
+    unidentifiable(br, "only " + std::to_string(dip) +
+                           " points slower than 2·v_s = " + formatShortest(kDipFactor * d.v_s.value) +
                            " rad/s (at least " + std::to_string(kMinDipPoints) +
                            " needed): the Stribeck dip is not sampled; measure slower speeds");
   const std::pair<const char*, const ParameterEstimate*> checked[] = {{"alpha0", &d.alpha0},
@@ -287,8 +282,9 @@ void checkIdentifiable(const Branch& br, const DirectionFit& d, const FrictionFi
                                                                       {"v_s", &d.v_s}};
   for (const auto& [name, e] : checked)
     if (!(e->std_error <= o.max_relative_std_error * std::abs(e->value)))
-      unidentifiable(br, std::string(name) + " = " + num(e->value) + " has a standard error of " + num(e->std_error) +
-                             " (more than " + num(100 * o.max_relative_std_error) +
+      unidentifiable(br, std::string(name) + " = " + formatShortest(e->value) + " has a standard error of " +
+                             formatShortest(e->std_error) + " (more than " +
+                             formatShortest(100 * o.max_relative_std_error) +
                              " % of the value): the data do not determine it");
 }
 
@@ -296,11 +292,12 @@ void checkIdentifiable(const Branch& br, const DirectionFit& d, const FrictionFi
 
 void FrictionFitOptions::validate() const {
   auto bad = [](const std::string& field, double value, const std::string& rule) {
-    throw InputError("friction fit option '" + field + "': " + rule + ", got " + num(value));
+    throw InputError("friction fit option '" + field + "': " + rule + ", got " + formatShortest(value));
   };
   if (!(delta > 0) || !std::isfinite(delta)) bad("delta", delta, "expected a finite form factor > 0");
   if (fit_delta && !(delta >= kDeltaMin && delta <= kDeltaMax))
-    bad("delta", delta, "expected a start value in [" + num(kDeltaMin) + ", " + num(kDeltaMax) + "]");
+    bad("delta", delta,
+        "expected a start value in [" + formatShortest(kDeltaMin) + ", " + formatShortest(kDeltaMax) + "]");
   if (min_points < 6) bad("min_points", min_points, "expected at least 6 points per direction");
   if (!(loss_scale > 0) || !std::isfinite(loss_scale)) bad("loss_scale", loss_scale, "expected a finite scale > 0 N·m");
   if (!(max_relative_std_error > 0)) bad("max_relative_std_error", max_relative_std_error, "expected a value > 0");
@@ -337,7 +334,7 @@ FrictionFit fitFrictionMap(const std::vector<double>& velocity, const std::vecto
     const double v = velocity[i], f = torque[i];
     if (!std::isfinite(v) || !std::isfinite(f))
       throw InputError("friction map point " + std::to_string(i) + ": expected finite velocity and torque, got " +
-                       num(v) + " rad/s, " + num(f) + " N·m");
+                       formatShortest(v) + " rad/s, " + formatShortest(f) + " N·m");
     if (v > 0)
       pts_pos.emplace_back(v, f);
     else if (v < 0)
@@ -357,7 +354,7 @@ FrictionFit fitFrictionMap(const std::vector<double>& velocity, const std::vecto
       unidentifiable(*br, "only " + std::to_string(br->w.size()) + " points, at least " +
                               std::to_string(options.min_points) + " needed");
     if (br->w.front() == br->w.back())
-      unidentifiable(*br, "all points have the same speed " + num(br->w.front()) + " rad/s");
+      unidentifiable(*br, "all points have the same speed " + formatShortest(br->w.front()) + " rad/s");
   }
 
   // Stage 1: each direction alone with δ fixed (multi-start in v_S).
@@ -457,13 +454,15 @@ std::string frictionFitYaml(const FrictionFit& fit, const FrictionYamlOptions& o
   if (o.lugre) {
     if (fit.delta.value != 2.0)
       throw InputError("the LuGre model has delta = 2 ([Hauschild2003, eq. 4.17]); the fit used delta = " +
-                       num(fit.delta.value) + ", write a stribeck block instead");
+                       formatShortest(fit.delta.value) + ", write a stribeck block instead");
     if (!(o.sigma0 > 0) || !std::isfinite(o.sigma0))
-      throw InputError("LuGre sigma0: expected a finite bristle stiffness > 0 N·m/rad, got " + num(o.sigma0));
+      throw InputError("LuGre sigma0: expected a finite bristle stiffness > 0 N·m/rad, got " +
+                       formatShortest(o.sigma0));
     if (!(o.sigma1 > 0) || !std::isfinite(o.sigma1))
-      throw InputError("LuGre sigma1: expected a finite bristle damping > 0 N·m·s/rad, got " + num(o.sigma1));
+      throw InputError("LuGre sigma1: expected a finite bristle damping > 0 N·m·s/rad, got " +
+                       formatShortest(o.sigma1));
   } else if (!(o.k_s > 0) || !std::isfinite(o.k_s)) {
-    throw InputError("stribeck k_s: expected a finite slope-limiter factor > 0 s/rad, got " + num(o.k_s));
+    throw InputError("stribeck k_s: expected a finite slope-limiter factor > 0 s/rad, got " + formatShortest(o.k_s));
   }
   std::ostringstream y;
   y << "# jointsim identify friction" << (o.source.empty() ? "" : ": " + o.source) << "\n"
@@ -477,40 +476,43 @@ std::string frictionFitYaml(const FrictionFit& fit, const FrictionYamlOptions& o
     y << "  type: lugre\n"
       << "  # sigma0/sigma1 are dynamic parameters: a static map cannot determine them. These values were given\n"
       << "  # on the command line (default: [Hauschild2003, §4.5.4], Watflex shoulder), not identified.\n"
-      << "  sigma0: " << num(o.sigma0) << "   # bristle stiffness [N*m/rad]\n"
-      << "  sigma1: " << num(o.sigma1) << "   # bristle damping [N*m*s/rad]\n";
+      << "  sigma0: " << formatShortest(o.sigma0) << "   # bristle stiffness [N*m/rad]\n"
+      << "  sigma1: " << formatShortest(o.sigma1) << "   # bristle damping [N*m*s/rad]\n";
   } else {
     y << "  type: stribeck\n"
-      << "  delta: " << num(fit.delta.value) << "   # form factor [-]" << (fit.delta_fitted ? " (fitted)" : " (fixed)")
-      << "\n"
-      << "  k_s: " << num(o.k_s)
+      << "  delta: " << formatShortest(fit.delta.value) << "   # form factor [-]"
+      << (fit.delta_fitted ? " (fitted)" : " (fixed)") << "\n"
+      << "  k_s: " << formatShortest(o.k_s)
       << "   # slope limiter 1 - exp(-k_s|v|) of [Hauschild2003, eq. 4.24] [s/rad], not fitted: "
       << "it lowers the map by 1 % at |v| = 4.6/k_s and more below\n";
   }
   for (const DirectionFit* d : {&fit.positive, &fit.negative})
-    y << "  " << d->direction << ": {alpha0: " << num(d->alpha0.value) << ", alpha1: " << num(d->alpha1.value)
-      << ", alpha2: " << num(d->alpha2.value) << ", v_s: " << num(d->v_s.value) << "}   # v "
+    y << "  " << d->direction << ": {alpha0: " << formatShortest(d->alpha0.value)
+      << ", alpha1: " << formatShortest(d->alpha1.value) << ", alpha2: " << formatShortest(d->alpha2.value)
+      << ", v_s: " << formatShortest(d->v_s.value) << "}   # v "
       << (d->direction == "positive" ? "> 0" : "< 0 (magnitudes)") << "\n";
   y << "fit:\n";
   if (!o.source.empty()) y << "  source: \"" << o.source << "\"\n";
   y << "  method: Ceres Levenberg-Marquardt, per-direction least squares on |v|; std_error = sqrt(diag((J^T J)^-1) "
        "* SSR/(m - p))\n"
-    << "  delta: {value: " << num(fit.delta.value) << ", unit: \"-\", std_error: " << num(fit.delta.std_error)
+    << "  delta: {value: " << formatShortest(fit.delta.value)
+    << ", unit: \"-\", std_error: " << formatShortest(fit.delta.std_error)
     << ", fitted: " << (fit.delta_fitted ? "true" : "false") << "}\n"
     << "  dropped_zero_velocity_points: " << fit.dropped_zero << "   # v = 0 belongs to neither direction\n";
-  if (o.wall_time_s >= 0) y << "  wall_time_s: " << num(o.wall_time_s) << "\n";
+  if (o.wall_time_s >= 0) y << "  wall_time_s: " << formatShortest(o.wall_time_s) << "\n";
   for (const DirectionFit* d : {&fit.positive, &fit.negative}) {
     y << "  " << d->direction << ":\n"
       << "    points: " << d->points << "\n"
-      << "    speed_range: [" << num(d->min_speed) << ", " << num(d->max_speed) << "]   # |v| [rad/s]\n"
-      << "    rms_residual: " << num(d->rms_residual) << "   # [N*m]\n";
+      << "    speed_range: [" << formatShortest(d->min_speed) << ", " << formatShortest(d->max_speed)
+      << "]   # |v| [rad/s]\n"
+      << "    rms_residual: " << formatShortest(d->rms_residual) << "   # [N*m]\n";
     const std::tuple<const char*, const char*, const ParameterEstimate*> rows[] = {{"alpha0", "N*m", &d->alpha0},
                                                                                    {"alpha1", "N*m", &d->alpha1},
                                                                                    {"alpha2", "N*m*s/rad", &d->alpha2},
                                                                                    {"v_s", "rad/s", &d->v_s}};
     for (const auto& [name, unit, e] : rows)
-      y << "    " << name << ": {value: " << num(e->value) << ", unit: \"" << unit
-        << "\", std_error: " << num(e->std_error) << ", initial: " << num(e->initial) << "}\n";
+      y << "    " << name << ": {value: " << formatShortest(e->value) << ", unit: \"" << unit
+        << "\", std_error: " << formatShortest(e->std_error) << ", initial: " << formatShortest(e->initial) << "}\n";
   }
   return y.str();
 }

@@ -11,11 +11,18 @@
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::io {
-namespace {
+
 std::string temporaryName(const std::string& path) {
   return path + ".tmp." + std::to_string(static_cast<long>(::getpid()));
 }
-}  // namespace
+
+void moveIntoPlace(const std::string& tmp, const std::string& path) {
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    std::remove(tmp.c_str());
+    throw Error(path + ": cannot move output into place: " + std::strerror(err));
+  }
+}
 
 CsvWriter::CsvWriter(std::string path, const std::vector<std::string>& header)
     : path_(std::move(path)), tmp_path_(temporaryName(path_)), columns_(header.size()) {
@@ -58,8 +65,7 @@ void CsvWriter::finish() {
 void CsvWriter::commit() {
   if (committed_) throw Error(path_ + ": already committed");
   finish();
-  if (std::rename(tmp_path_.c_str(), path_.c_str()) != 0)
-    throw Error(path_ + ": cannot move output into place: " + std::strerror(errno));
+  moveIntoPlace(tmp_path_, path_);
   committed_ = true;
 }
 
@@ -72,10 +78,7 @@ void writeFileAtomically(const std::string& path, const std::string& content) {
     std::remove(tmp.c_str());
     throw Error(path + ": writing failed");
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw Error(path + ": cannot move output into place: " + std::strerror(errno));
-  }
+  moveIntoPlace(tmp, path);
 }
 
 void createDirectories(const std::string& path) {

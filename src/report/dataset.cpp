@@ -1,24 +1,23 @@
 #include "jointsim/report/dataset.hpp"
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <memory>
-#include <type_traits>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <hdf5.h>
-#include <unistd.h>
 
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/common/version.hpp"
 #include "jointsim/io/csv_reader.hpp"
 #include "jointsim/io/input_files.hpp"
+#include "jointsim/io/output.hpp"
 
 namespace jointsim::report {
 namespace {
@@ -91,31 +90,12 @@ void doubles(hid_t group, const std::string& name, const double* data, hsize_t n
   attribute(set, "unit", unit);
 }
 
-// "gear_torque_elbow_joint[N·m]" → ("gear_torque_elbow_joint", "N·m"); a name without brackets has unit "".
-std::pair<std::string, std::string> splitUnit(const std::string& column) {
-  const size_t open = column.rfind('[');
-  if (open == std::string::npos || column.empty() || column.back() != ']') return {column, ""};
-  return {column.substr(0, open), column.substr(open + 1, column.size() - open - 2)};
-}
-
 // HDF5 link names may not contain '/' and '.' alone is the group itself.
 std::string linkName(const std::string& s) {
   std::string out = s;
   for (char& c : out)
     if (c == '/') c = '_';
   return out == "." || out.empty() ? "_" + out : out;
-}
-
-double firstNumber(const std::string& joined) {
-  if (joined.empty()) return std::nan("");
-  return std::stod(joined.substr(0, joined.find(';')));
-}
-
-int countFaults(const std::string& joined_types) {
-  if (joined_types.empty()) return 0;
-  int n = 1;
-  for (char c : joined_types) n += c == ';';
-  return n;
 }
 
 // Fixed-length string fields of the label table: each as long as its longest value (at least 1 byte).
@@ -148,47 +128,41 @@ void writeLabels(hid_t file, const LabelTable& t) {
                o_design = o_count + sizeof(int), w_design = longest(t.design), o_seed = o_design + w_design,
                row = o_seed + sizeof(long long);
   const Handle type(H5Tcreate(H5T_COMPOUND, row), H5Tclose, "create the label type");
-  std::vector<hid_t> string_types;
-  auto stringType = [&](size_t n) {
-    const hid_t s = H5Tcopy(H5T_C_S1);
-    check(s < 0 ? -1 : H5Tset_size(s, n), "size a string field");
+  std::vector<std::unique_ptr<Handle>> string_types;  // closed when the table is written (or on an error)
+  auto stringType = [&](size_t n) -> hid_t {
+    string_types.push_back(std::make_unique<Handle>(H5Tcopy(H5T_C_S1), H5Tclose, "copy a string type"));
+    const hid_t s = *string_types.back();
+    check(H5Tset_size(s, n), "size a string field");
     check(H5Tset_strpad(s, H5T_STR_NULLPAD), "pad a string field");
     check(H5Tset_cset(s, H5T_CSET_UTF8), "set UTF-8");
-    string_types.push_back(s);
     return s;
   };
-  try {
-    for (size_t i = 0; i < strings.size(); ++i)
-      check(H5Tinsert(type, strings[i].first, offsets[i], stringType(width[i])), "insert a label field");
-    check(H5Tinsert(type, "fault_severity", o_sev, H5T_NATIVE_DOUBLE), "insert fault_severity");
-    check(H5Tinsert(type, "fault_onset_s", o_onset, H5T_NATIVE_DOUBLE), "insert fault_onset_s");
-    check(H5Tinsert(type, "fault_count", o_count, H5T_NATIVE_INT), "insert fault_count");
-    check(H5Tinsert(type, "design", o_design, stringType(w_design)), "insert design");
-    check(H5Tinsert(type, "seed", o_seed, H5T_NATIVE_LLONG), "insert seed");
-    const size_t n = t.run.size();
-    std::vector<char> buffer(n * row, '\0');
-    for (size_t r = 0; r < n; ++r) {
-      char* p = buffer.data() + r * row;
-      for (size_t i = 0; i < strings.size(); ++i) {
-        const std::string& s = (*strings[i].second)[r];
-        std::memcpy(p + offsets[i], s.data(), s.size());
-      }
-      std::memcpy(p + o_sev, &t.severity[r], sizeof(double));
-      std::memcpy(p + o_onset, &t.onset[r], sizeof(double));
-      std::memcpy(p + o_count, &t.count[r], sizeof(int));
-      std::memcpy(p + o_design, t.design[r].data(), t.design[r].size());
-      std::memcpy(p + o_seed, &t.seed[r], sizeof(long long));
+  for (size_t i = 0; i < strings.size(); ++i)
+    check(H5Tinsert(type, strings[i].first, offsets[i], stringType(width[i])), "insert a label field");
+  check(H5Tinsert(type, "fault_severity", o_sev, H5T_NATIVE_DOUBLE), "insert fault_severity");
+  check(H5Tinsert(type, "fault_onset_s", o_onset, H5T_NATIVE_DOUBLE), "insert fault_onset_s");
+  check(H5Tinsert(type, "fault_count", o_count, H5T_NATIVE_INT), "insert fault_count");
+  check(H5Tinsert(type, "design", o_design, stringType(w_design)), "insert design");
+  check(H5Tinsert(type, "seed", o_seed, H5T_NATIVE_LLONG), "insert seed");
+  const size_t n = t.run.size();
+  std::vector<char> buffer(n * row, '\0');
+  for (size_t r = 0; r < n; ++r) {
+    char* p = buffer.data() + r * row;
+    for (size_t i = 0; i < strings.size(); ++i) {
+      const std::string& s = (*strings[i].second)[r];
+      std::memcpy(p + offsets[i], s.data(), s.size());
     }
-    const hsize_t dims = n;
-    const Handle space(H5Screate_simple(1, &dims, nullptr), H5Sclose, "create the label space");
-    const Handle set(H5Dcreate2(file, "labels", type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
-                     "create /labels");
-    if (n > 0) check(H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()), "write /labels");
-  } catch (...) {
-    for (hid_t s : string_types) H5Tclose(s);
-    throw;
+    std::memcpy(p + o_sev, &t.severity[r], sizeof(double));
+    std::memcpy(p + o_onset, &t.onset[r], sizeof(double));
+    std::memcpy(p + o_count, &t.count[r], sizeof(int));
+    std::memcpy(p + o_design, t.design[r].data(), t.design[r].size());
+    std::memcpy(p + o_seed, &t.seed[r], sizeof(long long));
   }
-  for (hid_t s : string_types) H5Tclose(s);
+  const hsize_t dims = n;
+  const Handle space(H5Screate_simple(1, &dims, nullptr), H5Sclose, "create the label space");
+  const Handle set(H5Dcreate2(file, "labels", type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+                   "create /labels");
+  if (n > 0) check(H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()), "write /labels");
 }
 
 // Removes the temporary file unless committed.
@@ -219,13 +193,12 @@ DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& 
 
   DatasetSummary summary;
   summary.path = path;
-  TemporaryFile tmp{path + ".tmp." + std::to_string(static_cast<long>(::getpid()))};
+  TemporaryFile tmp{io::temporaryName(path)};
   {
     // The HDF5 1.10 file format: compact object headers and single-chunk indexes (several thousand small data sets per file).
     const Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create a file access list");
     check(H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_V110), "set the file format version");
-    const Handle file(H5Fcreate(tmp.path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl), H5Fclose,
-                      "create " + tmp.path);
+    const Handle file(H5Fcreate(tmp.path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl), H5Fclose, "create " + tmp.path);
     attribute(file, "format", "jointsim-dataset");
     numberAttribute(file, "format_version", 1L);
     attribute(file, "sweep", sweep.name);
@@ -244,9 +217,9 @@ DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& 
       labels.status.push_back(r.status);
       labels.type.push_back(r.fault_type);
       labels.joint.push_back(r.fault_joint);
-      labels.severity.push_back(firstNumber(r.fault_severity));
-      labels.onset.push_back(firstNumber(r.fault_onset_s));
-      labels.count.push_back(countFaults(r.fault_type));
+      labels.severity.push_back(run.faults.empty() ? std::nan("") : run.faults.front().value);
+      labels.onset.push_back(run.faults.empty() ? std::nan("") : run.faults.front().onset);
+      labels.count.push_back(static_cast<int>(run.faults.size()));
       labels.design.push_back(r.design);
       labels.seed.push_back(run.seed);
 
@@ -272,9 +245,8 @@ DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& 
       numberAttribute(group, "seed", run.seed);
       const fs::path folder = fs::path(dir) / run.name;
       const fs::path summary_file = folder / "summary.json";
-      attribute(group, "summary_json", io::pathExists(summary_file.string())
-                                           ? io::readBoundedFile(summary_file.string())
-                                           : std::string());
+      attribute(group, "summary_json",
+                io::pathExists(summary_file.string()) ? io::readBoundedFile(summary_file.string()) : std::string());
       // The run's log: the CSV files of its folder (one per experiment; several are stored in subgroups).
       std::vector<fs::path> logs;
       std::error_code ec;
@@ -287,17 +259,17 @@ DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& 
         std::unique_ptr<Handle> sub;
         hid_t target = group;
         if (logs.size() > 1) {
-          sub = std::make_unique<Handle>(
-              H5Gcreate2(group, linkName(log.stem().string()).c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-              H5Gclose, "create a group for " + log.string());
+          sub = std::make_unique<Handle>(H5Gcreate2(group, linkName(log.stem().string()).c_str(), H5P_DEFAULT,
+                                                    H5P_DEFAULT, H5P_DEFAULT),
+                                         H5Gclose, "create a group for " + log.string());
           target = *sub;
         }
         const Eigen::Index n = table.rows();
-        std::vector<double> column(static_cast<size_t>(n));
         for (size_t c = 0; c < table.header.size(); ++c) {
-          auto [name, unit] = splitUnit(table.header[c]);
-          for (Eigen::Index k = 0; k < n; ++k) column[static_cast<size_t>(k)] = table.data(k, static_cast<Eigen::Index>(c));
-          doubles(target, linkName(name), column.data(), static_cast<hsize_t>(n), unit);
+          const auto [name, unit] = splitColumn(table.header[c]);
+          // Eigen stores the table by columns: each column is contiguous.
+          doubles(target, linkName(name), table.data.col(static_cast<Eigen::Index>(c)).data(), static_cast<hsize_t>(n),
+                  unit);
           columns += (columns.empty() ? "" : ",") + name;
         }
         summary.samples += static_cast<long>(n);
@@ -309,8 +281,7 @@ DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& 
     writeLabels(file, labels);
     check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush " + tmp.path);
   }  // closed here: the file is complete on disk
-  if (std::rename(tmp.path.c_str(), path.c_str()) != 0)
-    throw Error(path + ": cannot move the data set into place: " + std::strerror(errno));
+  io::moveIntoPlace(tmp.path, path);
   tmp.keep = true;
   return summary;
 }

@@ -295,12 +295,7 @@ void applyFaults(std::vector<DriveSpec>& drives, const std::vector<Fault>& fault
     bool found = false;
     for (auto& d : drives)
       if (d.joint == f.joint) {
-        if (f.timeVarying()) {
-          DriveSpec probe = d;  // checked now against the drive; applied during the run
-          applyFault(probe, f);
-        } else {
-          applyFault(d, f);
-        }
+        if (!f.timeVarying()) applyFault(d, f);  // the others act during the run (RobotSystem::setFaults checks them)
         found = true;
       }
     if (!found) throw InputError("fault " + describe(f) + ": no drive moves joint '" + f.joint + "'");

@@ -11,6 +11,8 @@ namespace jointsim {
 
 /// A number for a message: %.<precision>g ("0.001", "2.5e+07").
 std::string formatNumber(double value, int precision = 10);
+/// The shortest text that reads back as exactly `value` ("0.8", not "0.80000000000000004").
+std::string formatShortest(double value);
 
 /// Items joined by `separator`.
 std::string join(const std::vector<std::string>& items, const std::string& separator);

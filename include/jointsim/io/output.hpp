@@ -38,6 +38,12 @@ class CsvWriter {
   size_t columns_ = 0, rows_ = 0;
 };
 
+/// The temporary name under which an output is written before it is renamed into place: "PATH.tmp.<pid>" (beside
+/// the target, so that the rename stays on one file system; a batch removes leftovers by the ".tmp." in the name).
+std::string temporaryName(const std::string& path);
+/// Renames the complete temporary file `tmp` to `path`; on failure removes `tmp` and throws Error naming `path`.
+void moveIntoPlace(const std::string& tmp, const std::string& path);
+
 /// Writes `content` to `path` through a temporary file and a rename.
 void writeFileAtomically(const std::string& path, const std::string& content);
 

@@ -108,8 +108,8 @@ bool faultEpisode(const Fault& fault, double t, long* episode = nullptr);
 /// InputError when the fault does not apply to the drive's components or its value is out of range. The other
 /// types act during the run (RobotSystem::setFaults) and are only checked against the drive here.
 void applyFault(DriveSpec& drive, const Fault& fault, double value = std::numeric_limits<double>::quiet_NaN());
-/// Applies every constant fault to the drive of its joint and checks the others against it; throws InputError for
-/// a joint without a drive.
+/// Applies every constant fault to the drive of its joint (the time-varying ones act during the run:
+/// RobotSystem::setFaults); throws InputError for a joint without a drive.
 void applyFaults(std::vector<DriveSpec>& drives, const std::vector<Fault>& faults);
 
 }  // namespace jointsim::systems
