@@ -21,9 +21,11 @@ void write(const fs::path& p, const std::string& text) {
   std::ofstream(p) << text;
 }
 
-// A two-run sweep whose run folders are written by hand (nothing is simulated).
+// A two-run sweep whose run folders are written by hand (nothing is simulated), in a folder of the test's own (CTest
+// runs the tests of this file in parallel).
 struct HandMadeSweep {
-  fs::path dir = fs::temp_directory_path() / "jointsim_dataset_test";
+  fs::path dir = fs::temp_directory_path() /
+                 ("jointsim_dataset_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
   experiments::Sweep sweep;
   HandMadeSweep() {
     fs::remove_all(dir);
