@@ -19,7 +19,7 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   if (!node.defined()) return o;
   node.expectMap("a solver mapping {method, rtol, atol, max_step, max_order, stability_limit_detection}");
   node.allowKeys({"method", "rtol", "atol", "max_step", "max_order", "stability_limit_detection", "max_num_steps",
-                  "input_jumps"});
+                  "input_jumps", "max_gamma_change"});
   if (node.has("method")) {
     const std::string m = node["method"].asString("adams or bdf");
     if (m == "adams")
@@ -37,6 +37,9 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   if (o.max_step < 0) node["max_step"].failExpected("a step >= 0 s");
   if (node.has("max_order"))
     o.max_order = static_cast<int>(node["max_order"].asInt("an order 1..5 (BDF) or 1..12 (Adams)"));
+  o.max_gamma_change = node["max_gamma_change"].asDouble(o.max_gamma_change, "a relative change of h·β₀ > 0");
+  if (!(o.max_gamma_change > 0) || !std::isfinite(o.max_gamma_change))
+    node["max_gamma_change"].failExpected("a relative change of h·β₀ > 0");
   if (node.has("max_num_steps")) o.max_num_steps = node["max_num_steps"].asInt("a positive step count");
   if (node.has("stability_limit_detection"))
     o.stability_limit_detection = node["stability_limit_detection"].asBool("true or false");
@@ -161,7 +164,8 @@ void solverJson(nlohmann::ordered_json& out, const sim::CvodeOptions& o) {
          {"atol", o.atol},
          {"max_step", o.max_step},
          {"max_order", o.max_order},
-         {"stability_limit_detection", o.stability_limit_detection}};
+         {"stability_limit_detection", o.stability_limit_detection},
+         {"max_gamma_change", o.max_gamma_change}};
 }
 
 void solverStatsJson(nlohmann::ordered_json& out, const sim::SolverStats& s) {
@@ -169,6 +173,7 @@ void solverStatsJson(nlohmann::ordered_json& out, const sim::SolverStats& s) {
          {"rhs_evals", s.rhs_evals},
          {"rhs_evals_jacobian", s.rhs_evals_jacobian},
          {"jac_evals", s.jac_evals},
+         {"jac_reused", s.jac_reused},
          {"lin_setups", s.lin_setups},
          {"error_test_failures", s.error_test_failures},
          {"nonlinear_iterations", s.nonlinear_iterations},

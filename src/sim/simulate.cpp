@@ -184,9 +184,10 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
   };
   // After an event (`restart`: the right-hand side may jump anywhere) or a sample: restart, or go on with the
   // history; then the stop time at the next event or sample.
+  // A restart at a sample alone (the state is continuous, the held inputs jumped) starts with the last Jacobian.
   auto goOn = [&](double t_now, bool restart) {
     if (restart || !keepHistory(t_now)) {
-      integ.initialize(t_now, y);
+      integ.initialize(t_now, y, !restart);
       ++result.restarts;
     } else {
       ++result.input_jumps;  // CVODE stopped exactly at the sample and goes on with the new held inputs

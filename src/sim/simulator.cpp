@@ -73,7 +73,7 @@ void Simulator::reset(double t0, const Eigen::VectorXd& y0) {
   horizon_ = t0;
   next_event_ = 0;
   seen_revision_ = plant_->inputRevision();
-  restart_ = true;
+  restart_ = fresh_jacobian_ = true;
   invalidate();
 }
 
@@ -83,7 +83,7 @@ void Simulator::setState(const Eigen::VectorXd& y) {
                      " entries, expected " + std::to_string(plant_->stateSize()));
   if (!y.allFinite()) throw InputError(plant_->name() + ": setState: the state must be finite");
   y_ = y;
-  restart_ = true;
+  restart_ = fresh_jacobian_ = true;
   invalidate();
 }
 
@@ -127,10 +127,10 @@ void Simulator::restartIfNeeded(double h_max) {
       restart_ = true;
   }
   if (restart_) {
-    integ_->initialize(t_, y_);
+    integ_->initialize(t_, y_, !fresh_jacobian_);
     ++restarts_;
   }
-  restart_ = jump_ = false;
+  restart_ = jump_ = fresh_jacobian_ = false;
 }
 
 void Simulator::prepare(double t_target) {
@@ -140,7 +140,7 @@ void Simulator::prepare(double t_target) {
     y_work_ = y_;
     plant_->applyInputs(t_, y_);
     if (y_ != y_work_)
-      restart_ = true;  // the plant moved states (bumpless transfer): CVODE's history no longer matches
+      restart_ = fresh_jacobian_ = true;  // the plant moved states (bumpless transfer): CVODE's history no longer matches
     else
       inputJumped();
     invalidate();
@@ -185,14 +185,14 @@ double Simulator::advanceTo(double t_target) {
             ++next_event_;
         plant_->updateModes(t_, y_, root ? integ_->rootDirections() : std::vector<int>{});
         ++events_;
-        restart_ = true;
+        restart_ = fresh_jacobian_ = true;
       }
       if (at_sample) takeSample();
       // At the target: the next advance restarts or goes on (after its inputs).
       if (t_ < t_target) restartIfNeeded(std::min(t_sample_, t_target) - t_);
     }
   } catch (const SolverError&) {
-    restart_ = true;  // the integrator's history is unusable; y_ is the last state reached
+    restart_ = fresh_jacobian_ = true;  // the integrator's history is unusable; y_ is the last state reached
     throw;
   }
   // The derivative with the inputs in force now: the reference for an input change before the next advance.

@@ -21,6 +21,7 @@ using jointsim::sim::CvodeOptions;
 using jointsim::sim::JacobianFunction;
 using jointsim::sim::Method;
 using jointsim::sim::RhsFunction;
+using jointsim::sim::SolverStats;
 
 const double kPi = std::acos(-1.0);
 
@@ -706,4 +707,61 @@ TEST(DenseSolvers, EigenAndSundialsAgreeOnRobertson) {
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(results[0][i], results[1][i], 1e-6 * std::abs(results[1][i]) + 1e-16);
   EXPECT_NEAR(static_cast<double>(steps[0]), static_cast<double>(steps[1]), 0.05 * static_cast<double>(steps[1]))
       << "same method, same step-size control";
+}
+
+// A stiff linear system y' = A y + u with a held input u that jumps every 1 ms (a sampled controller):
+// restarting with the last Jacobian (initialize(t, y, true)) gives the same solution as fresh Jacobians to the
+// tolerance, and the restarts evaluate no Jacobian of their own.
+TEST(CvodeJacobianReuse, RestartsAtInputJumpsReuseTheLastJacobian) {
+  Eigen::Matrix2d A;
+  A << -1000.0, 999.0, 0.0, -1.0;  // eigenvalues −1000 and −1
+  double u = 0.0;
+  auto rhs = [&](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+    yd = A * y;
+    yd[1] += u;
+  };
+  int jac_calls = 0;
+  JacobianFunction jac = [&](double, const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
+                             Eigen::Ref<Eigen::MatrixXd> J) {
+    ++jac_calls;
+    J = A;
+  };
+  std::vector<Eigen::VectorXd> end(2);
+  std::vector<SolverStats> stats(2);
+  std::vector<int> calls(2);
+  for (int reuse = 0; reuse < 2; ++reuse) {
+    CvodeOptions o;
+    o.rtol = 1e-8;
+    o.atol = 1e-12;
+    o.max_order = 2;
+    jac_calls = 0;
+    CvodeIntegrator cv(2, rhs, o, jac);
+    Eigen::VectorXd y = Eigen::VectorXd::Zero(2);
+    cv.initialize(0.0, y);
+    for (int k = 0; k < 50; ++k) {
+      u = std::sin(0.3 * k);  // the held input of sample k
+      if (k > 0) cv.initialize(k * 1e-3, y, reuse == 1);
+      cv.setStopTime((k + 1) * 1e-3);
+      cv.advance((k + 1) * 1e-3, y);
+    }
+    end[static_cast<size_t>(reuse)] = y;
+    stats[static_cast<size_t>(reuse)] = cv.stats();
+    calls[static_cast<size_t>(reuse)] = jac_calls;
+  }
+  EXPECT_NEAR(end[0][0], end[1][0], 1e-8 * std::abs(end[0][0]) + 1e-12);
+  EXPECT_NEAR(end[0][1], end[1][1], 1e-8 * std::abs(end[0][1]) + 1e-12);
+  EXPECT_EQ(stats[0].jac_reused, 0);
+  EXPECT_GE(calls[0], 50);  // a fresh Jacobian at every restart (and every 51 steps, CVODE's default)
+  EXPECT_EQ(stats[1].jac_reused, 49);
+  EXPECT_LE(calls[1], calls[0] - 40) << calls[0];
+  EXPECT_EQ(stats[1].jac_evals, calls[1]);  // the reported evaluations are the real ones
+}
+
+TEST(CvodeOptionsValidation, MaxGammaChangeMustBePositive) {
+  auto rhs = [](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) { yd = -y; };
+  for (double bad : {0.0, -0.5, std::nan("")}) {
+    CvodeOptions o;
+    o.max_gamma_change = bad;
+    EXPECT_THROW(CvodeIntegrator(1, rhs, o), InputError) << bad;
+  }
 }

@@ -99,6 +99,9 @@ class Simulator {
   Eigen::VectorXd f_old_;  // ẏ at (t_, y_) with the inputs before a jump (KeepHistory)
   bool restart_ = true;
   bool jump_ = false;  // an input jumped at t_ (counted once, when the integration goes on)
+  // The pending restart has a cause other than an input jump (start, event, state change, solver failure): the
+  // Jacobian is then evaluated afresh; after an input jump alone the restart starts with the last one.
+  bool fresh_jacobian_ = true;
   bool keep_history_ = true;
   long seen_revision_ = 0;
   // Sampled part: next sample at t0 + k·T_s.
