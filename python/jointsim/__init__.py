@@ -238,11 +238,13 @@ class Simulator:
 
     @staticmethod
     def from_robot(path: str, q0: Optional[Sequence[float]] = None, rtol: float = 1e-6, atol: float = 1e-9,
-                   max_order: int = 2, max_step: float = 0.0) -> "Simulator":
+                   max_order: int = 2, max_step: float = 0.0, max_gamma_change: float = 0.3) -> "Simulator":
         """A simulator over a robot-with-drives file (e.g. config/robots/ur5_drives.yaml) starting at rest at q0
-        [rad] (default zeros) with the drives holding it; BDF of order <= max_order with rtol, atol [state units]."""
+        [rad] (default zeros) with the drives holding it; BDF of order <= max_order with rtol, atol [state units],
+        steps of at most max_step [s] (0: unlimited), a new Newton matrix when h*beta0 changes by more than
+        max_gamma_change (relative; 0.5 suits sampled control, see docs/design.md)."""
         q = None if q0 is None else np.asarray(q0, dtype=np.float64)
-        return Simulator(_core.Simulator.from_robot(str(path), q, rtol, atol, max_order, max_step))
+        return Simulator(_core.Simulator.from_robot(str(path), q, rtol, atol, max_order, max_step, max_gamma_change))
 
     # --- time and state
     name = property(lambda self: self._s.name, doc="Name of the simulated model.")
@@ -294,6 +296,10 @@ class Simulator:
     joint_names = property(lambda self: list(self._s.joint_names))
     joint_positions = property(lambda self: self._s.joint_positions, doc="Joint angles q [rad] (copy).")
     joint_velocities = property(lambda self: self._s.joint_velocities, doc="Joint rates qd [rad/s] (copy).")
+    gear_ratios = property(lambda self: self._s.gear_ratios,
+                           doc="Gear ratio N per joint [-] (motor angle = N * joint angle for a rigid gear).")
+    motor_velocities = property(lambda self: self._s.motor_velocities,
+                                doc="Motor shaft speeds [rad/s] (copy): what the motor encoders measure.")
 
     def model(self) -> Model:
         """The robot's rigid-body model (with the reflected rotor inertias), for rnea/aba/... in a controller."""

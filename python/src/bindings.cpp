@@ -112,8 +112,9 @@ struct PySimulator {
   }
 };
 
-sim::CvodeOptions solverFrom(double rtol, double atol, int max_order, double max_step) {
+sim::CvodeOptions solverFrom(double rtol, double atol, int max_order, double max_step, double max_gamma_change) {
   sim::CvodeOptions o;
+  o.max_gamma_change = max_gamma_change;
   o.method = sim::Method::BDF;
   o.rtol = rtol;
   o.atol = atol;
@@ -410,16 +411,17 @@ PYBIND11_MODULE(_core, m) {
           py::arg("experiment"))
       .def_static(
           "from_robot",
-          [](const std::string& path, const py::object& q0, double rtol, double atol, int max_order, double max_step) {
+          [](const std::string& path, const py::object& q0, double rtol, double atol, int max_order, double max_step,
+             double max_gamma_change) {
             auto robot = std::make_shared<systems::RobotSystem>(systems::loadRobotWithDrives(path));
             if (!q0.is_none()) robot->setInitialPositions(Eigen::VectorXd(vec(q0.cast<Array>(), robot->dof(), "q0")));
             PySimulator s;
             s.plant = robot;
-            s.sim = std::make_unique<sim::Simulator>(s.plant, solverFrom(rtol, atol, max_order, max_step));
+            s.sim = std::make_unique<sim::Simulator>(s.plant, solverFrom(rtol, atol, max_order, max_step, max_gamma_change));
             return s;
           },
           py::arg("path"), py::arg("q0") = py::none(), py::arg("rtol") = 1e-6, py::arg("atol") = 1e-9,
-          py::arg("max_order") = 2, py::arg("max_step") = 0.0)
+          py::arg("max_order") = 2, py::arg("max_step") = 0.0, py::arg("max_gamma_change") = 0.3)
       .def_property_readonly("name", [](PySimulator& s) { return s.plant->name(); })
       .def_property_readonly("time", [](PySimulator& s) { return s.sim->time(); })
       .def_property_readonly("state", [](PySimulator& s) { return toArray(s.sim->state()); })
@@ -449,6 +451,20 @@ PYBIND11_MODULE(_core, m) {
         const int n = s.robot().dof();
         return toArray(Eigen::VectorXd(s.sim->state().segment(n, n)));
       })
+      .def_property_readonly("gear_ratios",
+                             [](PySimulator& s) {
+                               const int n = s.robot().dof();
+                               Eigen::VectorXd r(n);
+                               for (int k = 0; k < n; ++k) r[k] = s.robot().layout(k).ratio;
+                               return toArray(r);
+                             })
+      .def_property_readonly("motor_velocities",
+                             [](PySimulator& s) {
+                               const int n = s.robot().dof();
+                               Eigen::VectorXd v(n);
+                               for (int k = 0; k < n; ++k) v[k] = s.robot().motorVelocity(s.sim->state(), k);
+                               return toArray(v);
+                             })
       .def("model", [](PySimulator& s) { return std::make_shared<PyModel>(s.robot().model()); })
       .def("set_port", [](PySimulator& s, const py::object& j, const std::string& port) {
         s.robot().setCommandPort(s.joint(j), systems::parsePort(port));

@@ -109,9 +109,12 @@ def test_overrides_and_experiment_objects(root):
 def test_python_pd_controller_tracks_a_step_on_the_ur5_twin(root):
     """A PD law with gravity feed-forward, in Python at 1 kHz, commands the six motor voltages of the UR5 twin;
     every joint steps by 0.1 rad at 0.2 s and is within 5 mrad of its reference from 1.7 s on (the C++ example
-    examples/pd_voltage_ur5.cpp does the same)."""
+    examples/pd_voltage_ur5.cpp does the same, with the same solver settings: rtol 1e-4, see docs/design.md). The
+    damping acts on the motor speed (collocated with the voltage)."""
     q0 = np.array([0.0, -1.2, 1.2, -1.5, -1.5708, 0.0])
-    sim = jointsim.Simulator.from_robot(str(root / "config/robots/ur5_drives.yaml"), q0=q0)
+    sim = jointsim.Simulator.from_robot(str(root / "config/robots/ur5_drives.yaml"), q0=q0, rtol=1e-4,
+                                        max_gamma_change=0.5)
+    ratios = sim.gear_ratios
     model = sim.model()
     for k in range(6):
         sim.set_port(k, "voltage")
@@ -123,8 +126,8 @@ def test_python_pd_controller_tracks_a_step_on_the_ur5_twin(root):
     while sim.time < 2.0 - 1e-9:
         if sim.time >= 0.2 - 1e-9:
             q_ref = q0 + 0.1
-        q, qd = sim.joint_positions, sim.joint_velocities
-        V = ff * jointsim.gravity_torques(model, q) + Kp * (q_ref - q) - Kd * qd
+        q = sim.joint_positions
+        V = ff * jointsim.gravity_torques(model, q) + Kp * (q_ref - q) - Kd * sim.motor_velocities / ratios
         sim.set_commands(V)
         sim.advance(dt)
         if sim.time >= 1.7 - 1e-9:

@@ -195,6 +195,12 @@ class RobotSystem : public sim::Plant {
     double ratio = 1.0;
   };
   const DriveLayout& layout(int k) const { return layout_[static_cast<size_t>(k)]; }
+  /// Speed of drive k's motor shaft [rad/s] in state y: its own state, or N·q̇_k where a rigid gear merges the motor
+  /// into the joint (N the gear ratio). What a motor encoder measures: the collocated rate for damping injection.
+  double motorVelocity(const Eigen::Ref<const Eigen::VectorXd>& y, int k) const {
+    const DriveLayout& L = layout(k);
+    return L.motor >= 0 ? y[L.motor + 1] : L.ratio * y[model_.nq + k];
+  }
 
   // sim::Plant
   std::string name() const override { return "robot with drives '" + model_.name + "'"; }
