@@ -39,8 +39,9 @@ int main(int argc, char** argv) try {
   sim::Simulator sim(robot, solver);
   for (int k = 0; k < n; ++k) robot.setCommandPort(k, systems::CommandPort::Voltage);
 
-  // PD gains on the joint angle [V/rad] and the motor speed reduced to the joint [V·s/rad]; gravity feed-forward through the steady current
-  // i = g / (N k_t), i.e. the voltage R i (the back-EMF and the friction are left to the feedback).
+  // PD gains on the joint angle [V/rad] and on the motor speed reduced to the joint [V·s/rad]; gravity
+  // feed-forward through the steady current i = g / (N k_t), i.e. the voltage R i (the back-EMF and the friction
+  // are left to the feedback).
   const double Kp = 200.0, Kd = 5.0, dt = 1e-3;
   multibody::Data data(robot.model());
   Eigen::VectorXd V(n), q_ref = q0;
@@ -53,7 +54,8 @@ int main(int argc, char** argv) try {
     for (int k = 0; k < n; ++k) {
       const auto& d = robot.drives()[static_cast<size_t>(k)];
       const double N = d.transmission->ratio();
-      V[k] = d.motor.R * g[k] / (N * d.motor.kt) + Kp * (q_ref[k] - q[k]) - Kd * robot.motorVelocity(sim.state(), k) / N;
+      V[k] = d.motor.R * g[k] / (N * d.motor.kt) + Kp * (q_ref[k] - q[k]) -
+             Kd * robot.motorVelocity(sim.state(), k) / N;
     }
     robot.setCommands(V);
     sim.advance(dt);

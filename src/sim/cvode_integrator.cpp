@@ -29,17 +29,8 @@ namespace {
 
 // ------------------------------------------------------------------ Eigen dense linear solver
 // A SUNLinearSolver (matrix-based, direct) over SUNDenseMatrix storage: setup factorises the Newton
-// matrix with Eigen::PartialPivLU (blocked, vectorised), solve applies it. The solves allocate nothing; with a
-// block structure the setup's condition estimates (PartialPivLU::rcond) use small temporaries.
-/// Block elimination of a bordered block-diagonal matrix A (JacobianStructure): with H the hub and B_k the blocks,
-///   D_k = A(B_k, B_k), C_k = A(B_k, H), E_k = A(H, B_k), W_k = D_k⁻¹ C_k, S = A(H, H) − Σ E_k W_k,
-/// and A x = b is solved by z_k = D_k⁻¹ b_k, x_H = S⁻¹ (b_H − Σ E_k z_k), x_k = z_k − W_k x_H.
-/// A part usually couples to few hub states (a drive to its own joint's angle and rate): only the non-zero columns
-/// Z_k of C_k enter W_k and the update of S (columns Z_k only), found at each factorisation. The blocks and S are
-/// kept as LU factors (no inverses): for 14-state drive blocks against a 12-state hub this makes a factorisation
-/// about three times cheaper than inverting, which matters where setups are frequent (sampled control stops at
-/// every sample; each stop and restart changes the step and thus the Newton matrix). Every workspace is sized once
-/// here.
+// matrix with Eigen::PartialPivLU (blocked, vectorised), solve applies it. The solves allocate nothing.
+
 /// x = A⁻¹ x with A = P⁻¹ L U from `f` (x holds b on entry), by column-oriented substitution: for the 10–20 states
 /// of a drive block a plain loop over contiguous columns is several times faster than Eigen's blocked triangular
 /// solver, whose panel logic is tuned for large matrices.
@@ -65,6 +56,15 @@ void luSolveInPlace(const Eigen::PartialPivLU<Eigen::MatrixXd>& f, Eigen::Vector
   x.swap(work);
 }
 
+/// Block elimination of a bordered block-diagonal matrix A (JacobianStructure): with H the hub and B_k the blocks,
+///   D_k = A(B_k, B_k), C_k = A(B_k, H), E_k = A(H, B_k), W_k = D_k⁻¹ C_k, S = A(H, H) − Σ E_k W_k,
+/// and A x = b is solved by z_k = D_k⁻¹ b_k, x_H = S⁻¹ (b_H − Σ E_k z_k), x_k = z_k − W_k x_H.
+/// A part usually couples to few hub states (a drive to its own joint's angle and rate): only the non-zero columns
+/// Z_k of C_k enter W_k and the update of S (columns Z_k only), found at each factorisation. The blocks and S are
+/// kept as LU factors (no inverses): for 14-state drive blocks against a 12-state hub this makes a factorisation
+/// about three times cheaper than inverting, which matters where setups are frequent (sampled control stops at
+/// every sample; each stop and restart changes the step and thus the Newton matrix). Every workspace is sized once
+/// here.
 struct BlockPlan {
   explicit BlockPlan(const JacobianStructure& st) : hub(st.hub), blocks(st.blocks) {
     const auto h = static_cast<Eigen::Index>(hub.size());
@@ -627,7 +627,7 @@ struct CvodeIntegrator::Impl {
     if (opts.min_step > 0.0) check(CVodeSetMinStep(mem, opts.min_step), "CVodeSetMinStep");
     if (opts.initial_step != 0.0) check(CVodeSetInitStep(mem, opts.initial_step), "CVodeSetInitStep");
     if (opts.max_order > 0) check(CVodeSetMaxOrd(mem, opts.max_order), "CVodeSetMaxOrd");
-    if (opts.method == Method::BDF && opts.max_gamma_change != 0.3)
+    if (opts.method == Method::BDF)
       check(CVodeSetDeltaGammaMaxLSetup(mem, opts.max_gamma_change), "CVodeSetDeltaGammaMaxLSetup");
   }
 
