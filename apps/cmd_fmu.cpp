@@ -15,7 +15,8 @@ void addFmuCommand(CLI::App& app) {
     fmi::ExportOptions fmu;
   };
   auto opt = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand("fmu", "Export an experiment (tracking, joint_rig) as an FMI 2.0 Co-Simulation FMU");
+  CLI::App* cmd =
+      app.add_subcommand("fmu", "Export an experiment (tracking, joint_rig) as an FMI 2.0 Co-Simulation FMU");
   cmd->add_option("experiment", opt->config, "Experiment description (.yaml)")->required();
   cmd->add_option("-o,--output", opt->output, "The FMU file NAME.fmu (NAME, a C identifier, is its model identifier)")
       ->required();
@@ -24,8 +25,9 @@ void addFmuCommand(CLI::App& app) {
                   "current, motor_torque, motor_velocity, setpoint (tracking); command (joint_rig). Default: none")
       ->delimiter(',');
   cmd->add_option("--outputs", opt->fmu.outputs, "Signals as outputs, comma-separated (default: all)")->delimiter(',');
-  cmd->add_option("--set", opt->fmu.overrides,
-                  "Override a scalar of the experiment file: key.path=value, or +key.path=value to add a key (repeatable)");
+  cmd->add_option(
+      "--set", opt->fmu.overrides,
+      "Override a scalar of the experiment file: key.path=value, or +key.path=value to add a key (repeatable)");
   cmd->add_option("--step-size", opt->fmu.step_size, "Suggested communication step [s] (default 1e-3)");
   cmd->callback([opt] {
     const fmi::FmuDescription d = fmi::exportFmu(opt->config, opt->output, opt->fmu);

@@ -16,7 +16,8 @@ void addValidateCommand(CLI::App& app) {
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
-      "validate", "Check an experiment or sweep file completely (keys, referenced files, every run) without running it");
+      "validate",
+      "Check an experiment or sweep file completely (keys, referenced files, every run) without running it");
   cmd->add_option("file", opt->file, "Experiment or sweep description (.yaml)")->required();
   cmd->add_option("--set", opt->overrides,
                   "Override a scalar as in `run`: key.path=value, or +key.path=value to add a key (repeatable)");

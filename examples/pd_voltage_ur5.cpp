@@ -54,8 +54,8 @@ int main(int argc, char** argv) try {
     for (int k = 0; k < n; ++k) {
       const auto& d = robot.drives()[static_cast<size_t>(k)];
       const double N = d.transmission->ratio();
-      V[k] = d.motor.R * g[k] / (N * d.motor.kt) + Kp * (q_ref[k] - q[k]) -
-             Kd * robot.motorVelocity(sim.state(), k) / N;
+      V[k] =
+          d.motor.R * g[k] / (N * d.motor.kt) + Kp * (q_ref[k] - q[k]) - Kd * robot.motorVelocity(sim.state(), k) / N;
     }
     robot.setCommands(V);
     sim.advance(dt);

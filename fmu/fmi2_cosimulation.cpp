@@ -35,10 +35,14 @@ fmi2Status toC(Status s) { return static_cast<fmi2Status>(static_cast<int>(s)); 
 std::string pathFromUri(const char* uri) {
   if (uri == nullptr) return {};
   std::string u = uri;
-  if (u.rfind("file://localhost/", 0) == 0) u = u.substr(16);
-  else if (u.rfind("file:///", 0) == 0) u = u.substr(7);
-  else if (u.rfind("file:/", 0) == 0) u = u.substr(5);
-  else return {};
+  if (u.rfind("file://localhost/", 0) == 0)
+    u = u.substr(16);
+  else if (u.rfind("file:///", 0) == 0)
+    u = u.substr(7);
+  else if (u.rfind("file:/", 0) == 0)
+    u = u.substr(5);
+  else
+    return {};
   std::string out;
   for (size_t i = 0; i < u.size(); ++i) {
     if (u[i] == '%' && i + 2 < u.size() + 0 && std::isxdigit(static_cast<unsigned char>(u[i + 1])) &&
@@ -104,12 +108,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     comp->callbacks = cb;
     comp->logging = loggingOn != fmi2False;
     Component* raw = comp.get();
-    comp->instance = std::make_unique<Instance>(
-        name, resources, fmuGUID != nullptr ? fmuGUID : "",
-        [raw](Status s, const char* category, const std::string& message) {
-          if (raw->logging || s >= Status::Warning)
-            emit(raw->callbacks, raw->name, toC(s), category, message);
-        });
+    comp->instance = std::make_unique<Instance>(name, resources, fmuGUID != nullptr ? fmuGUID : "",
+                                                [raw](Status s, const char* category, const std::string& message) {
+                                                  if (raw->logging || s >= Status::Warning)
+                                                    emit(raw->callbacks, raw->name, toC(s), category, message);
+                                                });
     return comp.release();
   } catch (const std::exception& e) {
     emit(cb, name, fmi2Error, "logError", std::string("fmi2Instantiate: ") + e.what());
@@ -186,8 +189,8 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate, fmi2Byte[], size
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte[], size_t, fmi2FMUstate*) {
   return unsupported(c, "fmi2DeSerializeFMUstate");
 }
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference[], size_t,
-                                        const fmi2ValueReference[], size_t, const fmi2Real[], fmi2Real[]) {
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2ValueReference[],
+                                        size_t, const fmi2Real[], fmi2Real[]) {
   return unsupported(c, "fmi2GetDirectionalDerivative");
 }
 
@@ -201,8 +204,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 }
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean /*noSetFMUStatePriorToCurrentPoint*/) {
-  return call(c, "fmi2DoStep",
-              [&](Instance& i) { return i.doStep(currentCommunicationPoint, communicationStepSize); });
+  return call(c, "fmi2DoStep", [&](Instance& i) { return i.doStep(currentCommunicationPoint, communicationStepSize); });
 }
 fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, "fmi2CancelStep (doStep is synchronous)"); }
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind, fmi2Status*) { return unsupported(c, "fmi2GetStatus"); }

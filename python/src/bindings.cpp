@@ -21,7 +21,6 @@
 #include "jointsim/fmi/fmu.hpp"
 #include "jointsim/report/dataset.hpp"
 
-#include <nlohmann/json.hpp>
 #include "jointsim/identify/clamping_fit.hpp"
 #include "jointsim/identify/friction_fit.hpp"
 #include "jointsim/multibody/algorithms.hpp"
@@ -29,6 +28,7 @@
 #include "jointsim/sim/simulator.hpp"
 #include "jointsim/systems/joint_rig.hpp"
 #include "jointsim/systems/robot_with_drives.hpp"
+#include <nlohmann/json.hpp>
 
 namespace py = pybind11;
 using namespace jointsim;
@@ -107,7 +107,8 @@ struct PySimulator {
     if (py::isinstance<py::str>(j)) return r.model().jointIndex(j.cast<std::string>());
     const long k = j.cast<long>();
     if (k < 0 || k >= r.dof())
-      throw InputError(r.name() + ": joint index " + std::to_string(k) + " out of range 0.." + std::to_string(r.dof() - 1));
+      throw InputError(r.name() + ": joint index " + std::to_string(k) + " out of range 0.." +
+                       std::to_string(r.dof() - 1));
     return static_cast<int>(k);
   }
 };
@@ -182,24 +183,28 @@ PYBIND11_MODULE(_core, m) {
       .def("__repr__", [](const PyModel& p) {
         return "<jointsim.Model '" + p.model.name + "' with " + std::to_string(p.model.nq) + " joints>";
       });
-  m.def("load_robot", [](const std::string& path) { return std::make_shared<PyModel>(multibody::loadRobot(path)); },
-        py::arg("path"));
+  m.def(
+      "load_robot", [](const std::string& path) { return std::make_shared<PyModel>(multibody::loadRobot(path)); },
+      py::arg("path"));
   m.def(
       "rnea",
       [](PyModel& p, const Array& q, const Array& qd, const Array& qdd) {
         const auto n = p.model.nq;
         return toArray(multibody::rnea(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(qdd, n, "qdd")));
       },
-      "Inverse dynamics (recursive Newton-Euler): tau [N*m] = M(q) qdd + C(q, qd) qd + g(q); q [rad], qd [rad/s], qdd [rad/s^2], each shape (nq,).", py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("qdd"));
+      "Inverse dynamics (recursive Newton-Euler): tau [N*m] = M(q) qdd + C(q, qd) qd + g(q); q [rad], qd [rad/s], qdd [rad/s^2], each shape (nq,).",
+      py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("qdd"));
   m.def(
       "aba",
       [](PyModel& p, const Array& q, const Array& qd, const Array& tau) {
         const auto n = p.model.nq;
         return toArray(multibody::aba(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(tau, n, "tau")));
       },
-      "Forward dynamics (articulated-body algorithm): qdd [rad/s^2] for q [rad], qd [rad/s], tau [N*m].", py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("tau"));
+      "Forward dynamics (articulated-body algorithm): qdd [rad/s^2] for q [rad], qd [rad/s], tau [N*m].",
+      py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("tau"));
   m.def(
-      "crba", [](PyModel& p, const Array& q) { return toArray(multibody::crba(p.model, p.data, vec(q, p.model.nq, "q"))); },
+      "crba",
+      [](PyModel& p, const Array& q) { return toArray(multibody::crba(p.model, p.data, vec(q, p.model.nq, "q"))); },
       "Joint-space mass matrix M(q) [kg*m^2], shape (nq, nq).", py::arg("model"), py::arg("q"));
   m.def(
       "rnea_derivatives",
@@ -223,7 +228,9 @@ PYBIND11_MODULE(_core, m) {
       py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("tau"));
   m.def(
       "gravity_torques",
-      [](PyModel& p, const Array& q) { return toArray(multibody::gravityTorques(p.model, p.data, vec(q, p.model.nq, "q"))); },
+      [](PyModel& p, const Array& q) {
+        return toArray(multibody::gravityTorques(p.model, p.data, vec(q, p.model.nq, "q")));
+      },
       "Gravity torques g(q) [N*m].", py::arg("model"), py::arg("q"));
   m.def(
       "frame_placement",
@@ -236,14 +243,16 @@ PYBIND11_MODULE(_core, m) {
         T.topRightCorner<3, 1>() = X.p;
         return toArray(Eigen::MatrixXd(T));
       },
-      "4x4 homogeneous pose of a frame (default: the tool frame) in the base frame [m].", py::arg("model"), py::arg("q"), py::arg("frame") = py::none());
+      "4x4 homogeneous pose of a frame (default: the tool frame) in the base frame [m].", py::arg("model"),
+      py::arg("q"), py::arg("frame") = py::none());
   m.def(
       "frame_jacobian",
       [](PyModel& p, const Array& q, const py::object& frame) {
         const int f = frameOf(p.model, frame);
         return toArray(Eigen::MatrixXd(multibody::frameJacobian(p.model, p.data, vec(q, p.model.nq, "q"), f)));
       },
-      "Frame Jacobian, shape (6, nq): rows [v; w] in world axes at the frame origin [m/s, rad/s per rad/s].", py::arg("model"), py::arg("q"), py::arg("frame") = py::none());
+      "Frame Jacobian, shape (6, nq): rows [v; w] in world axes at the frame origin [m/s, rad/s per rad/s].",
+      py::arg("model"), py::arg("q"), py::arg("frame") = py::none());
 
   // ------------------------------------------------------------------------------------------ experiments
   py::class_<PyExperiment>(m, "Experiment")
@@ -269,7 +278,8 @@ PYBIND11_MODULE(_core, m) {
         out["columns"] = r.log.columns;
         out["values"] = toArray(r.log.values);
         py::dict extras;
-        for (const auto& t : r.extras) extras[py::str(t.suffix)] = py::make_tuple(t.table.columns, toArray(t.table.values));
+        for (const auto& t : r.extras)
+          extras[py::str(t.suffix)] = py::make_tuple(t.table.columns, toArray(t.table.values));
         out["extras"] = extras;
         out["summary_json"] = r.summary_json;
         return out;
@@ -417,7 +427,8 @@ PYBIND11_MODULE(_core, m) {
             if (!q0.is_none()) robot->setInitialPositions(Eigen::VectorXd(vec(q0.cast<Array>(), robot->dof(), "q0")));
             PySimulator s;
             s.plant = robot;
-            s.sim = std::make_unique<sim::Simulator>(s.plant, solverFrom(rtol, atol, max_order, max_step, max_gamma_change));
+            s.sim = std::make_unique<sim::Simulator>(s.plant,
+                                                     solverFrom(rtol, atol, max_order, max_step, max_gamma_change));
             return s;
           },
           py::arg("path"), py::arg("q0") = py::none(), py::arg("rtol") = 1e-6, py::arg("atol") = 1e-9,
@@ -446,11 +457,14 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("dof", [](PySimulator& s) { return s.robot().dof(); })
       .def_property_readonly("joint_names", [](PySimulator& s) { return s.robot().model().joint_names; })
       .def_property_readonly("joint_positions",
-                             [](PySimulator& s) { return toArray(Eigen::VectorXd(s.sim->state().head(s.robot().dof()))); })
-      .def_property_readonly("joint_velocities", [](PySimulator& s) {
-        const int n = s.robot().dof();
-        return toArray(Eigen::VectorXd(s.sim->state().segment(n, n)));
-      })
+                             [](PySimulator& s) {
+                               return toArray(Eigen::VectorXd(s.sim->state().head(s.robot().dof())));
+                             })
+      .def_property_readonly("joint_velocities",
+                             [](PySimulator& s) {
+                               const int n = s.robot().dof();
+                               return toArray(Eigen::VectorXd(s.sim->state().segment(n, n)));
+                             })
       .def_property_readonly("gear_ratios",
                              [](PySimulator& s) {
                                const int n = s.robot().dof();
@@ -466,10 +480,12 @@ PYBIND11_MODULE(_core, m) {
                                return toArray(v);
                              })
       .def("model", [](PySimulator& s) { return std::make_shared<PyModel>(s.robot().model()); })
-      .def("set_port", [](PySimulator& s, const py::object& j, const std::string& port) {
-        s.robot().setCommandPort(s.joint(j), systems::parsePort(port));
-      })
-      .def("port", [](PySimulator& s, const py::object& j) { return std::string(systems::portName(s.robot().commandPort(s.joint(j)))); })
+      .def("set_port", [](PySimulator& s, const py::object& j,
+                          const std::string& port) { s.robot().setCommandPort(s.joint(j), systems::parsePort(port)); })
+      .def("port",
+           [](PySimulator& s, const py::object& j) {
+             return std::string(systems::portName(s.robot().commandPort(s.joint(j))));
+           })
       .def("set_command",
            [](PySimulator& s, const py::object& j, double value) {
              if (auto* rig = dynamic_cast<systems::JointRig*>(s.plant.get())) {
@@ -478,15 +494,16 @@ PYBIND11_MODULE(_core, m) {
              }
              s.robot().setCommand(s.joint(j), value);
            })
-      .def("set_commands", [](PySimulator& s, const Array& v) { s.robot().setCommands(vec(v, s.robot().dof(), "commands")); })
-      .def("set_setpoint", [](PySimulator& s, const py::object& j, double q, double qd, double qdd) {
-        s.robot().setSetpoint(s.joint(j), q, qd, qdd);
-      })
+      .def("set_commands",
+           [](PySimulator& s, const Array& v) { s.robot().setCommands(vec(v, s.robot().dof(), "commands")); })
+      .def("set_setpoint", [](PySimulator& s, const py::object& j, double q, double qd,
+                              double qdd) { s.robot().setSetpoint(s.joint(j), q, qd, qdd); })
       .def("hold_setpoints",
            [](PySimulator& s, const Array& q, const py::object& qd, const py::object& qdd) {
              const int n = s.robot().dof();
              const Eigen::VectorXd qv = vec(q, n, "q");
-             const Eigen::VectorXd qdv = qd.is_none() ? Eigen::VectorXd() : Eigen::VectorXd(vec(qd.cast<Array>(), n, "qd"));
+             const Eigen::VectorXd qdv =
+                 qd.is_none() ? Eigen::VectorXd() : Eigen::VectorXd(vec(qd.cast<Array>(), n, "qd"));
              const Eigen::VectorXd qddv =
                  qdd.is_none() ? Eigen::VectorXd() : Eigen::VectorXd(vec(qdd.cast<Array>(), n, "qdd"));
              s.robot().holdSetpoints(qv, qdv, qddv);

@@ -50,7 +50,7 @@ ControllerOutputs JointController::evaluate(const ControllerInputs& in, const do
       double e_vel = 0.0;
       if (velocity_loop) {
         out.qdm_ref = in.entry == ControlEntry::MotorVelocity ? in.command
-                                                               : p_.P_pos * (in.q_set - in.q_fb) + in.ratio * in.qd_set;
+                                                              : p_.P_pos * (in.q_set - in.q_fb) + in.ratio * in.qd_set;
         e_vel = out.qdm_ref - in.qdm_fb;
         out.i_ref = p_.P_vel * e_vel + p_.I_vel * x[0];
       } else {
@@ -65,8 +65,9 @@ ControllerOutputs JointController::evaluate(const ControllerInputs& in, const do
       break;
     }
     case ControllerType::MotorPPI000: {
-      out.qdm_ref = in.entry == ControlEntry::MotorVelocity ? in.command
-                                                             : in.ratio * in.qd_set + p_.kp * (in.ratio * in.q_set - in.qm_fb);
+      out.qdm_ref = in.entry == ControlEntry::MotorVelocity
+                        ? in.command
+                        : in.ratio * in.qd_set + p_.kp * (in.ratio * in.q_set - in.qm_fb);
       const double u = out.qdm_ref - in.qdm_fb;
       out.u = p_.ks * (u + x[0]);
       xdot[0] = u / p_.Ts;

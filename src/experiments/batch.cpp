@@ -74,9 +74,11 @@ void readTimeLaw(const YamlValue& n, systems::Fault& f) {
     n["progression"].failExpected("step, linear or exponential");
   f.ramp_time = n["ramp_time"].asDouble(0.0, "a ramp time in s");
   f.rate = n["rate"].asDouble(0.0, "a rate in 1/s");
-  if (n["steps"].defined()) f.steps = static_cast<int>(std::clamp(n["steps"].asInt("a number of steps"), -1L, 1000000L));
+  if (n["steps"].defined())
+    f.steps = static_cast<int>(std::clamp(n["steps"].asInt("a number of steps"), -1L, 1000000L));
   f.period = n["period"].asDouble(0.0, "a period in s");
-  if (n["count"].defined()) f.count = static_cast<int>(std::clamp(n["count"].asInt("a number of episodes"), -1L, 1000000000L));
+  if (n["count"].defined())
+    f.count = static_cast<int>(std::clamp(n["count"].asInt("a number of episodes"), -1L, 1000000000L));
   f.width = n["width"].asDouble(f.width, "a spike width in s");
   f.order = n["order"].asDouble(1.0, "an order (cycles per revolution)");
 }
@@ -356,7 +358,8 @@ Sweep loadSweep(const std::string& path) {
       ParameterDistribution p;
       if (kind_text == "uniform" || kind_text == "log_uniform") {
         d.allowKeys({"distribution", "low", "high"});
-        p.kind = kind_text == "uniform" ? ParameterDistribution::Kind::Uniform : ParameterDistribution::Kind::LogUniform;
+        p.kind =
+            kind_text == "uniform" ? ParameterDistribution::Kind::Uniform : ParameterDistribution::Kind::LogUniform;
         p.a = d.required("low", "the lower bound").asDouble("a number");
         p.b = d.required("high", "the upper bound").asDouble("a number");
         if (!(p.b > p.a)) d["high"].failExpected("an upper bound above low = " + formatNumber(p.a));
@@ -537,9 +540,10 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
         // folder, so that --collect (e.g. after the shards of a job array) reports it as an error, not as pending.
         nlohmann::ordered_json j;
         j["status"] = "error";
-        j["reason"] = WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status)) + "; see run.log"
-                                          : "exit status " + std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
-                                                " before a summary was written; see run.log";
+        j["reason"] = WIFSIGNALED(status)
+                          ? "killed by signal " + std::to_string(WTERMSIG(status)) + "; see run.log"
+                          : "exit status " + std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
+                                " before a summary was written; see run.log";
         io::writeFileAtomically((fs::path(dir) / run.name / "summary.json").string(), j.dump(2) + "\n");
       }
       ++res.failed;

@@ -192,7 +192,8 @@ void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& o
     const bool add = !o.empty() && o[0] == '+';
     const std::string spec = add ? o.substr(1) : o;
     const size_t eq = spec.find('=');
-    if (eq == std::string::npos || eq == 0) throw InputError("--set " + o + ": expected key.path=value or +key.path=value");
+    if (eq == std::string::npos || eq == 0)
+      throw InputError("--set " + o + ": expected key.path=value or +key.path=value");
     const std::string path = spec.substr(0, eq), value = spec.substr(eq + 1);
     // Split "a.b[2].c" into a, b, 2, c.
     std::vector<std::string> parts;

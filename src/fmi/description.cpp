@@ -32,8 +32,10 @@ std::string xmlEscape(const std::string& s) {
       case '>': out += "&gt;"; break;
       case '"': out += "&quot;"; break;
       default:
-        if (static_cast<unsigned char>(c) < 0x20 && c != '\t') out += ' ';
-        else out += c;
+        if (static_cast<unsigned char>(c) < 0x20 && c != '\t')
+          out += ' ';
+        else
+          out += c;
     }
   }
   return out;
@@ -61,11 +63,11 @@ struct BaseUnit {
 };
 bool baseUnit(const std::string& unit, BaseUnit& b) {
   static const std::map<std::string, BaseUnit> units = {
-      {"rad", {0, 0, 0, 0, 1}},       {"rad/s", {0, 0, -1, 0, 1}},   {"rad/s²", {0, 0, -2, 0, 1}},
-      {"m", {0, 1, 0, 0, 0}},         {"m/s", {0, 1, -1, 0, 0}},     {"s", {0, 0, 1, 0, 0}},
-      {"A", {0, 0, 0, 1, 0}},         {"V", {1, 2, -3, -1, 0}},      {"N·m", {1, 2, -2, 0, 0}},
-      {"N", {1, 1, -2, 0, 0}},        {"W", {1, 2, -3, 0, 0}},       {"J", {1, 2, -2, 0, 0}},
-      {"kg·m²", {1, 2, 0, 0, 0}},     {"Hz", {0, 0, -1, 0, 0}},      {"N·m/rad", {1, 2, -2, 0, -1}},
+      {"rad", {0, 0, 0, 0, 1}},        {"rad/s", {0, 0, -1, 0, 1}}, {"rad/s²", {0, 0, -2, 0, 1}},
+      {"m", {0, 1, 0, 0, 0}},          {"m/s", {0, 1, -1, 0, 0}},   {"s", {0, 0, 1, 0, 0}},
+      {"A", {0, 0, 0, 1, 0}},          {"V", {1, 2, -3, -1, 0}},    {"N·m", {1, 2, -2, 0, 0}},
+      {"N", {1, 1, -2, 0, 0}},         {"W", {1, 2, -3, 0, 0}},     {"J", {1, 2, -2, 0, 0}},
+      {"kg·m²", {1, 2, 0, 0, 0}},      {"Hz", {0, 0, -1, 0, 0}},    {"N·m/rad", {1, 2, -2, 0, -1}},
       {"N·m·s/rad", {1, 2, -1, 0, -1}}};
   auto it = units.find(unit);
   if (it == units.end()) return false;
@@ -198,9 +200,18 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
       v.causality = Causality::Input;
       v.port = "input";
       switch (rig->setup().input) {
-        case systems::RigInput::MotorTorque: v.unit = "N·m"; v.description = "motor torque"; break;
-        case systems::RigInput::Voltage: v.unit = "V"; v.description = "motor voltage"; break;
-        case systems::RigInput::VelocityPI: v.unit = "rad/s"; v.description = "velocity reference of the PI loop"; break;
+        case systems::RigInput::MotorTorque:
+          v.unit = "N·m";
+          v.description = "motor torque";
+          break;
+        case systems::RigInput::Voltage:
+          v.unit = "V";
+          v.description = "motor voltage";
+          break;
+        case systems::RigInput::VelocityPI:
+          v.unit = "rad/s";
+          v.description = "velocity reference of the PI loop";
+          break;
       }
       v.description += " (held in place of the input profile)";
       add(v);
@@ -234,7 +245,8 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
         systems::Fault f;
         f.type = systems::faultTypeFromString(type_name);
         f.joint = drive.joint;
-        if (!f.parameterFault()) continue;  // intermittent sensor faults and bearing ripple have time laws, no neutral value
+        if (!f.parameterFault())
+          continue;  // intermittent sensor faults and bearing ripple have time laws, no neutral value
         const bool offset = f.type == systems::FaultType::BacklashAdd || f.type == systems::FaultType::SensorBias;
         f.value = offset ? 1e-4 : 1.1;  // a non-neutral value: does the fault apply to this drive?
         systems::DriveSpec copy = drive;
@@ -250,7 +262,8 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
         v.start = offset ? 0.0 : 1.0;
         v.joint = k;
         v.fault = type_name;
-        v.description = "drive of " + drive.joint + ": " + type_name + (offset ? " [rad]" : " (factor on the robot file's value)");
+        v.description =
+            "drive of " + drive.joint + ": " + type_name + (offset ? " [rad]" : " (factor on the robot file's value)");
         add(v);
       }
     }
@@ -358,14 +371,16 @@ std::string FmuDescription::modelDescriptionXml() const {
     }
     x << "  </UnitDefinitions>\n";
   }
-  x << "  <DefaultExperiment startTime=\"0\" stopTime=\"" << number(stop_time) << "\" stepSize=\""
-    << number(step_size) << "\"/>\n  <ModelVariables>\n";
+  x << "  <DefaultExperiment startTime=\"0\" stopTime=\"" << number(stop_time) << "\" stepSize=\"" << number(step_size)
+    << "\"/>\n  <ModelVariables>\n";
   for (size_t i = 0; i < variables.size(); ++i) {
     const Variable& v = variables[i];
     x << "    <ScalarVariable name=\"" << xmlEscape(v.name) << "\" valueReference=\"" << i << "\" description=\""
       << xmlEscape(v.description) << "\" causality=\"" << causalityName(v.causality) << "\"";
     switch (v.causality) {
-      case Causality::Input: x << " variability=\"continuous\">\n      <Real start=\"" << number(v.start) << "\""; break;
+      case Causality::Input:
+        x << " variability=\"continuous\">\n      <Real start=\"" << number(v.start) << "\"";
+        break;
       case Causality::Output: x << " variability=\"continuous\" initial=\"calculated\">\n      <Real"; break;
       case Causality::Parameter:
         x << " variability=\"fixed\" initial=\"exact\">\n      <Real start=\"" << number(v.start) << "\"";

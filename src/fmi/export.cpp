@@ -49,7 +49,8 @@ class ZipWriter {
   explicit ZipWriter(const std::string& path) : path_(path) {
     int err = 0;
     zip_ = zip_open(path.c_str(), ZIP_CREATE | ZIP_TRUNCATE, &err);
-    if (zip_ == nullptr) throw Error("FMU export: cannot create " + path + " (libzip error " + std::to_string(err) + ")");
+    if (zip_ == nullptr)
+      throw Error("FMU export: cannot create " + path + " (libzip error " + std::to_string(err) + ")");
   }
   ~ZipWriter() {
     if (zip_ != nullptr) zip_discard(zip_);
@@ -81,8 +82,9 @@ std::string defaultBinaryDir() {
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (!ec) {
     const fs::path install_dir(JOINTSIM_FMU_INSTALL_DIR);  // the installation's lib folder (may be absolute)
-    for (const fs::path& dir : {exe.parent_path() / "fmu" / "linux64",
-                                install_dir.is_absolute() ? install_dir : exe.parent_path().parent_path() / install_dir}) {
+    for (const fs::path& dir :
+         {exe.parent_path() / "fmu" / "linux64",
+          install_dir.is_absolute() ? install_dir : exe.parent_path().parent_path() / install_dir}) {
       if (io::isRegularFile((dir / "jointsim_fmu.so").string())) return dir.string();
     }
   }

@@ -37,7 +37,10 @@ struct Instance::Impl {
   void log(Status s, const std::string& msg) {
     if (!logger) return;
     try {
-      logger(s, s == Status::OK ? "logInfo" : s == Status::Warning ? "logWarning" : "logError",
+      logger(s,
+             s == Status::OK        ? "logInfo"
+             : s == Status::Warning ? "logWarning"
+                                    : "logError",
              "jointsim FMU '" + name + "': " + msg);
     } catch (...) {
     }
@@ -117,8 +120,8 @@ struct Instance::Impl {
       return Status::OK;
     } catch (const SolverError& e) {
       if (fatal) phase = Phase::Failed;
-      return error(std::string(call) + ": solver failure at t = " + number(e.time()) + " s in " + e.component() +
-                   ": " + e.what());
+      return error(std::string(call) + ": solver failure at t = " + number(e.time()) + " s in " + e.component() + ": " +
+                   e.what());
     } catch (const std::exception& e) {
       if (fatal) phase = Phase::Failed;
       return error(std::string(call) + ": " + e.what());
@@ -249,7 +252,8 @@ Status Instance::setReal(const unsigned* vr, size_t n, const double* values) {
     if (v.causality == Causality::Parameter && m.phase == Phase::StepComplete)
       return m.error("fmi2SetReal: parameter " + v.name +
                      " is fixed: it may be set only before fmi2ExitInitializationMode (then fmi2Reset)");
-    if (!std::isfinite(values[k])) return m.error("fmi2SetReal: " + v.name + " = " + number(values[k]) + " is not finite");
+    if (!std::isfinite(values[k]))
+      return m.error("fmi2SetReal: " + v.name + " = " + number(values[k]) + " is not finite");
   }
   const std::vector<double> before = m.values;
   bool params = false;
@@ -262,14 +266,18 @@ Status Instance::setReal(const unsigned* vr, size_t n, const double* values) {
     // Load the experiment with the new parameters now, so that a bad value is rejected by this call with the
     // loader's message (as --set would be) and outputs in initialization mode reflect it.
     m.params_changed = true;
-    if (m.guarded("fmi2SetReal", [&] { m.build(); }, false) != Status::OK) {
+    if (m.guarded(
+            "fmi2SetReal", [&] { m.build(); }, false) != Status::OK) {
       m.values = before;  // rejected: back to the previous values and experiment
-      m.guarded("fmi2SetReal", [&] { m.build(); }, false);
+      m.guarded(
+          "fmi2SetReal", [&] { m.build(); }, false);
       return Status::Error;
     }
     return Status::OK;
   }
-  if (m.sim && m.phase == Phase::Initialization) return m.guarded("fmi2SetReal", [&] { m.applyInputs(); }, false);
+  if (m.sim && m.phase == Phase::Initialization)
+    return m.guarded(
+        "fmi2SetReal", [&] { m.applyInputs(); }, false);
   return Status::OK;
 }
 

@@ -82,8 +82,10 @@ std::string closestMatch(const std::string& word, const std::vector<std::string>
 std::string keyText(const YAML::Node& key, const YamlValue& where) {
   if (!key.IsScalar())
     throw InputError(where.file(), lineOf(key, where.line()), where.path().empty() ? "(document)" : where.path(),
-                     "expected mapping keys that are names, got a key that is " +
-                         std::string(key.IsMap() ? "a mapping" : key.IsSequence() ? "a list" : "empty"));
+                     "expected mapping keys that are names, got a key that is " + std::string(key.IsMap() ? "a mapping"
+                                                                                              : key.IsSequence()
+                                                                                                  ? "a list"
+                                                                                                  : "empty"));
   return key.Scalar();
 }
 

@@ -451,7 +451,6 @@ Eigen::Vector3d centerOfMass(const Model& model, Data& data, const VecRef& q) {
   return m > 0.0 ? Vector3d(mc / m) : Vector3d::Zero();
 }
 
-
 namespace {
 
 // B = [v×*] I − I [v×] for a world inertia I = [[A, [h]], [−[h], m 1]] and v = [ω; v_l]: with W = [ω], V = [v_l],

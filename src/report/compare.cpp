@@ -63,7 +63,8 @@ void checkDistinctNames(const CsvTable& t) {
     const auto [it, fresh] = seen.emplace(columnBaseName(t.header[i]), i);
     if (!fresh)
       throw InputError(t.path + ": columns " + std::to_string(it->second + 1) + " and " + std::to_string(i + 1) +
-                       " have the same name '" + printable(it->first) + "'; the columns of a log must have distinct names");
+                       " have the same name '" + printable(it->first) +
+                       "'; the columns of a log must have distinct names");
   }
 }
 

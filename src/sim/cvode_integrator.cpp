@@ -42,7 +42,7 @@ void luSolveInPlace(const Eigen::PartialPivLU<Eigen::MatrixXd>& f, Eigen::Vector
   double* __restrict w = work.data();
   const double* __restrict b = x.data();
   for (Eigen::Index i = 0; i < m; ++i) w[perm[i]] = b[i];  // w = P b
-  for (Eigen::Index j = 0; j < m; ++j) {                    // L (unit lower)
+  for (Eigen::Index j = 0; j < m; ++j) {                   // L (unit lower)
     const double wj = w[j];
     const double* __restrict col = a + j * m;
     for (Eigen::Index i = j + 1; i < m; ++i) w[i] -= col[i] * wj;
@@ -314,11 +314,11 @@ struct CvodeIntegrator::Impl {
   JacobianFunction jac;
   DifferenceJacobianFunction diff_jac;
   JacobianStructure structure;
-  N_Vector ewt = nullptr;      // error weights (diff_jac's increments, jumpError)
-  Eigen::VectorXd increments;  // diff_jac's increments
-  Eigen::MatrixXd last_jacobian;   // the last Jacobian evaluated (initialize(…, true)); empty: none yet
-  bool reuse_jacobian = false;     // answer the next Jacobian request with last_jacobian
-  long jac_reused = 0;             // requests so answered (all segments)
+  N_Vector ewt = nullptr;         // error weights (diff_jac's increments, jumpError)
+  Eigen::VectorXd increments;     // diff_jac's increments
+  Eigen::MatrixXd last_jacobian;  // the last Jacobian evaluated (initialize(…, true)); empty: none yet
+  bool reuse_jacobian = false;    // answer the next Jacobian request with last_jacobian
+  long jac_reused = 0;            // requests so answered (all segments)
   CvodeOptions opts;
 
   SUNContext ctx = nullptr;
@@ -337,9 +337,9 @@ struct CvodeIntegrator::Impl {
   double stop_time = 0.0;
   bool cvode_tstop_touched = false;  // CVodeSetStopTime was ever called (must be neutralised on clear)
 
-  SolverStats base;  // counters accumulated from earlier segments
-  long step_limit = 0;     // setStepLimit(): steps over all segments (0: none)
-  long mxstep_set = 0;     // the value last given to CVodeSetMaxNumSteps
+  SolverStats base;     // counters accumulated from earlier segments
+  long step_limit = 0;  // setStepLimit(): steps over all segments (0: none)
+  long mxstep_set = 0;  // the value last given to CVodeSetMaxNumSteps
   int n_roots = 0;
   RootFunction root_fn;
   bool root_found = false;
@@ -760,9 +760,7 @@ CvodeIntegrator::~CvodeIntegrator() = default;
 CvodeIntegrator::CvodeIntegrator(CvodeIntegrator&&) noexcept = default;
 CvodeIntegrator& CvodeIntegrator::operator=(CvodeIntegrator&&) noexcept = default;
 
-void CvodeIntegrator::initialize(double t0, const Eigen::Ref<const Eigen::VectorXd>& y0) {
-  initialize(t0, y0, false);
-}
+void CvodeIntegrator::initialize(double t0, const Eigen::Ref<const Eigen::VectorXd>& y0) { initialize(t0, y0, false); }
 
 void CvodeIntegrator::initialize(double t0, const Eigen::Ref<const Eigen::VectorXd>& y0, bool reuse_jacobian) {
   Impl& m = *impl_;
@@ -802,7 +800,7 @@ double CvodeIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out)
   // when a time event and an output time computed differently meet (0.2 + 0.5·69/100 against 545/1000): the state
   // at t0 is the state at t_out to rounding.
   if (m.fresh && std::abs(t_out - m.t0) <= 8.0 * std::numeric_limits<double>::epsilon() *
-                                                std::max({std::abs(m.t0), std::abs(t_out), 1e-300})) {
+                                               std::max({std::abs(m.t0), std::abs(t_out), 1e-300})) {
     y_out = ym;
     return t_out;
   }
@@ -833,11 +831,10 @@ double CvodeIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out)
   double t_ret = m.t_last;
   const int flag = CVode(m.mem, t_out, m.y, &t_ret, CV_NORMAL);
   m.fresh = false;
-  if (flag == CV_TOO_MUCH_WORK && m.step_limit > 0 && !m.callback_exception &&
-      m.stepsSoFar() > m.step_limit) {
+  if (flag == CV_TOO_MUCH_WORK && m.step_limit > 0 && !m.callback_exception && m.stepsSoFar() > m.step_limit) {
     m.t_last = m.cvodeTime();
-    throw SolverError(m.prefix() + ": more than " + std::to_string(m.step_limit) + " internal steps at t = " +
-                          formatTime(m.t_last) + " s (step limit)",
+    throw SolverError(m.prefix() + ": more than " + std::to_string(m.step_limit) +
+                          " internal steps at t = " + formatTime(m.t_last) + " s (step limit)",
                       m.t_last, "STEP_BUDGET", m.opts.component);
   }
   m.root_found = flag == CV_ROOT_RETURN;

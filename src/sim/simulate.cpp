@@ -94,7 +94,9 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
   const double t_end = options.t_end;
   const bool keep_history = solver.input_jump == CvodeOptions::InputJump::KeepHistory;
   const auto wall_start = std::chrono::steady_clock::now();
-  auto wall = [&wall_start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(); };
+  auto wall = [&wall_start] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  };
 
   // Why the run is being stopped from outside its physics: an interruption (requestStop) or the wall-clock
   // budget. Checked after every advance() and, since one advance() may take many steps, in the right-hand side
@@ -108,7 +110,8 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
     }
     if (options.max_wall_time > 0.0 && wall() > options.max_wall_time) {
       stop_flag = "WALL_TIME_BUDGET";
-      stop_message = "more than its wall-clock budget of " + formatNumber(options.max_wall_time) + " s (limits.wall_time)";
+      stop_message =
+          "more than its wall-clock budget of " + formatNumber(options.max_wall_time) + " s (limits.wall_time)";
       return true;
     }
     return false;
@@ -117,7 +120,8 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
   CvodeIntegrator integ(
       n,
       [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-        if ((stopRequested() || (options.max_wall_time > 0.0 && (++rhs_calls & 255) == 0)) && stopNow()) throw StopRun{};
+        if ((stopRequested() || (options.max_wall_time > 0.0 && (++rhs_calls & 255) == 0)) && stopNow())
+          throw StopRun{};
         plant.derivatives(t, y, yd);
       },
       solver);
@@ -243,8 +247,7 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
     result.wall_time_s = wall();
     if (e.flag() == "STEP_BUDGET" && stop_flag.empty()) {
       stop_flag = "STEP_BUDGET";
-      stop_message = "more than " + std::to_string(options.max_steps) +
-                     " solver steps (limits.steps)";
+      stop_message = "more than " + std::to_string(options.max_steps) + " solver steps (limits.steps)";
     }
     if (stop_flag.empty()) throw SimulationFailure(e, result);
     const SolverError why(solver.component + ": " + stop_message + " at t = " + formatNumber(e.time()) + " s", e.time(),

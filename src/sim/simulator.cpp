@@ -57,7 +57,8 @@ void Simulator::reset() {
 
 void Simulator::reset(double t0, const Eigen::VectorXd& y0) {
   const int n = plant_->stateSize();
-  if (!std::isfinite(t0)) throw InputError(plant_->name() + ": reset: the time must be finite, got " + formatNumber(t0));
+  if (!std::isfinite(t0))
+    throw InputError(plant_->name() + ": reset: the time must be finite, got " + formatNumber(t0));
   if (y0.size() != n)
     throw InputError(plant_->name() + ": reset: the state has " + std::to_string(y0.size()) + " entries, expected " +
                      std::to_string(n));
@@ -79,8 +80,8 @@ void Simulator::reset(double t0, const Eigen::VectorXd& y0) {
 
 void Simulator::setState(const Eigen::VectorXd& y) {
   if (y.size() != plant_->stateSize())
-    throw InputError(plant_->name() + ": setState: the state has " + std::to_string(y.size()) +
-                     " entries, expected " + std::to_string(plant_->stateSize()));
+    throw InputError(plant_->name() + ": setState: the state has " + std::to_string(y.size()) + " entries, expected " +
+                     std::to_string(plant_->stateSize()));
   if (!y.allFinite()) throw InputError(plant_->name() + ": setState: the state must be finite");
   y_ = y;
   restart_ = fresh_jacobian_ = true;
@@ -140,7 +141,8 @@ void Simulator::prepare(double t_target) {
     y_work_ = y_;
     plant_->applyInputs(t_, y_);
     if (y_ != y_work_)
-      restart_ = fresh_jacobian_ = true;  // the plant moved states (bumpless transfer): CVODE's history no longer matches
+      restart_ = fresh_jacobian_ =
+          true;  // the plant moved states (bumpless transfer): CVODE's history no longer matches
     else
       inputJumped();
     invalidate();
@@ -181,7 +183,8 @@ double Simulator::advanceTo(double t_target) {
       const bool at_sample = t_ >= t_sample_ && t_ < t_target;  // a sample at the target waits for prepare()
       if (root || at_event) {
         if (at_event)
-          while (next_event_ < events_list_.size() && (events_list_[next_event_] <= t_ || near(t_, events_list_[next_event_])))
+          while (next_event_ < events_list_.size() &&
+                 (events_list_[next_event_] <= t_ || near(t_, events_list_[next_event_])))
             ++next_event_;
         plant_->updateModes(t_, y_, root ? integ_->rootDirections() : std::vector<int>{});
         ++events_;

@@ -14,8 +14,8 @@
 namespace jointsim::systems {
 namespace {
 
-const char* const kNames[] = {"gear_stiffness_scale",  "backlash_add",   "coulomb_friction_scale", "sigma0_scale",
-                              "torque_constant_scale", "sensor_bias",    "sensor_dropout",         "sensor_stuck",
+const char* const kNames[] = {"gear_stiffness_scale",  "backlash_add",  "coulomb_friction_scale", "sigma0_scale",
+                              "torque_constant_scale", "sensor_bias",   "sensor_dropout",         "sensor_stuck",
                               "sensor_spike",          "bearing_ripple"};
 constexpr int kTypes = sizeof(kNames) / sizeof(kNames[0]);
 
@@ -24,7 +24,9 @@ bool factorType(FaultType t) {
          t == FaultType::TorqueConstantScale;
 }
 
-[[noreturn]] void bad(const Fault& f, const std::string& what) { throw InputError("fault " + describe(f) + ": " + what); }
+[[noreturn]] void bad(const Fault& f, const std::string& what) {
+  throw InputError("fault " + describe(f) + ": " + what);
+}
 
 [[noreturn]] void notApplicable(const Fault& f, const std::string& component) {
   throw InputError("fault " + describe(f) + ": does not apply to " + component);

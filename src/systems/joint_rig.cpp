@@ -107,7 +107,8 @@ void JointRig::releaseCommand() {
 }
 
 void JointRig::setLoadTorque(double tau) {
-  if (!std::isfinite(tau)) throw InputError(name() + ": load torque: expected a finite number, got " + formatNumber(tau));
+  if (!std::isfinite(tau))
+    throw InputError(name() + ": load torque: expected a finite number, got " + formatNumber(tau));
   if (s_.clamped && tau != 0.0) throw InputError(name() + ": load torque: the output is clamped");
   if (load_torque_ != tau) {
     load_torque_ = tau;

@@ -228,7 +228,8 @@ void RobotSystem::setCommand(int joint, double value) {
   auto fail = [&](const std::string& why) {
     throw InputError(name() + ": joint '" + drives_[k].joint + "': " + portName(port) + " command: " + why);
   };
-  if (port == CommandPort::Setpoint) fail("the joint is under the setpoint port; use setSetpoint or choose another port");
+  if (port == CommandPort::Setpoint)
+    fail("the joint is under the setpoint port; use setSetpoint or choose another port");
   if (!std::isfinite(value)) fail("expected a finite number, got " + formatNumber(value));
   if (cmd_[joint] != value) {
     cmd_[joint] = value;
@@ -294,7 +295,8 @@ void RobotSystem::releaseSetpoints() {
 
 void RobotSystem::setExternalWrench(const std::string& frame, const Eigen::Matrix<double, 6, 1>& wrench) {
   const int f = model_.frameIndex(frame);
-  if (!wrench.allFinite()) throw InputError(name() + ": external wrench on frame '" + frame + "': expected finite values");
+  if (!wrench.allFinite())
+    throw InputError(name() + ": external wrench on frame '" + frame + "': expected finite values");
   if (model_.frames[static_cast<size_t>(f)].joint < 0)
     throw InputError(name() + ": external wrench on frame '" + frame +
                      "': the frame is fixed to the base, a wrench there does not act on the robot");
@@ -324,8 +326,8 @@ void RobotSystem::clearExternalWrenches() {
 
 control::ControllerInputs RobotSystem::controllerInputs(int k) const {
   const auto& L = layout_[static_cast<size_t>(k)];
-  return {sig_.q_set[k], sig_.qd_set[k],  sig_.q_fb[k], sig_.qm[k], sig_.qdm[k],
-          sig_.current[k], L.ratio, drives_[static_cast<size_t>(k)].motor.V_supply};
+  return {sig_.q_set[k], sig_.qd_set[k],  sig_.q_fb[k], sig_.qm[k],
+          sig_.qdm[k],   sig_.current[k], L.ratio,      drives_[static_cast<size_t>(k)].motor.V_supply};
 }
 
 void RobotSystem::applyInputs(double t, Eigen::Ref<Eigen::VectorXd> y) {
@@ -469,7 +471,8 @@ void RobotSystem::updateFaults(double t, const Eigen::Ref<const Eigen::VectorXd>
     const double v = t >= f.onset ? scheduledFaultValue(f, t) : std::numeric_limits<double>::quiet_NaN();
     const double before = fault_applied_[i];
     fault_applied_[i] = f.type == FaultType::BearingRipple ? (std::isnan(v) ? 0.0 : v) : v;
-    if (f.parameterFault() && !(v == before || (std::isnan(v) && std::isnan(before)))) dirty[static_cast<size_t>(k)] = 1;
+    if (f.parameterFault() && !(v == before || (std::isnan(v) && std::isnan(before))))
+      dirty[static_cast<size_t>(k)] = 1;
   }
   for (size_t k = 0; k < drives_.size(); ++k) {
     if (!dirty[k]) continue;
@@ -518,8 +521,8 @@ void RobotSystem::setSampledControl(double rate, unsigned seed, double current_r
     per_outer = std::isfinite(current_rate) ? std::lround(current_rate / rate) : 0;
     if (!(current_rate >= rate) || per_outer < 1 ||
         std::abs(static_cast<double>(per_outer) * rate - current_rate) > 1e-9 * current_rate)
-      throw InputError("current rate " + formatNumber(current_rate) + " Hz: expected an integer multiple of the control rate " +
-                       formatNumber(rate) + " Hz");
+      throw InputError("current rate " + formatNumber(current_rate) +
+                       " Hz: expected an integer multiple of the control rate " + formatNumber(rate) + " Hz");
   }
   const double loop_rate = current_rate != 0.0 ? current_rate : rate;
   // A current loop that the sampling makes unstable would ring at the Nyquist frequency against the supply
@@ -527,7 +530,9 @@ void RobotSystem::setSampledControl(double rate, unsigned seed, double current_r
   for (size_t k = 0; k < drives_.size(); ++k) {
     const DriveSpec& d = drives_[k];
     if (!d.electrics) continue;
-    auto radius = [&](double f) { return control::sampledCurrentLoopRadius(d.controller, d.motor.R, d.motor.L, 1.0 / f); };
+    auto radius = [&](double f) {
+      return control::sampledCurrentLoopRadius(d.controller, d.motor.R, d.motor.L, 1.0 / f);
+    };
     const double rho = radius(loop_rate);
     if (rho < 1.0) continue;
     double lo = loop_rate, hi = loop_rate;
@@ -537,12 +542,14 @@ void RobotSystem::setSampledControl(double rate, unsigned seed, double current_r
       (radius(mid) >= 1.0 ? lo : hi) = mid;
     }
     throw InputError(std::string(current_rate != 0.0 ? "current rate " : "control rate ") + formatNumber(loop_rate) +
-                     " Hz: the current loop of drive '" + d.joint +
-                     "' (P_cur = " + formatNumber(d.controller.P_cur) + " V/A, I_cur = " +
-                     formatNumber(d.controller.I_cur) + " V/(A·s), R = " + formatNumber(d.motor.R) + " Ω, L = " +
-                     formatNumber(d.motor.L) + " H) is unstable when sampled at this rate (discrete pole magnitude " +
-                     formatNumber(rho, 3) + " ≥ 1): it would ring at the Nyquist frequency against the supply "
-                     "voltage. It is stable from about " + formatNumber(hi, 3) + " Hz; sample faster, run the current loop "
+                     " Hz: the current loop of drive '" + d.joint + "' (P_cur = " + formatNumber(d.controller.P_cur) +
+                     " V/A, I_cur = " + formatNumber(d.controller.I_cur) + " V/(A·s), R = " + formatNumber(d.motor.R) +
+                     " Ω, L = " + formatNumber(d.motor.L) +
+                     " H) is unstable when sampled at this rate (discrete pole magnitude " + formatNumber(rho, 3) +
+                     " ≥ 1): it would ring at the Nyquist frequency against the supply "
+                     "voltage. It is stable from about " +
+                     formatNumber(hi, 3) +
+                     " Hz; sample faster, run the current loop "
                      "faster than the outer loops (control.current_rate), or lower P_cur");
   }
   sample_rate_ = rate;
@@ -678,8 +685,7 @@ void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>&
     const double i_meas = measureCurrent(k, y);
     const CommandPort port = port_[static_cast<size_t>(k)];
     if (!controllerDriven(port)) continue;  // voltage or torque command: the controller holds its state
-    control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], m.q,     m.qm,
-                                 m.qdm,         i_meas,         L.ratio, d.motor.V_supply};
+    control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], m.q, m.qm, m.qdm, i_meas, L.ratio, d.motor.V_supply};
     in.entry = entryOf(port);
     in.command = cmd_[k];
     double* x = L.controller >= 0 ? ctrl_x_.data() + L.controller : nullptr;
@@ -728,8 +734,8 @@ void RobotSystem::multiRateStep(double t, const Eigen::Ref<const Eigen::VectorXd
     }
     if (!cascade || !controllerDriven(port)) continue;
     // The current loop on the held reference (or the Current port's command), over Ts_in.
-    control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], held_q_fb_[k], 0.0, 0.0, i_meas, L.ratio,
-                                 d.motor.V_supply};
+    control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], held_q_fb_[k], 0.0,
+                                 0.0,           i_meas,         L.ratio,       d.motor.V_supply};
     in.entry = control::ControlEntry::Current;
     in.command = port == CommandPort::Current ? cmd_[k] : held_i_ref_[k];
     const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(in, x, xdot);
@@ -766,7 +772,8 @@ void RobotSystem::measurementStage(double t, const Eigen::Ref<const Eigen::Vecto
     sig_.qm[k] = L.rigid ? L.ratio * phi_[k] : y[L.motor];
     sig_.qdm[k] = L.rigid ? L.ratio * phid_[k] : y[L.motor + 1];
     sig_.current[k] = L.current >= 0 ? y[L.current] : 0.0;
-    sig_.q_fb[k] = sampled() ? held_q_fb_[k] : faultySensor(k, t, q[k] + drives_[static_cast<size_t>(k)].sensors.joint_bias);
+    sig_.q_fb[k] =
+        sampled() ? held_q_fb_[k] : faultySensor(k, t, q[k] + drives_[static_cast<size_t>(k)].sensors.joint_bias);
   }
 }
 

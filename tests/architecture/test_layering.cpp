@@ -16,8 +16,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const std::vector<std::string> kLayers{"common", "io",      "multibody",   "drive",    "control",
-                                       "sim",    "systems", "experiments", "identify", "report", "fmi"};
+const std::vector<std::string> kLayers{"common",  "io",          "multibody", "drive",  "control", "sim",
+                                       "systems", "experiments", "identify",  "report", "fmi"};
 
 int rank(const std::string& layer) {
   const auto it = std::find(kLayers.begin(), kLayers.end(), layer);

@@ -281,7 +281,8 @@ TEST(HostileBudgets, RunsStopAtTheirStepOrWallTimeBudgetWithAFailedSummary) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     EXPECT_EQ(r.status, 1) << r.err;
     EXPECT_LT(wall, 60.0);
-    EXPECT_THAT(r.err, HasSubstr(extra.empty() ? "more than 3000 solver steps (limits.steps) at t = " : "limits.wall_time"));
+    EXPECT_THAT(r.err,
+                HasSubstr(extra.empty() ? "more than 3000 solver steps (limits.steps) at t = " : "limits.wall_time"));
     const std::string s = slurp(dir / "out" / "summary.json");
     EXPECT_THAT(s, HasSubstr("\"status\": \"failed\""));
     EXPECT_THAT(s, Not(HasSubstr("\"wall_time_s\": 0,")));
@@ -310,7 +311,6 @@ TEST(HostileMessages, OverlongPathComponentNamesTheKey) {
   EXPECT_FALSE(fs::exists(dir / "out"));
   fs::remove_all(dir);
 }
-
 
 // Was: control bytes echoed across several lines; a 10 MB bad line echoed whole; an infinite trajectory, an
 // over-long path ended in "internal error".

@@ -63,14 +63,14 @@ TEST(Utf8, FirstInvalidByteOfMalformedSequences) {
   EXPECT_EQ(firstInvalidUtf8(""), kOk);
   EXPECT_EQ(firstInvalidUtf8("plain ascii\n"), kOk);
   EXPECT_EQ(firstInvalidUtf8("N\xC2\xB7m \xE2\x80\x93 \xF0\x9F\x98\x80"), kOk);  // N·m – 😀
-  EXPECT_EQ(firstInvalidUtf8("\xEF\xBF\xBD\xF4\x8F\xBF\xBF"), kOk);               // U+FFFD, U+10FFFF
-  EXPECT_EQ(firstInvalidUtf8("ab\xC4"), 2u);                                       // lead byte at the end
-  EXPECT_EQ(firstInvalidUtf8("ab\xE2\x80"), 2u);                                   // cut 3-byte sequence
-  EXPECT_EQ(firstInvalidUtf8("a\x80"), 1u);                                        // lone continuation byte
-  EXPECT_EQ(firstInvalidUtf8("a\xC0\xAF"), 1u);                                    // overlong '/'
-  EXPECT_EQ(firstInvalidUtf8("a\xE0\x80\xAF"), 1u);                                // overlong, 3 bytes
-  EXPECT_EQ(firstInvalidUtf8("a\xED\xA0\x80"), 1u);                                // surrogate U+D800
-  EXPECT_EQ(firstInvalidUtf8("a\xF4\x90\x80\x80"), 1u);                            // above U+10FFFF
-  EXPECT_EQ(firstInvalidUtf8("a\xF8\x88\x80\x80\x80"), 1u);                        // 5-byte form
-  EXPECT_EQ(firstInvalidUtf8("\xC3\xA9t\xC3"), 3u);                                // é then a cut one
+  EXPECT_EQ(firstInvalidUtf8("\xEF\xBF\xBD\xF4\x8F\xBF\xBF"), kOk);              // U+FFFD, U+10FFFF
+  EXPECT_EQ(firstInvalidUtf8("ab\xC4"), 2u);                                     // lead byte at the end
+  EXPECT_EQ(firstInvalidUtf8("ab\xE2\x80"), 2u);                                 // cut 3-byte sequence
+  EXPECT_EQ(firstInvalidUtf8("a\x80"), 1u);                                      // lone continuation byte
+  EXPECT_EQ(firstInvalidUtf8("a\xC0\xAF"), 1u);                                  // overlong '/'
+  EXPECT_EQ(firstInvalidUtf8("a\xE0\x80\xAF"), 1u);                              // overlong, 3 bytes
+  EXPECT_EQ(firstInvalidUtf8("a\xED\xA0\x80"), 1u);                              // surrogate U+D800
+  EXPECT_EQ(firstInvalidUtf8("a\xF4\x90\x80\x80"), 1u);                          // above U+10FFFF
+  EXPECT_EQ(firstInvalidUtf8("a\xF8\x88\x80\x80\x80"), 1u);                      // 5-byte form
+  EXPECT_EQ(firstInvalidUtf8("\xC3\xA9t\xC3"), 3u);                              // é then a cut one
 }

@@ -102,9 +102,9 @@ sim::SignalTable trackingRun(const std::string& control) {
 
 TEST(SampledCurrentLoop, MultiRateRunsTheCurrentLoopWhereTheOuterRateWouldBeUnstable) {
   systems::RobotSystem sys = systems::loadRobotWithDrives(test::sourcePath("config/robots/ur5_drives.yaml"));
-  EXPECT_THROW(sys.setSampledControl(2000.0, 1, 5000.0), InputError);    // the current loop unstable at 5 kHz
-  EXPECT_THROW(sys.setSampledControl(2000.0, 1, 21000.0), InputError);   // not an integer multiple
-  EXPECT_THROW(sys.setSampledControl(2000.0, 1, 1000.0), InputError);    // slower than the outer loops
+  EXPECT_THROW(sys.setSampledControl(2000.0, 1, 5000.0), InputError);   // the current loop unstable at 5 kHz
+  EXPECT_THROW(sys.setSampledControl(2000.0, 1, 21000.0), InputError);  // not an integer multiple
+  EXPECT_THROW(sys.setSampledControl(2000.0, 1, 1000.0), InputError);   // slower than the outer loops
   ASSERT_NO_THROW(sys.setSampledControl(2000.0, 1, 20000.0));
   EXPECT_DOUBLE_EQ(sys.samplePeriod(), 5e-5);
   EXPECT_DOUBLE_EQ(sys.currentRate(), 20000.0);

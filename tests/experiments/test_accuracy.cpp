@@ -34,7 +34,8 @@ void expectAccurate(const std::string& config) {
   const Eigen::Index rows = ref.values.rows();
   for (size_t j = 1; j < ref.columns.size(); ++j) {
     const std::string& name = ref.columns[j];
-    const Eigen::VectorXd x = a.values.col(static_cast<Eigen::Index>(j)), r = ref.values.col(static_cast<Eigen::Index>(j));
+    const Eigen::VectorXd x = a.values.col(static_cast<Eigen::Index>(j)),
+                          r = ref.values.col(static_cast<Eigen::Index>(j));
     if (unitOf(name) == "-" && r.array().round().isApprox(r.array())) {
       for (Eigen::Index k = 0; k < rows; ++k) {
         if (x[k] == r[k]) continue;

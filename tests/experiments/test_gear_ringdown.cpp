@@ -55,7 +55,9 @@ RingDown ringDown(const std::vector<std::string>& solver_overrides, double ampli
   if (m < 0) return {};
   const std::complex<double> lambda = es.eigenvalues()[m];
   const Eigen::MatrixXcd W = es.eigenvectors().inverse();
-  auto modal = [&](const Eigen::VectorXd& y) { return std::abs((W.row(m) * (y - y0).cast<std::complex<double>>())(0)); };
+  auto modal = [&](const Eigen::VectorXd& y) {
+    return std::abs((W.row(m) * (y - y0).cast<std::complex<double>>())(0));
+  };
   // Excite the mode alone: y0 + ε Re(v) with the largest component of ε Re(v) equal to `amplitude` (SI units of
   // that state), small enough for the gear's deflections to stay linear.
   Eigen::VectorXd v = es.eigenvectors().col(m).real();

@@ -36,8 +36,9 @@ TEST(Sampling, QuantilesAreTheDistributionsInverses) {
 
 TEST(Sampling, LatinHypercubeHasOneDrawInEveryStratumOfEveryParameter) {
   const int n = 37;
-  const std::vector<ParameterDistribution> p = {
-      {Kind::Uniform, 0.0, 1.0}, {Kind::LogUniform, 1e-3, 10.0}, {Kind::Normal, 5.0, 2.0}};
+  const std::vector<ParameterDistribution> p = {{Kind::Uniform, 0.0, 1.0},
+                                                {Kind::LogUniform, 1e-3, 10.0},
+                                                {Kind::Normal, 5.0, 2.0}};
   const auto s = sampleDesign(SamplingDesign::LatinHypercube, n, p, 42);
   ASSERT_EQ(s.size(), static_cast<size_t>(n));
   for (size_t j = 0; j < p.size(); ++j) {
@@ -74,7 +75,8 @@ TEST(Sampling, MonteCarloMomentsAndSeededReproducibility) {
   EXPECT_NEAR(std::sqrt(v1), 0.5, 4.0 * 0.5 / std::sqrt(2.0 * n));
   EXPECT_EQ(sampleDesign(SamplingDesign::MonteCarlo, n, p, 7), a) << "same seed, same values to the bit";
   EXPECT_NE(sampleDesign(SamplingDesign::MonteCarlo, n, p, 8), a);
-  EXPECT_EQ(sampleDesign(SamplingDesign::LatinHypercube, 10, p, 3), sampleDesign(SamplingDesign::LatinHypercube, 10, p, 3));
+  EXPECT_EQ(sampleDesign(SamplingDesign::LatinHypercube, 10, p, 3),
+            sampleDesign(SamplingDesign::LatinHypercube, 10, p, 3));
   EXPECT_THROW(sampleDesign(SamplingDesign::MonteCarlo, 0, p, 1), InputError);
   EXPECT_THROW(sampleDesign(SamplingDesign::MonteCarlo, 3, {{Kind::LogUniform, 0.0, 1.0}}, 1), InputError);
   EXPECT_THROW(samplingDesignFromString("sobol"), InputError);
@@ -89,16 +91,16 @@ TEST(Sampling, SweepFileSampleBlockMakesSeededRunsWithExactOverrides) {
     std::ofstream(dir / name) << "sweep:\n  name: s\n  experiment: " << exp << "\n  set: {duration: 0.1}\n" << sample;
     return (dir / name).string();
   };
-  const std::string good = write("good.yaml",
-                                 "sample:\n  design: latin_hypercube\n  runs: 12\n  seed: 5\n  parameters:\n"
-                                 "    load.inertia: {distribution: normal, mean: 1.279, std: 0.05}\n"
-                                 "    input.controller.ki: {distribution: log_uniform, low: 5, high: 50}\n");
+  const std::string good =
+      write("good.yaml", "sample:\n  design: latin_hypercube\n  runs: 12\n  seed: 5\n  parameters:\n"
+                         "    load.inertia: {distribution: normal, mean: 1.279, std: 0.05}\n"
+                         "    input.controller.ki: {distribution: log_uniform, low: 5, high: 50}\n");
   const Sweep a = loadSweep(good), b = loadSweep(good);
   ASSERT_EQ(a.runs.size(), 12u);
   EXPECT_EQ(a.runs.front().name, "sample-00");
   EXPECT_EQ(a.runs.back().name, "sample-11");
-  const auto values = sampleDesign(SamplingDesign::LatinHypercube, 12,
-                                   {{Kind::Normal, 1.279, 0.05}, {Kind::LogUniform, 5.0, 50.0}}, 5);
+  const auto values =
+      sampleDesign(SamplingDesign::LatinHypercube, 12, {{Kind::Normal, 1.279, 0.05}, {Kind::LogUniform, 5.0, 50.0}}, 5);
   for (size_t i = 0; i < a.runs.size(); ++i) {
     EXPECT_EQ(a.runs[i].overrides, b.runs[i].overrides);
     ASSERT_EQ(a.runs[i].overrides.size(), 3u);  // duration (common), then the two sampled keys

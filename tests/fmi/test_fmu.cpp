@@ -85,9 +85,8 @@ TEST(FmuInstance, MatchesSimulatorAndParameterActsAsSet) {
     ASSERT_EQ(inst.setReal(&vr_ki, 1, &ki), fmi::Status::OK);
     ASSERT_EQ(inst.enterInitializationMode(), fmi::Status::OK);
     ASSERT_EQ(inst.exitInitializationMode(), fmi::Status::OK);
-    auto sim = experiments::makeSimulator(std::shared_ptr<experiments::Experiment>(
-        experiments::loadExperiment(kRig, ki == 20.0 ? std::vector<std::string>{}
-                                                     : std::vector<std::string>{"input.controller.ki=5"})));
+    auto sim = experiments::makeSimulator(std::shared_ptr<experiments::Experiment>(experiments::loadExperiment(
+        kRig, ki == 20.0 ? std::vector<std::string>{} : std::vector<std::string>{"input.controller.ki=5"})));
     const int iv = sim->signalIndex("output_velocity");
     double t = 0.0, max_dev = 0.0, v_end = 0.0;
     for (int k = 0; k < 1500; ++k) {
@@ -304,8 +303,10 @@ TEST(FmuInstance, DriveParameterActsAsTheSameFault) {
   f.type = systems::FaultType::CoulombFrictionScale;
   f.joint = "elbow_joint";
   f.value = 2.0;
-  auto faulty = experiments::makeSimulator(std::shared_ptr<experiments::Experiment>(experiments::loadExperiment(kUr5, {}, {f})));
-  auto nominal = experiments::makeSimulator(std::shared_ptr<experiments::Experiment>(experiments::loadExperiment(kUr5)));
+  auto faulty =
+      experiments::makeSimulator(std::shared_ptr<experiments::Experiment>(experiments::loadExperiment(kUr5, {}, {f})));
+  auto nominal =
+      experiments::makeSimulator(std::shared_ptr<experiments::Experiment>(experiments::loadExperiment(kUr5)));
   const unsigned out = vrOf(r.d, "friction_torque_elbow_joint");
   double dev = 0.0, diff = 0.0, t = 0.0;
   for (int k = 0; k < 300; ++k) {

@@ -83,7 +83,9 @@ Eigen::MatrixXd central(F fun, const Eigen::VectorXd& x, double h) {
 
 void expectClose(const Eigen::MatrixXd& analytic, const Eigen::MatrixXd& fd, const char* what) {
   const double scale = std::max(1.0, fd.cwiseAbs().maxCoeff());
-  EXPECT_LE((analytic - fd).cwiseAbs().maxCoeff(), 1e-6 * scale) << what << "\nanalytic\n" << analytic << "\nfd\n" << fd;
+  EXPECT_LE((analytic - fd).cwiseAbs().maxCoeff(), 1e-6 * scale) << what << "\nanalytic\n"
+                                                                 << analytic << "\nfd\n"
+                                                                 << fd;
 }
 
 void checkModel(const Model& m) {

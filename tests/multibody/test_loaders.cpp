@@ -303,15 +303,19 @@ TEST(Urdf, LinkWithTwoParentsOrACycleOfJointsIsAnInputError) {
   };
   auto robot = [&](const std::string& joints) { return "<robot name=\"r\">" + links + joints + "\n</robot>"; };
   // The tree itself loads (3 joints).
-  EXPECT_EQ(loadUrdfString(robot(joint("j1", "base", "a") + joint("j2", "a", "b") + joint("j3", "b", "c")), "t.urdf").nq,
-            3);
+  EXPECT_EQ(
+      loadUrdfString(robot(joint("j1", "base", "a") + joint("j2", "a", "b") + joint("j3", "b", "c")), "t.urdf").nq, 3);
   EXPECT_THAT(
-      [&] { loadUrdfString(robot(joint("j1", "base", "a") + joint("j2", "a", "b") + joint("j3", "base", "b")), "p.urdf"); },
+      [&] {
+        loadUrdfString(robot(joint("j1", "base", "a") + joint("j2", "a", "b") + joint("j3", "base", "b")), "p.urdf");
+      },
       ::testing::ThrowsMessage<InputError>(
           HasSubstr("p.urdf:4: joint 'j3': link 'b' is already the child of joint 'j2' (line 3)")));
   // A cycle hanging off nothing (b -> c -> b) beside the tree base -> a.
   EXPECT_THAT(
-      [&] { loadUrdfString(robot(joint("j1", "base", "a") + joint("j2", "b", "c") + joint("j3", "c", "b")), "c.urdf"); },
+      [&] {
+        loadUrdfString(robot(joint("j1", "base", "a") + joint("j2", "b", "c") + joint("j3", "c", "b")), "c.urdf");
+      },
       ::testing::ThrowsMessage<InputError>(AllOf(HasSubstr("c.urdf:"), HasSubstr("closes a cycle of joints"))));
   // A link that is its own parent.
   EXPECT_THAT([&] { loadUrdfString(robot(joint("j1", "base", "a") + joint("self", "b", "b")), "s.urdf"); },
@@ -334,8 +338,8 @@ TEST(Urdf, LinkWithTwoParentsOrACycleOfJointsIsAnInputError) {
 // byte, is refused before any XML parser sees it; UTF-8 text (a comment in German) still loads.
 TEST(Urdf, TextThatIsNotUtf8IsRefusedBeforeParsing) {
   EXPECT_THAT([] { loadUrdf(sourcePath("tests/fuzz/regressions/urdf/utf8_lead_byte_at_end.urdf")); },
-              ::testing::ThrowsMessage<InputError>(AllOf(HasSubstr("utf8_lead_byte_at_end.urdf:"),
-                                                         HasSubstr("byte 0xC4 is not UTF-8"))));
+              ::testing::ThrowsMessage<InputError>(
+                  AllOf(HasSubstr("utf8_lead_byte_at_end.urdf:"), HasSubstr("byte 0xC4 is not UTF-8"))));
   const std::string good = "<robot name=\"r\"><!-- Gelenk f\xC3\xBCr die Achse -->\n<link name=\"base\"/>"
                            "<link name=\"a\"/>\n<joint name=\"j\" type=\"continuous\"><parent link=\"base\"/>"
                            "<child link=\"a\"/><axis xyz=\"0 0 1\"/></joint></robot>";

@@ -290,8 +290,7 @@ TEST(Compare, RepeatedColumnNamesAreAnInputError) {
   const std::string path = (dir / "repeated.csv").string();
   std::ofstream(path) << "time[s],x[m],x[mm]\n0,1,1000\n1,2,2000\n";
   EXPECT_THAT([&] { report::compareCsvFiles(path, path); },
-              ::testing::ThrowsMessage<InputError>(
-                  HasSubstr("repeated.csv: columns 2 and 3 have the same name 'x'")));
+              ::testing::ThrowsMessage<InputError>(HasSubstr("repeated.csv: columns 2 and 3 have the same name 'x'")));
   const std::string fuzz = std::string(JOINTSIM_SOURCE_DIR) + "/tests/fuzz/regressions/csv/header_repeats_a_name.csv";
   EXPECT_THAT([&] { report::compareCsvFiles(fuzz, fuzz); },
               ::testing::ThrowsMessage<InputError>(HasSubstr("columns 1 and 2 have the same name '-1'")));

@@ -29,9 +29,9 @@ struct HandMadeSweep {
   experiments::Sweep sweep;
   HandMadeSweep() {
     fs::remove_all(dir);
-    write(dir / "sweep.yaml", "sweep: {name: hand, experiment: " +
-                                  test::sourcePath("config/experiments/ur5_excitation.yaml") +
-                                  "}\nruns:\n  - name: a\n  - name: b\n");
+    write(dir / "sweep.yaml",
+          "sweep: {name: hand, experiment: " + test::sourcePath("config/experiments/ur5_excitation.yaml") +
+              "}\nruns:\n  - name: a\n  - name: b\n");
     sweep = experiments::loadSweep((dir / "sweep.yaml").string());
     for (const char* run : {"a", "b"}) {
       write(dir / "out" / run / "ur5_excitation.csv", "time[s],q_elbow_joint[rad]\n0,0.5\n0.01,0.25\n");
@@ -90,8 +90,7 @@ TEST(Dataset, AFolderThatDoesNotExistIsRejectedBeforeWriting) {
 TEST(Dataset, PendingRunsHaveLabelsButNoLog) {
   HandMadeSweep h;
   fs::remove_all(h.dir / "out" / "b");
-  const report::DatasetSummary s =
-      report::writeDataset(h.sweep, (h.dir / "out").string(), (h.dir / "set.h5").string());
+  const report::DatasetSummary s = report::writeDataset(h.sweep, (h.dir / "out").string(), (h.dir / "set.h5").string());
   EXPECT_EQ(s.runs, 2);
   EXPECT_EQ(s.runs_with_data, 1);
 }

@@ -134,7 +134,7 @@ TEST(FaultLaws, EpisodesStartEveryPeriodAndLastTheirLength) {
   EXPECT_THAT(systems::faultEvents(d, 10.0), ::testing::ElementsAre(0.3, 0.31, 0.5, 0.51, 0.7, 0.71));
   Fault s = fault(FaultType::SensorSpike, 0.01, 0.0);
   s.period = 0.1;
-  s.width = 0.002;  // count 0: every period until the end
+  s.width = 0.002;                                      // count 0: every period until the end
   EXPECT_EQ(systems::faultEvents(s, 1.0).size(), 19u);  // 0 is not an event: 9 starts and 10 ends
   EXPECT_TRUE(systems::faultEpisode(s, 0.9015));
   EXPECT_FALSE(systems::faultEpisode(s, 0.9025));
@@ -198,7 +198,8 @@ TEST(FaultLaws, ProgressiveParametersAreRebuiltOnTheirSchedule) {
   EXPECT_GE(r.events, static_cast<long>(instants.size()));
   EXPECT_GE(instants.size(), 60u);
   EXPECT_DOUBLE_EQ(stiffness(sys), 0.5 * k0);
-  EXPECT_DOUBLE_EQ(dynamic_cast<const drive::LuGreUr5Friction&>(*sys.drives()[kElbow].friction).params().f_c, 3.0 * fc0);
+  EXPECT_DOUBLE_EQ(dynamic_cast<const drive::LuGreUr5Friction&>(*sys.drives()[kElbow].friction).params().f_c,
+                   3.0 * fc0);
 }
 
 TEST(FaultLaws, TorqueConstantLossScalesTheMotorTorque) {
@@ -227,10 +228,10 @@ TEST(FaultLaws, SensorEpisodesChangeTheMeasuredAngleAsDefined) {
   const Eigen::VectorXd y = sys.initialState();
   const double q = y[kElbow];
   sys.start(0.0, y);
-  EXPECT_DOUBLE_EQ(sys.driveSignals(0.2, y).q_fb[kElbow], q + 1e-3);       // biased, no episode
-  EXPECT_EQ(sys.driveSignals(0.305, y).q_fb[kElbow], 0.0);                  // dropout: reads 0 rad
+  EXPECT_DOUBLE_EQ(sys.driveSignals(0.2, y).q_fb[kElbow], q + 1e-3);           // biased, no episode
+  EXPECT_EQ(sys.driveSignals(0.305, y).q_fb[kElbow], 0.0);                     // dropout: reads 0 rad
   EXPECT_DOUBLE_EQ(sys.driveSignals(0.355, y).q_fb[kElbow], q + 1e-3 + 0.02);  // spike: + A
-  EXPECT_DOUBLE_EQ(sys.driveSignals(0.365, y).q_fb[kElbow], q + 1e-3);      // after the spike's width
+  EXPECT_DOUBLE_EQ(sys.driveSignals(0.365, y).q_fb[kElbow], q + 1e-3);         // after the spike's width
   // Stuck: the reading at the episode's start is held while the joint moves on.
   Eigen::VectorXd moved = y;
   moved[kElbow] += 0.05;

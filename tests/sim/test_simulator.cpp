@@ -196,8 +196,8 @@ TEST(Simulator, SamplesAndTimeEventsAtTheirInstantsWhateverTheStep) {
 TEST(Simulator, SteppingAnExperimentReproducesItsRunOnTheLogGrid) {
   // The UR5 twin through its pick-and-place trajectory (time events at the path's breakpoints): stepping at the
   // log interval gives the log of sim::simulate within the solver tolerance (the step sequences differ).
-  std::shared_ptr<experiments::Experiment> e = experiments::loadExperiment(
-      test::sourcePath("config/experiments/ur5_pick_and_place.yaml"));
+  std::shared_ptr<experiments::Experiment> e =
+      experiments::loadExperiment(test::sourcePath("config/experiments/ur5_pick_and_place.yaml"));
   auto options = e->simulateOptions();
   options.t_end = 1.0;
   sim::SignalTable reference = sim::simulateTable(e->plant(), options);

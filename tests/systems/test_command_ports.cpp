@@ -21,8 +21,8 @@ namespace {
 
 using systems::CommandPort;
 
-constexpr double kN = 10.0;     // gear ratio
-constexpr double kIzz = 0.2;    // link inertia about the joint axis [kg·m²]
+constexpr double kN = 10.0;   // gear ratio
+constexpr double kIzz = 0.2;  // link inertia about the joint axis [kg·m²]
 
 /// One revolute joint about the vertical axis (gravity along −z exerts no torque), a rigid gear, a DC motor and
 /// the cascade controller; no friction.

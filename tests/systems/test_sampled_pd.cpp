@@ -66,10 +66,10 @@ TEST(SampledPd, LooseToleranceStaysCloseToTightRun) {
     i_peak = std::max(i_peak, b.i[s].cwiseAbs().maxCoeff());
     moved = std::max(moved, (b.q[s] - b.q[0]).cwiseAbs().maxCoeff());
   }
-  EXPECT_GT(moved, 0.02);   // the arm did move: a transient, not a rest
-  EXPECT_GT(i_peak, 5.0);   // the drives were pushed hard [A]
-  EXPECT_LT(dq, 1e-5);      // joint angles [rad] (3.5 µrad measured over the example's 2 s)
-  EXPECT_LT(di, 0.02);      // motor currents [A]
+  EXPECT_GT(moved, 0.02);  // the arm did move: a transient, not a rest
+  EXPECT_GT(i_peak, 5.0);  // the drives were pushed hard [A]
+  EXPECT_LT(dq, 1e-5);     // joint angles [rad] (3.5 µrad measured over the example's 2 s)
+  EXPECT_LT(di, 0.02);     // motor currents [A]
   // The restarts at the samples started with the last Jacobian.
   EXPECT_GT(a.stats.jac_reused, 10);
 }

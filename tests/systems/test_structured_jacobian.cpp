@@ -10,8 +10,8 @@
 
 #include "jointsim/common/error.hpp"
 #include "jointsim/drive/friction_models.hpp"
-#include "jointsim/experiments/experiment.hpp"
 #include "jointsim/drive/transmissions.hpp"
+#include "jointsim/experiments/experiment.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
 #include "jointsim/sim/simulate.hpp"
 #include "jointsim/systems/robot_system.hpp"

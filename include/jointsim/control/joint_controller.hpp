@@ -42,12 +42,12 @@ struct JointControllerParams {
 
 /// Measured and desired signals at one instant.
 struct ControllerInputs {
-  double q_set = 0, qd_set = 0;  ///< joint-side reference [rad], [rad/s]
-  double q_fb = 0;               ///< measured joint angle [rad]
-  double qm_fb = 0, qdm_fb = 0;  ///< measured motor angle [rad] and speed [rad/s]
-  double i_fb = 0;               ///< measured motor current [A]
-  double ratio = 1;              ///< gear ratio N used to scale references
-  double v_limit = 0;            ///< supply voltage [V] (Cascade002 anti-windup)
+  double q_set = 0, qd_set = 0;                 ///< joint-side reference [rad], [rad/s]
+  double q_fb = 0;                              ///< measured joint angle [rad]
+  double qm_fb = 0, qdm_fb = 0;                 ///< measured motor angle [rad] and speed [rad/s]
+  double i_fb = 0;                              ///< measured motor current [A]
+  double ratio = 1;                             ///< gear ratio N used to scale references
+  double v_limit = 0;                           ///< supply voltage [V] (Cascade002 anti-windup)
   ControlEntry entry = ControlEntry::Position;  ///< where the command enters
   double command = 0;  ///< motor speed reference [rad/s] (MotorVelocity) or current reference [A] (Current)
 };

@@ -23,8 +23,8 @@ struct BatchRun {
   std::string name;                    ///< unique; also the run's folder name
   std::vector<std::string> overrides;  ///< "key.path=value", the sweep's common overrides first
   std::vector<systems::Fault> faults;
-  std::string design;  ///< sampled runs: "monte_carlo" or "latin_hypercube" (empty otherwise)
-  long seed = -1;      ///< sampled runs: the design's seed (-1 otherwise)
+  std::string design;            ///< sampled runs: "monte_carlo" or "latin_hypercube" (empty otherwise)
+  long seed = -1;                ///< sampled runs: the design's seed (-1 otherwise)
   std::string describe() const;  ///< overrides and faults joined by "; "
 };
 
@@ -57,7 +57,7 @@ struct BatchRecord {
   /// design, seed): the run's faults (several joined by ';'; a constant fault acts from t = 0 s) and, for a
   /// sampled run, its design and seed. Empty for a nominal run.
   std::string fault_type, fault_joint, fault_severity, fault_onset_s, design, seed;
-  bool skipped = false;                                   ///< finished in an earlier invocation
+  bool skipped = false;  ///< finished in an earlier invocation
 };
 
 struct BatchResult {
@@ -88,13 +88,13 @@ std::string runSettings(const Sweep& sweep, const BatchRun& run);
 
 /// What `jointsim validate FILE` found: an experiment or sweep file checked completely without running it.
 struct ValidationReport {
-  std::string kind;  ///< "experiment" or "sweep"
-  std::string name;  ///< experiment.name or sweep.name
-  std::string type;  ///< the experiment type (of the sweep's base experiment for a sweep)
-  int runs = 0;      ///< runs of a sweep, each loaded with its overrides and faults (1 for an experiment)
-  int states = 0, signals = 0;      ///< of the (base) experiment's plant
-  double duration = 0.0;            ///< [s], of the (base) experiment
-  std::vector<std::string> files;   ///< every file read (absolute paths, each once)
+  std::string kind;                ///< "experiment" or "sweep"
+  std::string name;                ///< experiment.name or sweep.name
+  std::string type;                ///< the experiment type (of the sweep's base experiment for a sweep)
+  int runs = 0;                    ///< runs of a sweep, each loaded with its overrides and faults (1 for an experiment)
+  int states = 0, signals = 0;     ///< of the (base) experiment's plant
+  double duration = 0.0;           ///< [s], of the (base) experiment
+  std::vector<std::string> files;  ///< every file read (absolute paths, each once)
 };
 /// Checks `path` fully: an experiment file is loaded as `jointsim run` would load it (every key, every referenced
 /// file; `overrides` as --set); a sweep file (top-level `sweep:`) is read and every one of its runs is loaded with

@@ -29,8 +29,7 @@ struct ParameterDistribution {
 /// n samples (rows) of the parameters (columns), from `seed`. Throws InputError for n < 1 or an invalid
 /// distribution.
 std::vector<std::vector<double>> sampleDesign(SamplingDesign design, int n,
-                                              const std::vector<ParameterDistribution>& parameters,
-                                              std::uint64_t seed);
+                                              const std::vector<ParameterDistribution>& parameters, std::uint64_t seed);
 
 /// "monte_carlo", "latin_hypercube" (InputError listing them otherwise).
 SamplingDesign samplingDesignFromString(const std::string& name);

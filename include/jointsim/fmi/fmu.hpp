@@ -62,13 +62,13 @@ struct Variable {
 
 /// What the FMU binary needs to rebuild the experiment: written to resources/jointsim_fmu.json by the exporter.
 struct FmuDescription {
-  std::string model_identifier;  ///< the binary's name (NAME.so) and the model name
-  std::string guid;              ///< "{...}" from the content hashes of the description and the input files
-  std::string experiment_file;   ///< the experiment file, relative to resources/
-  std::string experiment_type;   ///< "tracking" or "joint_rig"
-  std::string description;       ///< the experiment's description
-  double stop_time = 1.0;        ///< the experiment's duration [s] (DefaultExperiment)
-  double step_size = 1e-3;       ///< suggested communication step [s] (DefaultExperiment)
+  std::string model_identifier;        ///< the binary's name (NAME.so) and the model name
+  std::string guid;                    ///< "{...}" from the content hashes of the description and the input files
+  std::string experiment_file;         ///< the experiment file, relative to resources/
+  std::string experiment_type;         ///< "tracking" or "joint_rig"
+  std::string description;             ///< the experiment's description
+  double stop_time = 1.0;              ///< the experiment's duration [s] (DefaultExperiment)
+  double step_size = 1e-3;             ///< suggested communication step [s] (DefaultExperiment)
   std::vector<std::string> overrides;  ///< "key.path=value" given at export (applied before the parameters')
   std::vector<Variable> variables;
 
@@ -80,8 +80,8 @@ struct FmuDescription {
 };
 
 struct ExportOptions {
-  std::vector<std::string> inputs;   ///< see the file comment (empty: none; the experiment drives itself)
-  std::vector<std::string> outputs;  ///< signal names with or without unit (empty: all)
+  std::vector<std::string> inputs;     ///< see the file comment (empty: none; the experiment drives itself)
+  std::vector<std::string> outputs;    ///< signal names with or without unit (empty: all)
   std::vector<std::string> overrides;  ///< "key.path=value" applied to the experiment before export (as --set)
   /// Folder with the FMU binary jointsim_fmu.so and the libraries it carries (empty: defaultBinaryDir()).
   std::string binary_dir;

@@ -58,7 +58,6 @@ struct Data {
   // the per-joint vectors of the derivative recursions.
   std::vector<Vector6d> oS, ov, oa, oF, oh, ou, oc, odS, oP, oDa, oDF;
   std::vector<Matrix6d> oI, oIc, oB;
-
 };
 
 }  // namespace jointsim::multibody

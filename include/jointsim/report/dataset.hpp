@@ -33,9 +33,9 @@ namespace jointsim::report {
 
 struct DatasetSummary {
   std::string path;
-  int runs = 0;           ///< label rows (every run of the sweep)
-  int runs_with_data = 0; ///< runs whose log was stored
-  long samples = 0;       ///< rows of all stored logs together
+  int runs = 0;            ///< label rows (every run of the sweep)
+  int runs_with_data = 0;  ///< runs whose log was stored
+  long samples = 0;        ///< rows of all stored logs together
 };
 
 /// Writes the results of `sweep` found in `output_dir` (empty: the batch's default, out/<sweep name>/) to `path`.

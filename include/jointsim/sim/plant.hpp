@@ -75,8 +75,8 @@ class Plant {
   /// J = ∂f/∂y at (t, y) with f = f(t, y), J zero on entry; `inc` holds the difference increment CVODE would use
   /// per state (DifferenceJacobianFunction). Pure like derivatives(); must respect jacobianStructure().
   virtual void jacobian(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
-                        const Eigen::Ref<const Eigen::VectorXd>& /*f*/, const Eigen::Ref<const Eigen::VectorXd>& /*inc*/,
-                        Eigen::Ref<Eigen::MatrixXd> /*J*/) const {}
+                        const Eigen::Ref<const Eigen::VectorXd>& /*f*/,
+                        const Eigen::Ref<const Eigen::VectorXd>& /*inc*/, Eigen::Ref<Eigen::MatrixXd> /*J*/) const {}
   /// Block structure of the Jacobian (empty: dense).
   virtual JacobianStructure jacobianStructure() const { return {}; }
 

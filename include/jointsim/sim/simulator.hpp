@@ -60,8 +60,8 @@ class Simulator {
   /// Integrates to `t` [s] (>= time(), finite); returns the time reached.
   double advanceTo(double t);
 
-  double time() const { return t_; }                     ///< [s]
-  const Eigen::VectorXd& state() const { return y_; }    ///< continuous state (the plant's layout)
+  double time() const { return t_; }                   ///< [s]
+  const Eigen::VectorXd& state() const { return y_; }  ///< continuous state (the plant's layout)
   /// Replaces the continuous state at time() (size stateSize(), finite); the integrator restarts.
   void setState(const Eigen::VectorXd& y);
 
@@ -84,9 +84,9 @@ class Simulator {
   long inputJumps() const { return input_jumps_; }
 
  private:
-  void prepare(double t_target);  // input changes and a pending sample at t_, then the restart if needed
-  void takeSample();         // the plant's sampled part at t_, next sample time, input jump pending
-  void inputJumped();        // a held input jumped at t_: a restart or a kept history, per the options
+  void prepare(double t_target);       // input changes and a pending sample at t_, then the restart if needed
+  void takeSample();                   // the plant's sampled part at t_, next sample time, input jump pending
+  void inputJumped();                  // a held input jumped at t_: a restart or a kept history, per the options
   void restartIfNeeded(double h_max);  // CVODE re-initialised at (t_, y_) when needed; h_max: to the next stop
   void refreshEvents(double t_target);
   void invalidate() { signals_valid_ = false; }

@@ -66,9 +66,9 @@ struct Fault {
   double rate = 0.0;       ///< λ [1/s] of the exponential progression
   int steps = 100;         ///< parameter updates over the ramp (1 … 100000)
   // Intermittent sensor faults:
-  double period = 0.0;   ///< [s] between episode starts (0: a single episode)
-  int count = 0;         ///< episodes (0: unlimited, with period > 0)
-  double width = 1e-3;   ///< [s] length of a spike episode (sensor_spike)
+  double period = 0.0;  ///< [s] between episode starts (0: a single episode)
+  int count = 0;        ///< episodes (0: unlimited, with period > 0)
+  double width = 1e-3;  ///< [s] length of a spike episode (sensor_spike)
   // bearing_ripple:
   double order = 1.0;  ///< ripple cycles per output shaft revolution [-], > 0
 

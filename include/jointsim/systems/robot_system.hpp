@@ -291,9 +291,9 @@ class RobotSystem : public sim::Plant {
   Eigen::VectorXd q0_;
   // Sampled control: discrete controller states, held outputs and sensor memory (not ODE states).
   double sample_rate_ = 0.0;
-  double current_rate_ = 0.0;   // multi-rate: the current loops' rate (0: single rate)
-  long inner_per_outer_ = 1;    // current-loop samples per outer sample
-  long inner_count_ = 0;        // current-loop samples since the start
+  double current_rate_ = 0.0;  // multi-rate: the current loops' rate (0: single rate)
+  long inner_per_outer_ = 1;   // current-loop samples per outer sample
+  long inner_count_ = 0;       // current-loop samples since the start
   std::vector<double> ctrl_x_;
   Eigen::VectorXd held_u_, held_i_ref_, held_q_fb_, prev_qm_meas_;
   bool first_sample_ = true;
@@ -301,8 +301,8 @@ class RobotSystem : public sim::Plant {
   std::shared_ptr<Rng> rng_;
   // Command ports (inputs between steps).
   std::vector<CommandPort> port_, applied_port_;
-  Eigen::VectorXd cmd_, applied_cmd_;                 // per joint: the port's value; the value last applied
-  std::vector<char> ref_held_;                        // per joint: the reference is held (setSetpoint)
+  Eigen::VectorXd cmd_, applied_cmd_;  // per joint: the port's value; the value last applied
+  std::vector<char> ref_held_;         // per joint: the reference is held (setSetpoint)
   Eigen::VectorXd ref_q_, ref_qd_, ref_qdd_;
   std::vector<std::pair<int, Eigen::Matrix<double, 6, 1>>> user_wrenches_;  // frame index, world wrench
   long revision_ = 0;
