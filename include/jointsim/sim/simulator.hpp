@@ -4,7 +4,7 @@
 /// controller can run around the plant at its own rate and change the plant's inputs (command ports) between
 /// steps.
 ///
-///   systems::RobotSystem robot = systems::loadRobotWithDrives("config/robots/ur5_twin.yaml");
+///   systems::RobotSystem robot = systems::loadRobotWithDrives("config/robots/ur5_drives.yaml");
 ///   sim::Simulator sim(robot, solver);
 ///   robot.setCommandPort(0, systems::CommandPort::Voltage);
 ///   for (int k = 0; k < 1000; ++k) {                        // 1 kHz
