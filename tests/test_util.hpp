@@ -1,14 +1,20 @@
 #pragma once
 // Shared test helpers: matrix comparison with an explanatory failure message, seeded random states,
-// and paths to the source tree.
+// paths to the source tree, a private temporary folder per test (TempDir) and the CLI run with its output
+// captured in files no other call can share (runCli).
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <random>
 #include <sstream>
 #include <string>
+#include <system_error>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -29,18 +35,98 @@ inline std::string readText(const std::filesystem::path& p) {
   return ss.str();
 }
 
+/// The folder temporary files go to: $TMPDIR, or /tmp when it is unset or empty.
+inline std::filesystem::path tempRoot() {
+  const char* t = std::getenv("TMPDIR");
+  return std::filesystem::path(t != nullptr && *t != '\0' ? t : "/tmp");
+}
+
+/// `text` with every character other than [A-Za-z0-9._-] replaced by '_', at most `max_size` characters (a
+/// file name part that needs no quoting).
+inline std::string sanitizeFileName(const std::string& text, size_t max_size = 100) {
+  std::string s = text.substr(0, max_size);
+  for (char& c : s) {
+    const bool ok =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-';
+    if (!ok) c = '_';
+  }
+  return s;
+}
+
+/// A new, empty folder `<tempRoot()>/<prefix>.XXXXXX` made by mkdtemp (the suffix random, so no other process
+/// or call can get the same folder). Throws std::system_error when it cannot be made.
+inline std::filesystem::path makeUniqueDir(const std::string& prefix) {
+  std::string templ = (tempRoot() / (sanitizeFileName(prefix) + ".XXXXXX")).string();
+  if (::mkdtemp(templ.data()) == nullptr) throw std::system_error(errno, std::generic_category(), "mkdtemp " + templ);
+  return templ;
+}
+
+/// "Suite.Test" of the running GoogleTest test ("no_test" outside one).
+inline std::string currentTestName() {
+  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  return info == nullptr ? std::string("no_test") : std::string(info->test_suite_name()) + "." + info->name();
+}
+
+/// A private temporary folder of one test: made by mkdtemp under $TMPDIR (default /tmp), named after the running
+/// test (suite.test, sanitized; `label` appended when given) and a random suffix, so that neither two tests
+/// run in parallel nor two checkouts testing at once can share it. Removed with everything in it when it goes
+/// out of scope, unless the running test has failed: then it is kept and its path printed to stderr, to look
+/// at what the test left. Use it as a local in a TEST or as a member of a fixture (it is made when the
+/// fixture is, and removed after TearDown).
+class TempDir {
+ public:
+  explicit TempDir(const std::string& label = "")
+      : path_(makeUniqueDir("jointsim_" + currentTestName() + (label.empty() ? "" : "_" + label))) {}
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  TempDir(TempDir&& other) noexcept : path_(std::exchange(other.path_, {})) {}
+  TempDir& operator=(TempDir&&) = delete;
+  ~TempDir() {
+    if (path_.empty()) return;
+    if (::testing::Test::HasFailure()) {
+      std::cerr << "[ TempDir  ] kept for the failed test " << currentTestName() << ": " << path_.string() << "\n";
+      return;
+    }
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+
+  const std::filesystem::path& path() const { return path_; }
+  operator const std::filesystem::path&() const { return path_; }  // to pass it where a path is expected
+  std::string string() const { return path_.string(); }
+  std::filesystem::path operator/(const std::filesystem::path& relative) const { return path_ / relative; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// `s` in single quotes for /bin/sh.
+inline std::string shellQuote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
 /// Exit status (-1 when not a normal exit), stdout and stderr of one `jointsim` command.
 struct CliResult {
   int status;
   std::string out, err;
 };
-/// Runs the CLI with `args` (shell words), its output captured in `<tag>.out` / `<tag>.err` in the temp folder.
-inline CliResult runCli(const std::string& args, const std::string& tag) {
-  const auto base = std::filesystem::temp_directory_path() / tag;
-  const std::string out = base.string() + ".out", err = base.string() + ".err";
-  const int rc = std::system((std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + out + " 2>" + err).c_str());
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, readText(out), readText(err)};
+/// Runs a shell command line (`command` must not redirect its own output). Its stdout and stderr are captured
+/// in a folder of this call alone (makeUniqueDir), read back and removed, so no two calls, in one test or in
+/// tests run in parallel, can mix their output.
+inline CliResult runCommand(const std::string& command) {
+  const std::filesystem::path dir = makeUniqueDir("jointsim_cmd_" + currentTestName());
+  const std::filesystem::path out = dir / "stdout", err = dir / "stderr";
+  const int rc = std::system((command + " >" + shellQuote(out.string()) + " 2>" + shellQuote(err.string())).c_str());
+  CliResult result{WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, readText(out), readText(err)};
+  std::error_code ec;
+  std::filesystem::remove_all(dir, ec);
+  return result;
 }
+
+/// Runs the CLI with `args` (shell words), its output captured as by runCommand.
+inline CliResult runCli(const std::string& args) { return runCommand(std::string(JOINTSIM_CLI_PATH) + " " + args); }
 
 /// Index in a simulate() row (time first) of the plant's signal `name` ("time": 0).
 inline int rowIndex(const sim::Plant& plant, const std::string& name) {

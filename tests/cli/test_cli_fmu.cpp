@@ -14,7 +14,7 @@ namespace fs = std::filesystem;
 
 namespace {
 using Result = jointsim::test::CliResult;
-Result run(const std::string& args) { return jointsim::test::runCli(args, "jointsim_fmu_cli"); }
+Result run(const std::string& args) { return jointsim::test::runCli(args); }
 const std::string kConfig = std::string(JOINTSIM_SOURCE_DIR) + "/config/experiments/";
 }  // namespace
 
@@ -22,9 +22,8 @@ TEST(CliFmu, ExportsAnArchiveWithDescriptionBinaryAndResources) {
 #ifndef JOINTSIM_HAS_FMU
   GTEST_SKIP() << "the FMU binary is not built in this configuration (sanitizers)";
 #endif
-  const auto dir = fs::temp_directory_path() / "jointsim_fmu_cli_good";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const jointsim::test::TempDir tmp;
+  const fs::path dir = tmp.path();
   const Result r = run("fmu " + kConfig + "ur5_excitation.yaml -o " + (dir / "ur5_twin.fmu").string() +
                        " --inputs voltage --outputs q_shoulder_pan_joint,current_shoulder_pan_joint");
   ASSERT_EQ(r.status, 0) << r.err;
@@ -43,9 +42,8 @@ TEST(CliFmu, ExportsAnArchiveWithDescriptionBinaryAndResources) {
 }
 
 TEST(CliFmu, BadInputExitTwoAndNothingWritten) {
-  const auto dir = fs::temp_directory_path() / "jointsim_fmu_cli_bad";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const jointsim::test::TempDir tmp;
+  const fs::path dir = tmp.path();
   const std::string ur5 = kConfig + "ur5_excitation.yaml";
   struct Case {
     std::string args, message;

@@ -14,7 +14,7 @@ namespace fs = std::filesystem;
 
 namespace {
 using Result = jointsim::test::CliResult;
-Result run(const std::string& args) { return jointsim::test::runCli(args, "jointsim_validate_cli"); }
+Result run(const std::string& args) { return jointsim::test::runCli(args); }
 const std::string kRoot = JOINTSIM_SOURCE_DIR;
 }  // namespace
 
@@ -31,9 +31,8 @@ TEST(CliValidate, ExperimentAndSweepFilesAreCheckedWithoutRunning) {
 }
 
 TEST(CliValidate, AProblemInOneRunOfASweepIsFoundAndNamed) {
-  const fs::path dir = fs::temp_directory_path() / "jointsim_validate_sweep";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const jointsim::test::TempDir tmp;
+  const fs::path dir = tmp.path();
   // backlash_add does not apply to the strain-wave gears of ur5_drives.yaml: only the second run is wrong.
   std::ofstream(dir / "sweep.yaml") << "sweep:\n  name: s\n  experiment: " << kRoot
                                     << "/config/experiments/ur5_excitation.yaml\n"
@@ -51,8 +50,8 @@ TEST(CliValidate, AProblemInOneRunOfASweepIsFoundAndNamed) {
 
 TEST(CliSetAdd, PlusAddsAKeyTheFileLacksAndTheLoaderChecksIt) {
   const std::string fall = kRoot + "/config/experiments/ur5_fall.yaml";
-  const fs::path out = fs::temp_directory_path() / "jointsim_set_add";
-  fs::remove_all(out);
+  const jointsim::test::TempDir tmp;
+  const fs::path out = tmp / "jointsim_set_add";
   // ur5_fall.yaml has no solver block.
   Result r = run("run " + fall + " --set duration=0.05 --set solver.max_step=0.001 -o " + out.string());
   EXPECT_EQ(r.status, 2);
