@@ -27,10 +27,8 @@ using ::testing::HasSubstr;
 
 namespace {
 
-struct Result {
-  int status;
-  std::string out, err;
-};
+using Result = jointsim::test::CliResult;
+using jointsim::test::TempDir;
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p);
@@ -39,19 +37,7 @@ std::string slurp(const fs::path& p) {
   return ss.str();
 }
 
-fs::path freshDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("jointsim_batch_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-Result run(const std::string& args, const fs::path& dir) {
-  const fs::path out = dir / "cli.out", err = dir / "cli.err";
-  const int rc =
-      std::system((std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string()).c_str());
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurp(out), slurp(err)};
-}
+Result run(const std::string& args) { return jointsim::test::runCli(args); }
 
 // A sweep of the UR5 twin (elastic gears) over `duration` simulated seconds: one nominal run and four runs
 // per fault type (24 faulty runs), plus `extra` YAML appended to the runs list.
@@ -99,8 +85,9 @@ int okSummaries(const fs::path& out) {
 }  // namespace
 
 TEST(CliBatch, FaultSweepWithEveryFaultTypeCompletesItsManifest) {
-  const fs::path dir = freshDir("all");
-  const Result r = run("batch " + writeSweep(dir, 0.3).string() + " -j 2 -o " + (dir / "out").string(), dir);
+  const TempDir tmp("all");
+  const fs::path& dir = tmp.path();
+  const Result r = run("batch " + writeSweep(dir, 0.3).string() + " -j 2 -o " + (dir / "out").string());
   ASSERT_EQ(r.status, 0) << r.out << r.err;
   const auto rows = manifest(dir / "out" / "manifest.csv");
   ASSERT_EQ(rows.size(), 25u);
@@ -127,11 +114,11 @@ TEST(CliBatch, FaultSweepWithEveryFaultTypeCompletesItsManifest) {
   // Faults change the run: the faulty logs differ from the nominal one.
   EXPECT_NE(slurp(dir / "out" / "nominal" / "ur5_excitation.csv"),
             slurp(dir / "out" / "backlash_add-elbow_joint-0.001" / "ur5_excitation.csv"));
-  fs::remove_all(dir);
 }
 
 TEST(CliBatch, KilledMidwayResumesOnlyTheMissingRuns) {
-  const fs::path dir = freshDir("resume");
+  const TempDir tmp("resume");
+  const fs::path& dir = tmp.path();
   const fs::path out = dir / "out";
   const std::string args = "batch " + writeSweep(dir, 1.0).string() + " -j 1 -o " + out.string();
   // Start the batch in its own process group, wait until a few runs have finished, kill the whole group.
@@ -160,7 +147,7 @@ TEST(CliBatch, KilledMidwayResumesOnlyTheMissingRuns) {
   // The interrupted manifest is consistent: every run is listed.
   EXPECT_EQ(manifest(out / "manifest.csv").size(), 25u);
 
-  const Result r = run(args, dir);
+  const Result r = run(args);
   ASSERT_EQ(r.status, 0) << r.out << r.err;
   EXPECT_THAT(r.out, HasSubstr(std::to_string(25 - done_before) + " ok"));
   EXPECT_THAT(r.out, HasSubstr(std::to_string(done_before) + " skipped"));
@@ -170,38 +157,38 @@ TEST(CliBatch, KilledMidwayResumesOnlyTheMissingRuns) {
       EXPECT_EQ(fs::last_write_time(out / name / "summary.json"), t) << name;
     }
   }
-  fs::remove_all(dir);
 }
 
 TEST(CliBatch, TwoShardsCoverTheSweepExactlyOnce) {
-  const fs::path dir = freshDir("shards");
+  const TempDir tmp("shards");
+  const fs::path& dir = tmp.path();
   const fs::path sweep = writeSweep(dir, 0.2), out = dir / "out";
-  const Result a = run("batch " + sweep.string() + " --shard 0/2 -o " + out.string(), dir);
+  const Result a = run("batch " + sweep.string() + " --shard 0/2 -o " + out.string());
   ASSERT_EQ(a.status, 0) << a.err;
   const auto m0 = manifest(out / "manifest.shard-0-of-2.csv");
-  const Result b = run("batch " + sweep.string() + " --shard 1/2 -o " + out.string(), dir);
+  const Result b = run("batch " + sweep.string() + " --shard 1/2 -o " + out.string());
   ASSERT_EQ(b.status, 0) << b.err;
   const auto m1 = manifest(out / "manifest.shard-1-of-2.csv");
   EXPECT_EQ(m0.size(), 13u);
   EXPECT_EQ(m1.size(), 12u);
   for (const auto& [name, s] : m0) EXPECT_FALSE(m1.count(name)) << name << " ran in both shards";
   EXPECT_THAT(b.out, HasSubstr("0 skipped"));  // shard 1 did not re-run shard 0's runs
-  const Result c = run("batch " + sweep.string() + " --collect -o " + out.string(), dir);
+  const Result c = run("batch " + sweep.string() + " --collect -o " + out.string());
   ASSERT_EQ(c.status, 0) << c.err;
   const auto all = manifest(out / "manifest.csv");
   EXPECT_EQ(all.size(), 25u);
   for (const auto& [name, status] : all) EXPECT_EQ(status, "ok") << name;
-  EXPECT_EQ(run("batch " + sweep.string() + " --shard 2/2", dir).status, 2);
-  EXPECT_EQ(run("batch " + sweep.string() + " --shard x", dir).status, 2);
-  fs::remove_all(dir);
+  EXPECT_EQ(run("batch " + sweep.string() + " --shard 2/2").status, 2);
+  EXPECT_EQ(run("batch " + sweep.string() + " --shard x").status, 2);
 }
 
 TEST(CliBatch, FailingRunIsRecordedAndTheOthersFinish) {
-  const fs::path dir = freshDir("failing");
+  const TempDir tmp("failing");
+  const fs::path& dir = tmp.path();
   const std::string extra =
       "  - {name: bad_key, set: {no_such_key: 1}}\n"
       "  - {name: swg_backlash, set: {robot: ../robots/ur5_drives.yaml}, faults: [{type: backlash_add, joint: elbow_joint, value: 0.001}]}\n";
-  const Result r = run("batch " + writeSweep(dir, 0.2, extra).string() + " -j 2 -o " + (dir / "out").string(), dir);
+  const Result r = run("batch " + writeSweep(dir, 0.2, extra).string() + " -j 2 -o " + (dir / "out").string());
   EXPECT_EQ(r.status, 1);
   EXPECT_THAT(r.err, HasSubstr("2 run(s) failed"));
   const auto rows = manifest(dir / "out" / "manifest.csv");
@@ -214,16 +201,16 @@ TEST(CliBatch, FailingRunIsRecordedAndTheOthersFinish) {
   EXPECT_EQ(ok, 25);
   // Collected from the folders (as after the shards of a job array), the runs that ended before writing a summary
   // are still errors, not pending.
-  const Result c = run("batch " + (dir / "sweep.yaml").string() + " --collect -o " + (dir / "out").string(), dir);
+  const Result c = run("batch " + (dir / "sweep.yaml").string() + " --collect -o " + (dir / "out").string());
   EXPECT_EQ(c.status, 1);
   const auto collected = manifest(dir / "out" / "manifest.csv");
   EXPECT_EQ(collected.at("bad_key"), "error");
   EXPECT_EQ(collected.at("swg_backlash"), "error");
-  fs::remove_all(dir);
 }
 
 TEST(CliBatch, BadSweepFilesExitTwoWithFileAndLine) {
-  const fs::path dir = freshDir("bad");
+  const TempDir tmp("bad");
+  const fs::path& dir = tmp.path();
   struct Case {
     std::string text, expected;
   };
@@ -250,7 +237,7 @@ TEST(CliBatch, BadSweepFilesExitTwoWithFileAndLine) {
   for (size_t i = 0; i < cases.size(); ++i) {
     const fs::path p = dir / ("bad" + std::to_string(i) + ".yaml");
     std::ofstream(p) << cases[i].text;
-    const Result r = run("batch " + p.string() + " -o " + (dir / "out").string(), dir);
+    const Result r = run("batch " + p.string() + " -o " + (dir / "out").string());
     EXPECT_EQ(r.status, 2) << cases[i].expected << ": " << r.err;
     EXPECT_THAT(r.err, HasSubstr(cases[i].expected));
     EXPECT_THAT(r.err, HasSubstr(p.filename().string() + ":"));
@@ -263,25 +250,25 @@ TEST(CliBatch, BadSweepFilesExitTwoWithFileAndLine) {
            {" --shard 3/2", "0 <= I < N"},
            {" --dataset " + (dir / "missing" / "d.h5").string(), "does not exist"},
            {" --shard 0/2 --dataset " + (dir / "d.h5").string(), "needs the whole sweep"}}) {
-    const Result r = run("batch " + good.string() + " -o " + (dir / "out").string() + args, dir);
+    const Result r = run("batch " + good.string() + " -o " + (dir / "out").string() + args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.err;
     EXPECT_THAT(r.err, HasSubstr(expected));
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
   }
   EXPECT_FALSE(fs::exists(dir / "out"));  // nothing ran
   EXPECT_FALSE(fs::exists(dir / "d.h5"));
-  fs::remove_all(dir);
 }
 
 TEST(CliBatch, ResumeReusesOnlyRunsWhoseSettingsAreUnchanged) {
-  const fs::path dir = freshDir("settings");
+  const TempDir tmp("settings");
+  const fs::path& dir = tmp.path();
   const fs::path out = dir / "out";
   auto write = [&](const std::string& durations, int log_rate) {
     std::ofstream(dir / "grid.yaml") << "sweep:\n  name: g\n  experiment: "
                                      << jointsim::test::sourcePath("config/experiments/ur5_fall.yaml")
                                      << "\n  set: {log_rate: " << log_rate << "}\ngrid:\n  duration: [" << durations
                                      << "]\n";
-    return run("batch " + (dir / "grid.yaml").string() + " -o " + out.string(), dir);
+    return run("batch " + (dir / "grid.yaml").string() + " -o " + out.string());
   };
   Result r = write("0.2, 0.3", 50);
   ASSERT_EQ(r.status, 0) << r.err;
@@ -299,13 +286,13 @@ TEST(CliBatch, ResumeReusesOnlyRunsWhoseSettingsAreUnchanged) {
   EXPECT_THAT(r.out, HasSubstr("3 ok"));
   EXPECT_THAT(r.out, HasSubstr("0 skipped"));
   EXPECT_THAT(slurp(out / "grid-duration_0.1" / "summary.json"), HasSubstr("\"log_rate\": 100"));
-  fs::remove_all(dir);
 }
 
 TEST(CliBatch, EditedRobotFileRecomputesTheRunsThatReadIt) {
   // Resume compares the content hash of every file a finished run read (summary.json "inputs") with the file
   // now: editing the robot file recomputes the runs; an unrelated edit does not.
-  const fs::path dir = freshDir("inputs");
+  const TempDir tmp("inputs");
+  const fs::path& dir = tmp.path();
   const fs::path out = dir / "out";
   fs::create_directories(dir / "experiments");
   fs::create_directories(dir / "robots");
@@ -314,7 +301,7 @@ TEST(CliBatch, EditedRobotFileRecomputesTheRunsThatReadIt) {
   std::ofstream(dir / "grid.yaml") << "sweep:\n  name: g\n  experiment: experiments/ur5_fall.yaml\n"
                                    << "  set: {log_rate: 50}\ngrid:\n  duration: [0.1, 0.2]\n";
   const std::string args = "batch " + (dir / "grid.yaml").string() + " -o " + out.string();
-  Result r = run(args, dir);
+  Result r = run(args);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("2 ok"));
   const std::string summary = slurp(out / "grid-duration_0.1" / "summary.json");
@@ -323,30 +310,30 @@ TEST(CliBatch, EditedRobotFileRecomputesTheRunsThatReadIt) {
   EXPECT_THAT(slurp(out / "manifest.csv"), HasSubstr("ur5.yaml=xxh3:"));
   // Unchanged inputs (and an unrelated new file): both runs are reused.
   std::ofstream(dir / "robots" / "unrelated.yaml") << "name: x\n";
-  r = run(args, dir);
+  r = run(args);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("2 skipped"));
   // The robot file changes (a comment only, but its bytes change): both runs are recomputed.
   std::ofstream(dir / "robots" / "ur5.yaml", std::ios::app) << "# edited\n";
-  r = run(args, dir);
+  r = run(args);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("2 ok"));
   EXPECT_THAT(r.out, HasSubstr("0 skipped"));
   EXPECT_NE(slurp(out / "grid-duration_0.1" / "summary.json"), summary);
   // And reused again once the results match the edited file.
-  r = run(args, dir);
+  r = run(args);
   EXPECT_THAT(r.out, HasSubstr("2 skipped"));
-  fs::remove_all(dir);
 }
 
 // A sampled sweep runs and labels its runs with the design and the seed; the sampled value reaches the run.
 TEST(CliBatch, SampledRunsCarryDesignAndSeedAndTheirValues) {
-  const fs::path dir = freshDir("sampled");
+  const TempDir tmp("sampled");
+  const fs::path& dir = tmp.path();
   const std::string exp = std::string(JOINTSIM_SOURCE_DIR) + "/config/experiments/ur5_swg_joint_velocity.yaml";
   std::ofstream(dir / "s.yaml") << "sweep: {name: s, experiment: " << exp << ", set: {duration: 0.05}}\n"
                                 << "sample:\n  design: latin_hypercube\n  runs: 3\n  seed: 5\n  parameters:\n"
                                 << "    load.inertia: {distribution: uniform, low: 1.0, high: 2.0}\n";
-  const Result r = run("batch " + (dir / "s.yaml").string() + " -o " + (dir / "out").string(), dir);
+  const Result r = run("batch " + (dir / "s.yaml").string() + " -o " + (dir / "out").string());
   ASSERT_EQ(r.status, 0) << r.out << r.err;
   const std::string text = slurp(dir / "out" / "manifest.csv");
   for (const char* name : {"sample-0", "sample-1", "sample-2"}) {
@@ -362,5 +349,4 @@ TEST(CliBatch, SampledRunsCarryDesignAndSeedAndTheirValues) {
     EXPECT_LT(inertia, 2.0);
     EXPECT_THAT(slurp(dir / "out" / name / "summary.json"), HasSubstr("\"inertia\": " + line.substr(o + 13, 6)));
   }
-  fs::remove_all(dir);
 }

@@ -21,25 +21,9 @@ using ::testing::MatchesRegex;
 using jointsim::test::sourcePath;
 
 namespace {
-struct Result {
-  int status;
-  std::string out, err;
-};
-
-Result runCli(const std::string& args) {
-  const auto dir = std::filesystem::temp_directory_path() / ("jointsim_cli_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string out = (dir / "stdout").string(), err = (dir / "stderr").string();
-  const std::string cmd = std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + out + " 2>" + err;
-  const int rc = std::system(cmd.c_str());
-  auto slurp = [](const std::string& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  };
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurp(out), slurp(err)};
-}
+using Result = jointsim::test::CliResult;
+using jointsim::test::runCli;
+using jointsim::test::TempDir;
 
 // Extracts the numbers of the JSON array following "key": (flattening nested arrays).
 std::vector<double> jsonNumbers(const std::string& json, const std::string& key) {
@@ -115,12 +99,13 @@ TEST(CliDynamics, BadNumberUnknownFrameBadFiles) {
   r = runCli("dynamics --robot " + ur5 + " --q 0,0,0,0,0,0 --frame nowhere");
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("unknown frame 'nowhere'"));
-  const auto tmp = std::filesystem::temp_directory_path() / "jointsim_bad_robot.yaml";
+  const TempDir tmp_dir;
+  const auto tmp = tmp_dir / "jointsim_bad_robot.yaml";
   std::ofstream(tmp) << "name: r\nconvention: tree\nlinks: []\njoints: []\nextra: 1\n";
   r = runCli("dynamics --robot " + tmp.string() + " --q 0");
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr(tmp.string() + ":5: extra: unknown key 'extra'"));
-  const auto bad_urdf = std::filesystem::temp_directory_path() / "jointsim_bad.urdf";
+  const auto bad_urdf = tmp_dir / "jointsim_bad.urdf";
   std::ofstream(bad_urdf) << "<robot name='r'><link name='a'>";
   r = runCli("dynamics --robot " + bad_urdf.string() + " --q 0");
   EXPECT_EQ(r.status, 2);
@@ -149,7 +134,8 @@ links:
       {"[0.01, 0.05, 0.05, 0, 0, 0]", "[0.01, 0.05, 0.05, 0, 0, -0.1]", ":8: links[0].inertia: inertia tensor"},
       {"a: 0.5", "a: [0.5]", ":5: links[0].joint.a: expected a length, got a list of 1 items"},
   };
-  const auto path = std::filesystem::temp_directory_path() / "jointsim_cli_bad_robot.yaml";
+  const TempDir tmp;
+  const auto path = tmp / "jointsim_cli_bad_robot.yaml";
   for (const Case& c : cases) {
     std::string text = good;
     text.replace(text.find(c.from), c.from.size(), c.to);
@@ -163,8 +149,8 @@ links:
 }
 
 TEST(CliRun, WritesCsvAndSummary) {
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_run_test";
-  std::filesystem::remove_all(dir);
+  const TempDir tmp;
+  const auto dir = tmp / "jointsim_run_test";
   const Result r = runCli("run " + sourcePath("config/experiments/ur5_fall.yaml") + " -o " + dir.string());
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("real-time factor"));
@@ -185,9 +171,9 @@ TEST(CliRun, WritesCsvAndSummary) {
 }
 
 TEST(CliRun, BadExperimentFileWritesNothing) {
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_run_bad";
-  std::filesystem::remove_all(dir);
-  const auto cfg = std::filesystem::temp_directory_path() / "jointsim_bad_experiment.yaml";
+  const TempDir tmp;
+  const auto dir = tmp / "jointsim_run_bad";
+  const auto cfg = tmp / "jointsim_bad_experiment.yaml";
   std::ofstream(cfg) << "experiment: {name: x, type: passive_robot}\nrobot: " << sourcePath("config/robots/ur5.yaml")
                      << "\nduration: -1\n";
   const Result r = runCli("run " + cfg.string() + " -o " + dir.string());
@@ -197,9 +183,9 @@ TEST(CliRun, BadExperimentFileWritesNothing) {
 }
 
 TEST(CliRun, SolverFailureLeavesFailedSummaryAndNoCsv) {
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_run_fail";
-  std::filesystem::remove_all(dir);
-  const auto cfg = std::filesystem::temp_directory_path() / "jointsim_fail_experiment.yaml";
+  const TempDir tmp;
+  const auto dir = tmp / "jointsim_run_fail";
+  const auto cfg = tmp / "jointsim_fail_experiment.yaml";
   // Far too few steps allowed per output interval: CVODE gives up (CV_TOO_MUCH_WORK).
   std::ofstream(cfg) << "experiment: {name: f, type: passive_robot}\nrobot: " << sourcePath("config/robots/ur5.yaml")
                      << "\nduration: 1\nlog_rate: 1\nsolver: {rtol: 1.0e-12, atol: 1.0e-14, max_num_steps: 5}\n";

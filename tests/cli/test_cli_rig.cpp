@@ -18,20 +18,10 @@
 using ::testing::HasSubstr;
 
 namespace {
-struct Result {
-  int status;
-  std::string err;
-};
+using Result = jointsim::test::CliResult;
+using jointsim::test::TempDir;
 
-Result run(const std::string& args) {
-  const auto err_file = std::filesystem::temp_directory_path() / "jointsim_rig_cli_stderr";
-  const std::string cmd = std::string(JOINTSIM_CLI_PATH) + " " + args + " >/dev/null 2>" + err_file.string();
-  const int rc = std::system(cmd.c_str());
-  std::ifstream in(err_file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, ss.str()};
-}
+Result run(const std::string& args) { return jointsim::test::runCli(args); }
 
 const char* kGood = R"(experiment: {name: rig, type: joint_rig}
 rotor_inertia: 0.01
@@ -47,9 +37,9 @@ log_rate: 50
 }  // namespace
 
 TEST(CliRig, GoodFileRuns) {
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_rig_good";
-  std::filesystem::remove_all(dir);
-  const auto cfg = std::filesystem::temp_directory_path() / "jointsim_rig_good.yaml";
+  const TempDir tmp;
+  const auto dir = tmp / "jointsim_rig_good";
+  const auto cfg = tmp / "jointsim_rig_good.yaml";
   std::ofstream(cfg) << kGood;
   const Result r = run("run " + cfg.string() + " -o " + dir.string());
   ASSERT_EQ(r.status, 0) << r.err;
@@ -75,9 +65,10 @@ TEST(CliRig, BadInputExitTwoWithFileLineKeyPathAndNoOutput) {
       {"", "", "--set transmission.stiffness=abc",
        "transmission.stiffness: expected a stiffness in N·m/rad, got 'abc'"},
   };
-  const auto cfg = std::filesystem::temp_directory_path() / "jointsim_rig_bad.yaml";
+  const TempDir tmp;
+  const auto cfg = tmp / "jointsim_rig_bad.yaml";
   for (const Case& c : cases) {
-    const auto dir = std::filesystem::temp_directory_path() / "jointsim_rig_bad_out";
+    const auto dir = tmp / "jointsim_rig_bad_out";
     std::filesystem::remove_all(dir);
     std::string text = kGood;
     if (!c.from.empty()) {
@@ -99,9 +90,9 @@ TEST(CliRig, BadInputExitTwoWithFileLineKeyPathAndNoOutput) {
 }
 
 TEST(CliRig, SolverFailureLeavesFailedSummary) {
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_rig_fail";
-  std::filesystem::remove_all(dir);
-  const auto cfg = std::filesystem::temp_directory_path() / "jointsim_rig_fail.yaml";
+  const TempDir tmp;
+  const auto dir = tmp / "jointsim_rig_fail";
+  const auto cfg = tmp / "jointsim_rig_fail.yaml";
   std::ofstream(cfg) << kGood << "solver: {rtol: 1.0e-12, atol: 1.0e-14, max_num_steps: 3}\n";
   const Result r = run("run " + cfg.string() + " -o " + dir.string());
   EXPECT_EQ(r.status, 1) << r.err;

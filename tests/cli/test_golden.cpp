@@ -66,33 +66,17 @@ std::string slurp(const std::string& path) {
   return ss.str();
 }
 
-struct Result {
-  int status;
-  std::string out, err;
-};
-
-/// A scratch directory unique to this process and tag (CTest runs the tests in parallel processes).
-std::filesystem::path scratch(const std::string& tag) {
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("jointsim_golden_" + std::to_string(::getpid()) + "_" + tag);
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
-
-Result runCli(const std::filesystem::path& dir, const std::string& args) {
-  const std::string out = (dir / "stdout").string(), err = (dir / "stderr").string();
-  const std::string cmd = std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + out + " 2>" + err;
-  const int rc = std::system(cmd.c_str());
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurp(out), slurp(err)};
-}
+using Result = jointsim::test::CliResult;
+using jointsim::test::runCli;
+/// A scratch directory of this test alone (CTest runs the tests in parallel processes).
+using Scratch = jointsim::test::TempDir;
 
 /// Runs the case's experiment (plus `extra` overrides) into `dir`; returns the log path ("" on failure).
 std::string runCase(const GoldenCase& c, const std::filesystem::path& dir, const std::vector<std::string>& extra = {}) {
   std::string args = "run " + sourcePath(c.config) + " -o " + (dir / "out").string();
   for (const auto& o : c.overrides) args += " --set " + o;
   for (const auto& o : extra) args += " --set " + o;
-  const Result r = runCli(dir, args);
+  const Result r = runCli(args);
   EXPECT_EQ(r.status, 0) << "jointsim " << args << "\n" << r.out << r.err;
   const size_t at = r.out.find("log:");
   if (r.status != 0 || at == std::string::npos) return {};
@@ -102,9 +86,9 @@ std::string runCase(const GoldenCase& c, const std::filesystem::path& dir, const
   return log;
 }
 
-Result compareWithGolden(const GoldenCase& c, const std::filesystem::path& dir, const std::string& log) {
-  return runCli(dir, "compare " + sourcePath("tests/golden/" + c.name + ".csv") + " " + log + " --rtol " + c.rtol +
-                         " --atol " + c.atol);
+Result compareWithGolden(const GoldenCase& c, const std::string& log) {
+  return runCli("compare " + sourcePath("tests/golden/" + c.name + ".csv") + " " + log + " --rtol " + c.rtol +
+                " --atol " + c.atol);
 }
 
 class GoldenCaseTest : public ::testing::TestWithParam<GoldenCase> {};
@@ -113,15 +97,14 @@ class GoldenCaseTest : public ::testing::TestWithParam<GoldenCase> {};
 
 TEST_P(GoldenCaseTest, Matches) {
   const GoldenCase& c = GetParam();
-  const auto dir = scratch(c.name);
+  const Scratch dir(c.name);
   const std::string log = runCase(c, dir);
   ASSERT_FALSE(log.empty());
-  const Result r = compareWithGolden(c, dir, log);
+  const Result r = compareWithGolden(c, log);
   EXPECT_EQ(r.status, 0) << "the log of " << c.name << " differs from tests/golden/" << c.name
                          << ".csv (if the change is intended: bash scripts/regenerate-golden.sh)\n"
                          << r.out << r.err;
   EXPECT_THAT(r.out, HasSubstr("(0 with B interpolated)")) << "the reference must lie on the log's time grid";
-  std::filesystem::remove_all(dir);
 }
 
 INSTANTIATE_TEST_SUITE_P(Golden, GoldenCaseTest, ::testing::ValuesIn(readCases()),
@@ -154,10 +137,10 @@ TEST(Golden, CasesCoverEveryExperimentTypeAndReferencesAreSmall) {
 // moved, while the unchanged rerun (GoldenCaseTest.Matches/kr300_joint1_clamping) passes.
 TEST(Golden, CatchesOnePercentStiffnessChangeOnKr300ClampingRig) {
   const GoldenCase c = findCase("kr300_joint1_clamping");
-  const auto dir = scratch("kr300_stiffness");
+  const Scratch dir("kr300_stiffness");
   const std::string log = runCase(c, dir, {"transmission.stiffness=25.957"});  // 25.7 N·m/rad + 1 %
   ASSERT_FALSE(log.empty());
-  const Result r = compareWithGolden(c, dir, log);
+  const Result r = compareWithGolden(c, log);
   EXPECT_EQ(r.status, 1) << r.out << r.err;
   EXPECT_THAT(r.err, HasSubstr("columns differ beyond tolerance"));
   EXPECT_THAT(r.err, HasSubstr("motor_angle[rad]"));
@@ -174,32 +157,29 @@ TEST(Golden, CatchesOnePercentStiffnessChangeOnKr300ClampingRig) {
   }
   // Columns that the stiffness cannot move (the clamped output) stay within tolerance.
   EXPECT_THAT(r.out, ::testing::ContainsRegex("output_angle\\[rad\\] .* ok"));
-  std::filesystem::remove_all(dir);
 }
 
 TEST(Golden, CatchesOnePercentStiffnessChangeOnIrb140Clamping) {
   const GoldenCase c = findCase("irb140_clamping");
-  const auto dir = scratch("irb140_stiffness");
+  const Scratch dir("irb140_stiffness");
   const std::string log = runCase(c, dir, {"axes[1].c=8.282"});  // joint 2: 8.2 N·m/rad + 1 %
   ASSERT_FALSE(log.empty());
-  const Result r = compareWithGolden(c, dir, log);
+  const Result r = compareWithGolden(c, log);
   EXPECT_EQ(r.status, 1) << r.out << r.err;
   EXPECT_THAT(r.err, HasSubstr("joint2.deflection[rad]"));
   EXPECT_THAT(r.out, ::testing::ContainsRegex("joint2\\.motor_angle\\[rad\\] .* FAIL"));
-  std::filesystem::remove_all(dir);
 }
 
 TEST(Golden, CompareExitStatus2ForUnreadableOrIncompatibleFiles) {
-  const auto dir = scratch("incompatible");
+  const Scratch dir("incompatible");
   const std::string ref = sourcePath("tests/golden/kr300_joint1_clamping.csv");
-  Result r = runCli(dir, "compare " + ref + " " + (dir / "missing.csv").string());
+  Result r = runCli("compare " + ref + " " + (dir / "missing.csv").string());
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_THAT(r.err, HasSubstr("missing.csv"));
-  r = runCli(dir, "compare " + ref + " " + sourcePath("tests/golden/ur5_fall.csv"));
+  r = runCli("compare " + ref + " " + sourcePath("tests/golden/ur5_fall.csv"));
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_THAT(r.err, HasSubstr("incompatible"));
-  r = runCli(dir, "compare " + ref + " " + ref + " --columns motor_angle,friction_torque");
+  r = runCli("compare " + ref + " " + ref + " --columns motor_angle,friction_torque");
   EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("all 2 columns within tolerance"));
-  std::filesystem::remove_all(dir);
 }

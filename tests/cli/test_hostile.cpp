@@ -28,10 +28,8 @@ using ::testing::Not;
 
 namespace {
 
-struct Result {
-  int status;
-  std::string out, err;
-};
+using Result = jointsim::test::CliResult;
+using jointsim::test::TempDir;
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -40,23 +38,10 @@ std::string slurp(const fs::path& p) {
   return ss.str();
 }
 
-fs::path freshDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("jointsim_hostile_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-/// Runs the CLI with `args` in the working directory `cwd`.
+/// Runs the CLI with `args` in the working directory `cwd` (its output captured outside `cwd`).
 Result run(const std::string& args, const fs::path& cwd) {
-  const fs::path out = cwd / ".cli.out", err = cwd / ".cli.err";
-  const std::string cmd =
-      "cd '" + cwd.string() + "' && " + JOINTSIM_CLI_PATH + " " + args + " >" + out.string() + " 2>" + err.string();
-  const int rc = std::system(cmd.c_str());
-  Result r{WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurp(out), slurp(err)};
-  fs::remove(out);
-  fs::remove(err);
-  return r;
+  return jointsim::test::runCommand("cd " + jointsim::test::shellQuote(cwd.string()) + " && " + JOINTSIM_CLI_PATH +
+                                    " " + args);
 }
 
 /// Files (not folders) below `dir`, relative, sorted.
@@ -96,7 +81,8 @@ void expectOneLine(const Result& r) {
 // Was: an experiment named "pw\nsystem(\"touch X\")\n#" ran, and `jointsim plot` then executed the system()
 // call in gnuplot.
 TEST(HostileNames, ExperimentNameThatWouldRunCodeIsRejected) {
-  const fs::path dir = freshDir("codeexec");
+  const TempDir tmp("codeexec");
+  const fs::path& dir = tmp.path();
   write(dir / "e.yaml", fallExperiment("{name: \"pw\\nsystem(\\\"touch X\\\")\\n#\", type: passive_robot}"));
   const Result r = run("run e.yaml -o out", dir);
   EXPECT_EQ(r.status, 2) << r.err;
@@ -104,13 +90,13 @@ TEST(HostileNames, ExperimentNameThatWouldRunCodeIsRejected) {
   expectOneLine(r);
   EXPECT_FALSE(fs::exists(dir / "out"));
   EXPECT_FALSE(fs::exists(dir / "X"));
-  fs::remove_all(dir);
 }
 
 // Was: an experiment named ".." wrote into the working directory; a sweep run named ".." deleted *.csv and
 // summary.json in the parent of -o DIR and wrote its run there.
 TEST(HostileNames, DotDotNamesNeverLeaveTheOutputFolder) {
-  const fs::path dir = freshDir("dotdot");
+  const TempDir tmp("dotdot");
+  const fs::path& dir = tmp.path();
   write(dir / "keep.csv", "precious\n");
   write(dir / "summary.json", "{\"precious\": true}\n");
   write(dir / "e.yaml", fallExperiment("{name: .., type: passive_robot}"));
@@ -129,13 +115,13 @@ TEST(HostileNames, DotDotNamesNeverLeaveTheOutputFolder) {
   EXPECT_EQ(slurp(dir / "summary.json"), "{\"precious\": true}\n");
   EXPECT_EQ(filesBelow(dir),
             (std::vector<std::string>{"e.yaml", "keep.csv", "ok.yaml", "summary.json", "sweep.yaml", "sweep2.yaml"}));
-  fs::remove_all(dir);
 }
 
 // Was: a hand-edited summary's "experiment" steered plot output outside the figures folder, and a name with
 // newlines reached gnuplot as commands; a column name of the CSV could do the same through titles.
 TEST(HostilePlot, SummaryAndColumnNamesCannotSteerOutputsOrRunCode) {
-  const fs::path dir = freshDir("plot");
+  const TempDir tmp("plot");
+  const fs::path& dir = tmp.path();
   write(dir / "e.yaml", fallExperiment("{name: fall, type: passive_robot}"));
   ASSERT_EQ(run("run e.yaml -o run", dir).status, 0);
   const std::string summary = slurp(dir / "run" / "summary.json");
@@ -145,8 +131,8 @@ TEST(HostilePlot, SummaryAndColumnNamesCannotSteerOutputsOrRunCode) {
     s.replace(s.find(key), key.size(), "\"experiment\": \"" + name + "\"");
     write(dir / "run" / "summary.json", s);
   };
-  for (const std::string& name :
-       {std::string("../../evil"), std::string("x\\nsystem('touch X')\\n#"), std::string("/tmp/evil")}) {
+  for (const std::string& name : {std::string("../../evil"), std::string("x\\nsystem('touch X')\\n#"),
+                                  std::string("/tmp/evil")}) {  // tmp-path-ok: hostile input, never written
     withExperiment(name);
     const Result r = run("plot run", dir);
     EXPECT_EQ(r.status, 2) << name << ": " << r.err;
@@ -164,14 +150,14 @@ TEST(HostilePlot, SummaryAndColumnNamesCannotSteerOutputsOrRunCode) {
   EXPECT_FALSE(fs::exists(dir / "X"));
   EXPECT_FALSE(fs::exists(dir / "run" / "X"));
   for (const auto& f : filesBelow(dir)) EXPECT_TRUE(f.rfind("run/", 0) == 0 || f == "e.yaml") << "plot wrote " << f;
-  fs::remove_all(dir);
 }
 
 // ---------------------------------------------------------------------------------------------- parsers
 
 // Was: a URDF of deeply nested elements overflowed the stack in the XML parser (segfault).
 TEST(HostileParsers, DeeplyNestedUrdfIsAnInputError) {
-  const fs::path dir = freshDir("urdf");
+  const TempDir tmp("urdf");
+  const fs::path& dir = tmp.path();
   std::string xml = "<robot name='r'>";
   for (int i = 0; i < 200000; ++i) xml += "<a>";
   write(dir / "deep.urdf", xml);
@@ -189,13 +175,13 @@ TEST(HostileParsers, DeeplyNestedUrdfIsAnInputError) {
   const Result c = run("dynamics --robot chain.urdf --q 0", dir);
   EXPECT_EQ(c.status, 2) << c.err;
   EXPECT_THAT(c.err, HasSubstr("at most 1000 links"));
-  fs::remove_all(dir);
 }
 
 // Was: a deeply nested value in a summary.json overflowed the stack when plot copied the summary
 // (segfault). The folder is a real run's, with a value a million levels deep put into its parameters.
 TEST(HostileParsers, DeeplyNestedSummaryIsAnInputError) {
-  const fs::path dir = freshDir("deepjson");
+  const TempDir tmp("deepjson");
+  const fs::path& dir = tmp.path();
   write(dir / "e.yaml", fallExperiment("{name: fall, type: passive_robot}"));
   ASSERT_EQ(run("run e.yaml -o run", dir).status, 0);
   std::string summary = slurp(dir / "run" / "summary.json");
@@ -211,13 +197,13 @@ TEST(HostileParsers, DeeplyNestedSummaryIsAnInputError) {
   // Still an input error, not a crash, when the whole file is one deep array.
   write(dir / "run" / "summary.json", std::string(1000000, '[') + std::string(1000000, ']'));
   EXPECT_EQ(run("plot run -o figures", dir).status, 2);
-  fs::remove_all(dir);
 }
 
 // Was: a 1.5 KB alias bomb in experiment.description expanded without bound while the summary was written
 // (the CSV committed, no summary ever).
 TEST(HostileParsers, AliasBombIsRejectedBeforeAnythingIsWritten) {
-  const fs::path dir = freshDir("bomb");
+  const TempDir tmp("bomb");
+  const fs::path& dir = tmp.path();
   std::string v = "&a0 \"lol\"";
   for (int i = 1; i < 10; ++i) {
     std::string next = "&a" + std::to_string(i) + " [" + v;
@@ -229,19 +215,18 @@ TEST(HostileParsers, AliasBombIsRejectedBeforeAnythingIsWritten) {
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_THAT(r.err, HasSubstr("expands to more than 200000 values"));
   EXPECT_FALSE(fs::exists(dir / "out"));
-  fs::remove_all(dir);
 }
 
 // Was: a non-scalar YAML key ended in "internal error" with exit status 1 and no file named.
 TEST(HostileParsers, NonScalarKeyIsAnInputErrorWithFileAndLine) {
-  const fs::path dir = freshDir("key");
+  const TempDir tmp("key");
+  const fs::path& dir = tmp.path();
   write(dir / "e.yaml", fallExperiment("{name: k, type: passive_robot}", "? [a, b]\n: 1\n"));
   const Result r = run("run e.yaml -o out", dir);
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_THAT(r.err, HasSubstr("e.yaml:7"));
   EXPECT_THAT(r.err, HasSubstr("got a key that is a list"));
   expectOneLine(r);
-  fs::remove_all(dir);
 }
 
 // ---------------------------------------------------------------------------------------------- budgets
@@ -249,7 +234,8 @@ TEST(HostileParsers, NonScalarKeyIsAnInputErrorWithFileAndLine) {
 // Was: duration × log_rate overflowed a static_cast<long> (log_rate 1e300: "ok" with a one-row CSV;
 // log_rate 1e12: 382 MB in 30 s with no bound).
 TEST(HostileBudgets, OutputGridBeyondTheRowLimitIsAnInputError) {
-  const fs::path dir = freshDir("rows");
+  const TempDir tmp("rows");
+  const fs::path& dir = tmp.path();
   write(dir / "e.yaml", fallExperiment("{name: rows, type: passive_robot}"));
   for (const char* rate : {"1e300", "1e12", "3e8"}) {
     const Result r = run("run e.yaml -o out --set log_rate=" + std::string(rate), dir);
@@ -263,12 +249,12 @@ TEST(HostileBudgets, OutputGridBeyondTheRowLimitIsAnInputError) {
   const Result r = run("run small.yaml -o out", dir);
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_THAT(r.err, HasSubstr("more than the limit of 10 rows"));
-  fs::remove_all(dir);
 }
 
 // Was: huge gains or initial speeds made CVODE crawl for minutes with no work or time limit.
 TEST(HostileBudgets, RunsStopAtTheirStepOrWallTimeBudgetWithAFailedSummary) {
-  const fs::path dir = freshDir("budget");
+  const TempDir tmp("budget");
+  const fs::path& dir = tmp.path();
   // A violent spin (1e4 rad/s) for a long time: far more steps than the budget allows.
   write(dir / "e.yaml",
         "experiment: {name: spin, type: passive_robot}\nrobot: " + sourcePath("config/robots/ur5.yaml") +
@@ -289,7 +275,6 @@ TEST(HostileBudgets, RunsStopAtTheirStepOrWallTimeBudgetWithAFailedSummary) {
     EXPECT_THAT(s, Not(HasSubstr("\"steps\": 0,")));
     EXPECT_EQ(filesBelow(dir / "out"), std::vector<std::string>{"summary.json"});
   }
-  fs::remove_all(dir);
 }
 
 // ---------------------------------------------------------------------------------------------- messages
@@ -297,7 +282,8 @@ TEST(HostileBudgets, RunsStopAtTheirStepOrWallTimeBudgetWithAFailedSummary) {
 // made std::filesystem throw from the library (ENAMETOOLONG): no file and no key in the message, and an
 // exception that is not a jointsim error for a C++ caller. Now the key is named.
 TEST(HostileMessages, OverlongPathComponentNamesTheKey) {
-  const fs::path dir = freshDir("longname");
+  const TempDir tmp("longname");
+  const fs::path& dir = tmp.path();
   write(dir / "sweep.yaml", "sweep: {name: s, experiment: " + std::string(300, 'x') + ".yaml}\nruns: [{name: a}]\n");
   Result r = run("batch sweep.yaml -o out", dir);
   EXPECT_EQ(r.status, 2) << r.err;
@@ -309,13 +295,13 @@ TEST(HostileMessages, OverlongPathComponentNamesTheKey) {
   EXPECT_THAT(r.err, HasSubstr("no such run folder"));
   expectOneLine(r);
   EXPECT_FALSE(fs::exists(dir / "out"));
-  fs::remove_all(dir);
 }
 
 // Was: control bytes echoed across several lines; a 10 MB bad line echoed whole; an infinite trajectory, an
 // over-long path ended in "internal error".
 TEST(HostileMessages, OneLineEscapedCutAndNamingTheFile) {
-  const fs::path dir = freshDir("messages");
+  const TempDir tmp("messages");
+  const fs::path& dir = tmp.path();
   write(dir / "ctl.yaml", fallExperiment("{name: m, type: passive_robot}", "", "0.05", "\"1\\e[31mred\\a\""));
   Result r = run("run ctl.yaml", dir);
   EXPECT_EQ(r.status, 2) << r.err;
@@ -350,13 +336,13 @@ TEST(HostileMessages, OneLineEscapedCutAndNamingTheFile) {
     EXPECT_THAT(r.err, Not(HasSubstr("internal error")));
     expectOneLine(r);
   }
-  fs::remove_all(dir);
 }
 
 // Was: Ceres dumped its own log ("WARNING: Logging before InitGoogleLogging()", "Covariance matrix is near
 // rank deficient ...") before jointsim's message when a fit was not identifiable.
 TEST(HostileMessages, UnidentifiableFitPrintsOnlyItsOwnMessage) {
-  const fs::path dir = freshDir("ceres");
+  const TempDir tmp("ceres");
+  const fs::path& dir = tmp.path();
   const Result r = run("identify clamping " + sourcePath("tests/golden/kr300_joint1_clamping.csv") +
                            " --fix-backlash 0.01 --fit-viscous --fit-damping -o fit.yaml",
                        dir);
@@ -364,7 +350,6 @@ TEST(HostileMessages, UnidentifiableFitPrintsOnlyItsOwnMessage) {
   EXPECT_THAT(r.err, ::testing::StartsWith("jointsim: cannot identify: clamping fit: the parameters"));
   expectOneLine(r);
   EXPECT_FALSE(fs::exists(dir / "fit.yaml"));
-  fs::remove_all(dir);
 }
 
 // ---------------------------------------------------------------------------------------------- outputs
@@ -372,7 +357,8 @@ TEST(HostileMessages, UnidentifiableFitPrintsOnlyItsOwnMessage) {
 // Was: a failed run into the folder of an earlier good run left the old CSV beside a "failed" summary (and
 // plot drew it, exit 0).
 TEST(HostileOutputs, FailedRunLeavesOnlyItsFailedSummary) {
-  const fs::path dir = freshDir("stale");
+  const TempDir tmp("stale");
+  const fs::path& dir = tmp.path();
   write(dir / "e.yaml", fallExperiment("{name: fall, type: passive_robot}"));
   ASSERT_EQ(run("run e.yaml -o out", dir).status, 0);
   ASSERT_TRUE(fs::exists(dir / "out" / "fall.csv"));
@@ -384,13 +370,13 @@ TEST(HostileOutputs, FailedRunLeavesOnlyItsFailedSummary) {
   const Result p = run("plot out", dir);
   EXPECT_EQ(p.status, 2) << p.err;
   EXPECT_THAT(p.err, HasSubstr("the run failed"));
-  fs::remove_all(dir);
 }
 
 // Was (found by fuzz_experiment): a description with bytes that are not UTF-8 made the summary's JSON writer
 // throw after the CSV was written: "internal error", exit 1, no summary.
 TEST(HostileOutputs, DescriptionThatIsNotUtf8IsWrittenWithReplacementCharacters) {
-  const fs::path dir = freshDir("utf8");
+  const TempDir tmp("utf8");
+  const fs::path& dir = tmp.path();
   write(dir / "e.yaml", fallExperiment("{name: fall, type: passive_robot, description: \"bad \xff\xfe bytes\"}"));
   const Result r = run("run e.yaml -o out", dir);
   EXPECT_EQ(r.status, 0) << r.err;
@@ -398,13 +384,13 @@ TEST(HostileOutputs, DescriptionThatIsNotUtf8IsWrittenWithReplacementCharacters)
   EXPECT_THAT(s, HasSubstr("\"status\": \"ok\""));
   EXPECT_THAT(s, HasSubstr("bad \xEF\xBF\xBD\xEF\xBF\xBD bytes"));  // U+FFFD per bad byte
   EXPECT_EQ(filesBelow(dir / "out"), (std::vector<std::string>{"fall.csv", "summary.json"}));
-  fs::remove_all(dir);
 }
 
 // Was: clamping curves were written after an "ok" summary; a joint named "j6/x" made the run exit 1 with an
 // "ok" summary and 5 of 6 curves.
 TEST(HostileOutputs, ClampingCurveOfAJointWithASlashInItsName) {
-  const fs::path dir = freshDir("slash");
+  const TempDir tmp("slash");
+  const fs::path& dir = tmp.path();
   std::string robot = slurp(sourcePath("config/robots/irb140.yaml"));
   std::string experiment = slurp(sourcePath("config/experiments/irb140_clamping.yaml"));
   for (std::string* s : {&robot, &experiment})
@@ -419,7 +405,6 @@ TEST(HostileOutputs, ClampingCurveOfAJointWithASlashInItsName) {
   EXPECT_TRUE(std::count(files.begin(), files.end(), "irb140_clamping_j6_x_curve.csv"))
       << ::testing::PrintToString(files);
   EXPECT_THAT(slurp(dir / "out" / "summary.json"), HasSubstr("irb140_clamping_j6_x_curve.csv"));
-  fs::remove_all(dir);
 }
 
 // ---------------------------------------------------------------------------------------------- signals
@@ -468,7 +453,8 @@ bool hasTemporary(const fs::path& dir) {
 
 // Was: SIGINT/SIGTERM left a 6 MB *.csv.tmp.<pid> and no summary.
 TEST(HostileSignals, InterruptedRunLeavesAnInterruptedSummaryAndNoTemporaryFile) {
-  const fs::path dir = freshDir("signal");
+  const TempDir tmp("signal");
+  const fs::path& dir = tmp.path();
   write(dir / "e.yaml", fallExperiment("{name: long, type: passive_robot}", "", "10000"));
   for (const auto& [sig, code] : std::vector<std::pair<int, int>>{{SIGINT, 130}, {SIGTERM, 143}}) {
     const pid_t pid = start({"run", "e.yaml", "-o", "out"}, dir);
@@ -482,13 +468,13 @@ TEST(HostileSignals, InterruptedRunLeavesAnInterruptedSummaryAndNoTemporaryFile)
     EXPECT_THAT(s, HasSubstr("\"status\": \"interrupted\""));
     EXPECT_THAT(s, Not(HasSubstr("\"sim_time_s\": 0,")));
   }
-  fs::remove_all(dir);
 }
 
 // An interrupted batch stops launching runs, leaves no temporary file, and its resume gives results
 // byte-identical to an uninterrupted batch.
 TEST(HostileSignals, InterruptedBatchResumesToIdenticalResults) {
-  const fs::path dir = freshDir("batchsignal");
+  const TempDir tmp("batchsignal");
+  const fs::path& dir = tmp.path();
   write(dir / "e.yaml", fallExperiment("{name: fall, type: passive_robot}", "", "30", "200"));
   std::string sweep = "sweep: {name: s, experiment: e.yaml}\nruns:\n  - name: a\n";
   for (const auto& [name, qd] : {std::pair{"b", "0.5"}, {"c", "0.7"}, {"d", "0.9"}})
@@ -526,7 +512,6 @@ TEST(HostileSignals, InterruptedBatchResumesToIdenticalResults) {
     EXPECT_TRUE(a == b) << "run " << r << " differs after the resume";
   }
   EXPECT_FALSE(hasTemporary(dir / "interrupted"));
-  fs::remove_all(dir);
 }
 
 // ---------------------------------------------------------------------------------------------- joint limits
@@ -534,7 +519,8 @@ TEST(HostileSignals, InterruptedBatchResumesToIdenticalResults) {
 // Was: joint limits were informative only — a torque-free swing of the UR5 took the elbow far past its ±π
 // limit without a word. Now the default (warn) reports it, and `stop` holds the joints at their end stops.
 TEST(HostileJointLimits, SwingPastTheElbowLimitIsReportedOrStopped) {
-  const fs::path dir = freshDir("limits");
+  const TempDir tmp("limits");
+  const fs::path& dir = tmp.path();
   write(dir / "swing.yaml",
         "experiment: {name: swing, type: passive_robot}\nrobot: " + sourcePath("config/robots/ur5.urdf") +
             "\ninitial_state: {q: [0, -1.5708, 0.3, 0, 0, 0]}\njoint_limits: warn\n"
@@ -584,5 +570,4 @@ TEST(HostileJointLimits, SwingPastTheElbowLimitIsReportedOrStopped) {
   r = run("run bad.yaml", dir);
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("bad.yaml:3: joint_limits.damping: expected a finite damping >= 0 N·m·s/rad"));
-  fs::remove_all(dir);
 }

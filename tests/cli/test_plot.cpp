@@ -31,25 +31,7 @@ namespace {
 
 /// A fresh folder per test (CTest runs the tests in parallel processes), removed at the end of a test that
 /// passed (kept for inspection when it failed).
-class Scratch {
- public:
-  explicit Scratch(const std::string& name)
-      : dir_(fs::temp_directory_path() / ("jointsim_plot_test_" + std::to_string(::getpid()) + "_" + name)) {
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  ~Scratch() {
-    if (!::testing::Test::HasFailure()) fs::remove_all(dir_);
-  }
-  Scratch(const Scratch&) = delete;
-  Scratch& operator=(const Scratch&) = delete;
-  operator const fs::path&() const { return dir_; }
-  fs::path operator/(const std::string& p) const { return dir_ / p; }
-  std::string string() const { return dir_.string(); }
-
- private:
-  fs::path dir_;
-};
+using Scratch = jointsim::test::TempDir;
 
 /// Runs a shipped experiment file with overrides (kept short) into `dir`.
 void runExperiment(const std::string& config, const std::vector<std::string>& overrides, const fs::path& dir) {
@@ -105,16 +87,11 @@ void expectFigures(const fs::path& run_dir, const std::vector<std::string>& stem
     EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << "left behind: " << entry.path();
 }
 
-struct CliResult {
-  int status;
-  std::string out, err;
-};
+using jointsim::test::CliResult;
 
-CliResult runCli(const std::string& args, const fs::path& dir, const std::string& env = "") {
-  const std::string out = (dir / "cli.stdout").string(), err = (dir / "cli.stderr").string();
-  const std::string cmd = env + std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + out + " 2>" + err;
-  const int rc = std::system(cmd.c_str());
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurp(out), slurp(err)};
+/// The CLI with `args`, `env` (assignments such as "PATH=... ") in front; output captured by test::runCommand.
+CliResult runCli(const std::string& args, const std::string& env = "") {
+  return jointsim::test::runCommand(env + std::string(JOINTSIM_CLI_PATH) + " " + args);
 }
 
 }  // namespace
@@ -318,7 +295,7 @@ TEST(Plot, GnuplotFailureIsReportedAndLeavesNoFigure) {
 TEST(PlotCli, WritesFiguresAndListsThem) {
   const Scratch dir("cli");
   runExperiment("ur5_fall.yaml", {"duration=0.1"}, dir / "run");
-  const CliResult r = runCli("plot " + (dir / "run").string() + " -o " + (dir / "figs").string() + " --svg", dir);
+  const CliResult r = runCli("plot " + (dir / "run").string() + " -o " + (dir / "figs").string() + " --svg");
   ASSERT_EQ(r.status, 0) << r.err << r.out;
   EXPECT_THAT(r.out, HasSubstr((dir / "figs" / "ur5_fall_joints.png").string()));
   EXPECT_THAT(r.out, HasSubstr((dir / "figs" / "ur5_fall_energy.svg").string()));
@@ -327,11 +304,11 @@ TEST(PlotCli, WritesFiguresAndListsThem) {
 
 TEST(PlotCli, BadInputExitsWithStatus2) {
   const Scratch dir("cli_errors");
-  CliResult r = runCli("plot " + (dir / "nowhere").string(), dir);
+  CliResult r = runCli("plot " + (dir / "nowhere").string());
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("no such run folder"));
   runExperiment("ur5_fall.yaml", {"duration=0.05"}, dir / "run");
-  r = runCli("plot " + (dir / "run").string(), dir, "PATH=" + (dir / "empty").string() + " ");
+  r = runCli("plot " + (dir / "run").string(), "PATH=" + (dir / "empty").string() + " ");
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("gnuplot not found; install gnuplot-nox (scripts/install-deps.sh)"));
 }
