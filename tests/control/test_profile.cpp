@@ -8,6 +8,7 @@
 
 #include "jointsim/common/error.hpp"
 #include "jointsim/control/profile.hpp"
+#include "test_util.hpp"
 
 using jointsim::control::Profile;
 using ::testing::HasSubstr;
@@ -43,7 +44,8 @@ TEST(Profile, BreakpointsWithinHorizon) {
 }
 
 TEST(Profile, CsvLinearInterpolationAndErrors) {
-  const auto dir = std::filesystem::temp_directory_path();
+  const jointsim::test::TempDir tmp;
+  const auto dir = tmp.path();
   const auto good = dir / "jointsim_profile.csv";
   std::ofstream(good) << "time[s],torque[N·m],other\n0,0,5\n1,2,5\n3,-2,5\n";
   const Profile p = Profile::csv(good.string());

@@ -88,8 +88,8 @@ std::string slurpFile(const std::string& path) {
 
 /// ur5_excitation (0.05 s, no sensor noise) with the given `control:` mapping, in memory.
 sim::SignalTable trackingRun(const std::string& control) {
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_multirate";
-  std::filesystem::create_directories(dir);
+  const test::TempDir tmp("multirate");
+  const auto& dir = tmp.path();
   std::string drives = slurpFile(test::sourcePath("config/robots/ur5_drives.yaml"));
   drives.replace(drives.find("multibody: ur5.yaml"), 19, "multibody: " + test::sourcePath("config/robots/ur5.yaml"));
   std::ofstream(dir / "drives.yaml") << drives;

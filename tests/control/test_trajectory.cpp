@@ -21,6 +21,7 @@ using jointsim::control::PointToPointTrajectory;
 using jointsim::control::PtpSegment;
 using jointsim::control::SampledTrajectory;
 using jointsim::test::MatricesNear;
+using jointsim::test::TempDir;
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
@@ -76,8 +77,8 @@ PointToPointTrajectory ur5Moves() {
   return PointToPointTrajectory(start, segs);
 }
 
-std::filesystem::path writeFile(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / name;
+std::filesystem::path writeFile(const std::filesystem::path& dir, const std::string& name, const std::string& text) {
+  const auto path = dir / name;
   std::ofstream(path) << text;
   return path;
 }
@@ -363,12 +364,13 @@ TEST(TrajectorySampled, DerivativesMatchFiniteDifferences) {
 }
 
 TEST(TrajectorySampled, CsvByOrderAndByColumnName) {
+  const TempDir tmp;
   std::string text = "time [s],qd1,q1,q2\n";
   for (int k = 0; k < 20; ++k) {
     const double t = 100.0 + 0.008 * k;
     text += std::to_string(t) + ",9," + std::to_string(0.01 * k) + "," + std::to_string(-0.02 * k) + "\n";
   }
-  const auto path = writeFile("jointsim_traj_named.csv", text + "\n");
+  const auto path = writeFile(tmp, "jointsim_traj_named.csv", text + "\n");
   const auto traj = SampledTrajectory::fromCsv(path.string(), 2, {"q1", "q2"});
   EXPECT_EQ(traj.dof(), 2);
   EXPECT_NEAR(traj.startTime(), 100.0, 1e-12);
@@ -390,6 +392,7 @@ TEST(TrajectorySampled, CsvByOrderAndByColumnName) {
 }
 
 TEST(TrajectorySampled, CsvErrorsNameTheFileAndRow) {
+  const TempDir tmp;
   // A gap: 125 Hz samples, then one 0.05 s step into row 57 (line 57 of the file, the header is row 1).
   std::string text = "t,q1,q2\n";
   double t = 0.0;
@@ -397,34 +400,33 @@ TEST(TrajectorySampled, CsvErrorsNameTheFileAndRow) {
     if (row > 2) t += (row == 57) ? 0.05 : 0.008;
     text += std::to_string(t) + ",0.1,0.2\n";
   }
-  const auto gap = writeFile("jointsim_traj_gap.csv", text);
+  const auto gap = writeFile(tmp, "jointsim_traj_gap.csv", text);
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(gap.string(), 2); },
               ThrowsMessage<InputError>(
                   HasSubstr("jointsim_traj_gap.csv:57: time step 0.05 s is more than 3x the median 0.008 s (a gap)")));
   EXPECT_NO_THROW(SampledTrajectory::fromCsv(gap.string(), 2, {}, 10.0));
   EXPECT_NO_THROW(SampledTrajectory::fromCsv(gap.string(), 2, {}, 0.0));
 
-  const auto backwards = writeFile("jointsim_traj_backwards.csv", "t,q1\n0,1\n0.008,1\n0.008,2\n");
+  const auto backwards = writeFile(tmp, "jointsim_traj_backwards.csv", "t,q1\n0,1\n0.008,1\n0.008,2\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(backwards.string(), 1); },
               ThrowsMessage<InputError>(HasSubstr("jointsim_traj_backwards.csv:4: time 0.008 s is not after")));
-  const auto cell = writeFile("jointsim_traj_cell.csv", "t,q1,q2\n0,1,2\n0.008,1,abc\n");
+  const auto cell = writeFile(tmp, "jointsim_traj_cell.csv", "t,q1,q2\n0,1,2\n0.008,1,abc\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(cell.string(), 2); },
               ThrowsMessage<InputError>(
                   HasSubstr("jointsim_traj_cell.csv:3:3: column 'q2': expected a number, got 'abc'")));
-  const auto cols = writeFile("jointsim_traj_cols.csv", "t,q1,q2\n0,1,2\n0.008,1\n");
+  const auto cols = writeFile(tmp, "jointsim_traj_cols.csv", "t,q1,q2\n0,1,2\n0.008,1\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(cols.string(), 2); },
               ThrowsMessage<InputError>(
                   HasSubstr("jointsim_traj_cols.csv:3: expected 3 cells as in the header, got 2")));
-  const auto trailing = writeFile("jointsim_traj_trailing.csv", "t,q1,q2\n0,1,2,\n");
+  const auto trailing = writeFile(tmp, "jointsim_traj_trailing.csv", "t,q1,q2\n0,1,2,\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(trailing.string(), 2); },
               ThrowsMessage<InputError>(
                   HasSubstr("jointsim_traj_trailing.csv:2: expected 3 cells as in the header, got 4")));
-  const auto one = writeFile("jointsim_traj_one.csv", "t,q1\n0,1\n");
+  const auto one = writeFile(tmp, "jointsim_traj_one.csv", "t,q1\n0,1\n");
   EXPECT_THAT([&] { SampledTrajectory::fromCsv(one.string(), 1); },
               ThrowsMessage<InputError>(HasSubstr("at least 2 data rows")));
-  EXPECT_THAT(
-      [&] { SampledTrajectory::fromCsv((std::filesystem::temp_directory_path() / "jointsim_nope.csv").string(), 1); },
-      ThrowsMessage<InputError>(HasSubstr("cannot open")));
+  EXPECT_THAT([&] { SampledTrajectory::fromCsv((tmp / "jointsim_nope.csv").string(), 1); },
+              ThrowsMessage<InputError>(HasSubstr("cannot open")));
 }
 
 // ------------------------------------------------------------------------------------------ limits
@@ -464,11 +466,9 @@ std::unique_ptr<JointTrajectory> fromYaml(const std::string& text, int dof, cons
   const auto doc = jointsim::io::YamlValue::loadString(text, "t.yaml");
   return jointsim::control::trajectoryFromYaml(doc["trajectory"], dof, base_dir);
 }
-auto yamlError(const std::string& text, int dof, const std::string& message) {
-  return [=] {
-    EXPECT_THAT([&] { fromYaml(text, dof, std::filesystem::temp_directory_path().string()); },
-                ThrowsMessage<InputError>(HasSubstr(message)));
-  };
+/// Expects the trajectory of `text`, its files relative to `base_dir`, to fail with `message`.
+auto yamlErrorIn(const std::string& base_dir, const std::string& text, int dof, const std::string& message) {
+  return [=] { EXPECT_THAT([&] { fromYaml(text, dof, base_dir); }, ThrowsMessage<InputError>(HasSubstr(message))); };
 }
 }  // namespace
 
@@ -508,7 +508,8 @@ TEST(TrajectoryYaml, FourierAndCsv) {
   EXPECT_DOUBLE_EQ(fourier->params().b(1, 0), 0.1);
   EXPECT_TRUE(exactlyEqual(fourier->setpoint(0).q, vec({0.5, -1})));
 
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_traj_yaml";
+  const TempDir tmp;
+  const auto dir = tmp / "jointsim_traj_yaml";
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "log.csv") << "t,a,b\n0,1,2\n0.008,1,2\n0.016,1,2\n";
   const auto c = fromYaml("trajectory: {type: csv, file: log.csv, columns: [b, a], gap_factor: 5}\n", 2, dir.string());
@@ -517,6 +518,10 @@ TEST(TrajectoryYaml, FourierAndCsv) {
 }
 
 TEST(TrajectoryYaml, ErrorsNameFileLineAndKeyPath) {
+  const TempDir tmp;  // the base folder of the trajectory's files
+  const auto yamlError = [&](const std::string& text, int dof, const std::string& message) {
+    return yamlErrorIn(tmp.string(), text, dof, message);
+  };
   const std::string head = "trajectory:\n  type: point_to_point\n  start: [0, 0]\n  segments:\n";
   yamlError(
       head + "    - {target: [1, 2, 3], velocity: 1, acceleration: 1}\n", 2,
@@ -555,7 +560,7 @@ TEST(TrajectoryYaml, ErrorsNameFileLineAndKeyPath) {
             "t.yaml:8: trajectory.duration: expected a duration >= fade_in (2 s), got '1'")();
   yamlError(fh + "  a: [[0.1], [0.3]]\n", 2, "t.yaml:2: trajectory: missing required key 'b'")();
 
-  std::ofstream(std::filesystem::temp_directory_path() / "jointsim_traj_yaml_bad.csv") << "t,q1,q2\n0,1,2\n0.008,x,2\n";
+  std::ofstream(tmp / "jointsim_traj_yaml_bad.csv") << "t,q1,q2\n0,1,2\n0.008,x,2\n";
   yamlError("trajectory:\n  type: csv\n  file: jointsim_traj_yaml_bad.csv\n", 2, "t.yaml:3: trajectory.file: ")();
   yamlError("trajectory:\n  type: csv\n  file: jointsim_traj_yaml_bad.csv\n", 2,
             "jointsim_traj_yaml_bad.csv:3:2: column 'q1': expected a number, got 'x'")();

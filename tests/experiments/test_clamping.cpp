@@ -335,8 +335,8 @@ TEST(ClampedRobotCurve, FrictionWidensTheLoopByTwiceItsLevel) {
 }
 
 TEST(ClampingExperiment, Irb140DemoRunsAndWritesCurves) {
-  const std::string dir = (std::filesystem::temp_directory_path() / "jointsim_clamping_demo").string();
-  std::filesystem::remove_all(dir);
+  const test::TempDir tmp;
+  const std::string dir = (tmp / "jointsim_clamping_demo").string();
   experiments::RunOptions o;
   o.output_dir = dir;
   o.overrides = {"duration=3", "log_rate=100"};
@@ -349,12 +349,11 @@ TEST(ClampingExperiment, Irb140DemoRunsAndWritesCurves) {
   std::string header;
   std::getline(in, header);
   EXPECT_EQ(header, "time[s],motor_angle[rad],motor_torque[N·m]");
-  std::filesystem::remove_all(dir);
 }
 
 TEST(ClampingExperiment, BadInputNamesTheKey) {
-  const std::string dir = (std::filesystem::temp_directory_path() / "jointsim_clamping_bad").string();
-  std::filesystem::remove_all(dir);
+  const test::TempDir tmp;
+  const std::string dir = (tmp / "jointsim_clamping_bad").string();
   auto fails = [&](const std::string& override_, const std::string& expected) {
     experiments::RunOptions o;
     o.output_dir = dir;

@@ -103,8 +103,8 @@ TEST(DriveChainFriction, StopsAndSticksAgainWhenTheDriveDrops) {
 }
 
 TEST(DriveChainMsl, BacklashSpringDamperMatchesClosedForm) {
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_msl_backlash";
-  std::filesystem::remove_all(dir);
+  const test::TempDir tmp;
+  const auto dir = tmp / "jointsim_msl_backlash";
   experiments::RunOptions o;
   o.output_dir = dir.string();
   const auto report = experiments::runExperimentFile(test::sourcePath("config/experiments/msl_backlash.yaml"), o);
@@ -128,8 +128,8 @@ TEST(DriveChainMsl, BacklashSpringDamperMatchesClosedForm) {
 }
 
 TEST(DriveChainMsl, FrictionExampleRunsAndEndsWithTheBrakeHolding) {
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_msl_friction";
-  std::filesystem::remove_all(dir);
+  const test::TempDir tmp;
+  const auto dir = tmp / "jointsim_msl_friction";
   experiments::RunOptions o;
   o.output_dir = dir.string();
   const auto report = experiments::runExperimentFile(test::sourcePath("config/experiments/msl_friction.yaml"), o);
@@ -153,8 +153,8 @@ TEST(RobotR3OneAxis, RunsToTheTerminationTimeAndClosesItsEnergyBalance) {
   // MSL OneAxis: terminates at path end + swing = 1.4981317 s (derived timings, docs/validation.md); the
   // amplifier's work on the armature equals the stored energy (load, rotor, spring, inductance) plus the
   // resistor, damper and friction losses (energy integrals carried as ODE states), to 1e-4 relative.
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_one_axis";
-  std::filesystem::remove_all(dir);
+  const test::TempDir tmp;
+  const auto dir = tmp / "jointsim_one_axis";
   experiments::RunOptions o;
   o.output_dir = dir.string();
   const auto report = experiments::runExperimentFile(test::sourcePath("config/experiments/robotr3_one_axis.yaml"), o);
@@ -201,8 +201,8 @@ TEST(RobotR3OneAxis, RunsToTheTerminationTimeAndClosesItsEnergyBalance) {
 TEST(RobotR3FullRobot, StartsFromTheDocumentedStateAndReachesTheTarget) {
   // docs/validation.md (sa(0) = 0): i(0), v_C(0), x(0) per axis; termination at 1.8560450 s (derived timings);
   // the joints end near the path's end angles.
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_full_robot";
-  std::filesystem::remove_all(dir);
+  const test::TempDir tmp;
+  const auto dir = tmp / "jointsim_full_robot";
   experiments::RunOptions o;
   o.output_dir = dir.string();
   const auto report = experiments::runExperimentFile(test::sourcePath("config/experiments/robotr3_full_robot.yaml"), o);

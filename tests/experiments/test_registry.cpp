@@ -115,8 +115,8 @@ std::string writeExperiment(const std::filesystem::path& dir, const std::string&
 TEST(ExperimentRegistry, ANewTypeRunsThroughTheFileEntryPointAndThePlantSeam) {
   if (!experiments::findExperimentType("mass_spring_damper")) experiments::registerExperimentType(msdType());
   EXPECT_THAT(experiments::experimentTypeNames(), HasSubstr("mass_spring_damper"));
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_registry_msd";
-  std::filesystem::remove_all(dir);
+  const test::TempDir tmp;
+  const auto dir = tmp / "jointsim_registry_msd";
   const std::string file = writeExperiment(dir);
 
   // Experiment-file entry point: CSV and summary.json written.
@@ -166,7 +166,6 @@ TEST(ExperimentRegistry, ANewTypeRunsThroughTheFileEntryPointAndThePlantSeam) {
   } catch (const InputError& err) {
     EXPECT_THAT(err.what(), HasSubstr("msd.yaml:9: speed: unknown key 'speed'"));
   }
-  std::filesystem::remove_all(dir);
 }
 
 TEST(ExperimentRegistry, TypesAreUniqueAndTheUnknownTypeErrorListsThem) {
@@ -179,8 +178,8 @@ TEST(ExperimentRegistry, TypesAreUniqueAndTheUnknownTypeErrorListsThem) {
     EXPECT_FALSE(row->description.empty()) << t;
     EXPECT_TRUE(row->figures) << t;
   }
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_registry_unknown";
-  std::filesystem::create_directories(dir);
+  const test::TempDir tmp;
+  const auto& dir = tmp.path();
   std::ofstream(dir / "x.yaml") << "experiment: {name: x, type: spring_mass}\n";
   try {
     experiments::loadExperiment((dir / "x.yaml").string());
@@ -189,5 +188,4 @@ TEST(ExperimentRegistry, TypesAreUniqueAndTheUnknownTypeErrorListsThem) {
     EXPECT_THAT(e.what(), HasSubstr("x.yaml:1: experiment.type: expected an experiment type (known: passive_robot, "));
     EXPECT_THAT(e.what(), HasSubstr("mass_spring_damper"));
   }
-  std::filesystem::remove_all(dir);
 }

@@ -23,9 +23,8 @@ struct Table {
 };
 
 Table runConfig(const std::string& config, std::vector<std::string> overrides = {}) {
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("jointsim_cfg_" + std::filesystem::path(config).stem().string());
-  std::filesystem::remove_all(dir);
+  const test::TempDir tmp(std::filesystem::path(config).stem().string());
+  const auto dir = tmp / "out";
   experiments::RunOptions options;
   options.output_dir = dir.string();
   options.overrides = std::move(overrides);

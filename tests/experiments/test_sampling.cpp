@@ -13,6 +13,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/batch.hpp"
 #include "jointsim/experiments/sampling.hpp"
+#include "test_util.hpp"
 
 using namespace jointsim;
 using namespace jointsim::experiments;
@@ -83,9 +84,8 @@ TEST(Sampling, MonteCarloMomentsAndSeededReproducibility) {
 }
 
 TEST(Sampling, SweepFileSampleBlockMakesSeededRunsWithExactOverrides) {
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_sampling_sweep";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const test::TempDir tmp;
+  const auto& dir = tmp.path();
   const std::string exp = std::string(JOINTSIM_SOURCE_DIR) + "/config/experiments/ur5_swg_joint_velocity.yaml";
   auto write = [&](const std::string& name, const std::string& sample) {
     std::ofstream(dir / name) << "sweep:\n  name: s\n  experiment: " << exp << "\n  set: {duration: 0.1}\n" << sample;

@@ -46,8 +46,8 @@ std::vector<double> maxErrors(const std::string& csv_path, int n) {
 }  // namespace
 
 TEST(Tracking, Ur5ExcitationTracksWithinHalfADegree) {
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_ur5_excitation";
-  std::filesystem::remove_all(dir);
+  const test::TempDir tmp;
+  const auto dir = tmp / "jointsim_ur5_excitation";
   experiments::RunOptions o;
   o.output_dir = dir.string();
   const auto report = experiments::runExperimentFile(test::sourcePath("config/experiments/ur5_excitation.yaml"), o);
@@ -62,7 +62,8 @@ TEST(Tracking, Ur5ExcitationTracksWithinHalfADegree) {
 }
 
 TEST(Tracking, RobotWithDrivesErrors) {
-  const auto dir = std::filesystem::temp_directory_path();
+  const test::TempDir tmp;
+  const auto& dir = tmp.path();
   const std::string drives = slurp(test::sourcePath("config/robots/ur5_drives.yaml"));
   const auto path = dir / "jointsim_bad_drives.yaml";
   auto expectError = [&](std::string text, const std::string& expected) {
@@ -87,9 +88,8 @@ TEST(Tracking, RobotWithDrivesErrors) {
 }
 
 TEST(Tracking, TrajectoryBeyondLimitsAndBadSetpointCsvExitTwoAndWriteNothing) {
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_tracking_bad";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const test::TempDir tmp;
+  const auto& dir = tmp.path();
   const std::string robot = test::sourcePath("config/robots/ur5_drives.yaml");
   auto run = [&](const std::string& trajectory) {
     const auto cfg = dir / "exp.yaml";
@@ -126,9 +126,8 @@ TEST(Tracking, TrajectoryBeyondLimitsAndBadSetpointCsvExitTwoAndWriteNothing) {
 TEST(Tracking, SampledControlWithNoisySensorsIsReproducibleBySeed) {
   // Sample-and-hold control at 20 kHz with quantised, noisy sensors: the same seed gives the same run
   // bit for bit, another seed a different one, and the arm still tracks.
-  const auto dir = std::filesystem::temp_directory_path() / "jointsim_sampled";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const test::TempDir tmp;
+  const auto& dir = tmp.path();
   std::string drives = slurp(test::sourcePath("config/robots/ur5_drives.yaml"));
   drives.replace(drives.find("multibody: ur5.yaml"), 19, "multibody: " + test::sourcePath("config/robots/ur5.yaml"));
   for (size_t at = drives.find("    controller:"); at != std::string::npos;

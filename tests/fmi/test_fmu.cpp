@@ -17,6 +17,7 @@
 #include "jointsim/fmi/fmu.hpp"
 #include "jointsim/systems/faults.hpp"
 #include "jointsim/systems/robot_system.hpp"
+#include "test_util.hpp"
 
 namespace fs = std::filesystem;
 using namespace jointsim;
@@ -28,23 +29,19 @@ const std::string kUr5 = std::string(JOINTSIM_SOURCE_DIR) + "/config/experiments
 
 /// A resources folder with the description only; its experiment_file is the experiment in the source tree by a
 /// relative path through ../ (the instance reads resources/<experiment_file>), so its own references resolve.
+/// The folder is the test's own (test::TempDir).
 struct Resources {
+  test::TempDir tmp;
   fs::path dir;
   fmi::FmuDescription d;
-  Resources(const std::string& config, const fmi::ExportOptions& o, const std::string& tag) {
-    dir = fs::temp_directory_path() / ("jointsim_fmu_test_" + tag);
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+  Resources(const std::string& config, const fmi::ExportOptions& o, const std::string& tag)
+      : tmp(tag), dir(tmp.path()) {
     auto e = experiments::loadExperiment(config, o.overrides);
     d = fmi::describe(*e, o, "m");
     d.overrides = o.overrides;
     d.guid = "{test-" + tag + "}";
     d.experiment_file = fs::relative(fs::path(config), dir).string();
     std::ofstream(dir / "jointsim_fmu.json") << d.toJson().dump(1);
-  }
-  ~Resources() {
-    std::error_code ec;
-    fs::remove_all(dir, ec);
   }
 };
 
@@ -234,9 +231,8 @@ TEST(FmuDescription, JsonRoundTripAndModelDescription) {
 // A solver failure inside fmi2DoStep: fmi2Error, a log naming the simulated time and the component, and then
 // only reset, terminate and free. The rig's own file with a step budget of 20 per call (solver.max_num_steps).
 TEST(FmuInstance, SolverFailureIsReportedWithTimeAndComponent) {
-  const fs::path dir = fs::temp_directory_path() / "jointsim_fmu_test_fail_cfg";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const test::TempDir tmp("fail_cfg");
+  const fs::path& dir = tmp.path();
   {
     std::ifstream in(kRig);
     std::stringstream text;
@@ -273,7 +269,6 @@ TEST(FmuInstance, SolverFailureIsReportedWithTimeAndComponent) {
   ASSERT_EQ(inst.enterInitializationMode(), fmi::Status::OK);
   ASSERT_EQ(inst.exitInitializationMode(), fmi::Status::OK);
   for (int k = 0; k < 1500; ++k) ASSERT_EQ(inst.doStep(k * 1e-3, 1e-3), fmi::Status::OK) << k;
-  fs::remove_all(dir);
 }
 
 // Drive parameters of the UR5 twin's robot file as FMU parameters: the friction factor of one drive acts as the

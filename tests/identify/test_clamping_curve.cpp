@@ -11,6 +11,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/identify/clamping_curve.hpp"
 #include "jointsim/identify/clamping_fit.hpp"
+#include "test_util.hpp"
 
 using namespace jointsim;
 using namespace jointsim::identify;
@@ -169,7 +170,8 @@ TEST(ClampingCurve, TooFewHalfCyclesIsBadInputTooManyRejectedIsUnidentifiable) {
 }
 
 TEST(ClampingCurve, DataValidationNamesTheLine) {
-  const auto path = std::filesystem::temp_directory_path() / "jointsim_clamping_curve_unsorted.csv";
+  const jointsim::test::TempDir tmp;
+  const auto path = tmp / "jointsim_clamping_curve_unsorted.csv";
   {
     std::ofstream f(path);
     f << "time[s],motor_angle[deg],motor_torque[N*m]\n";

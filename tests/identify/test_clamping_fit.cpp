@@ -87,30 +87,10 @@ void writeCsv(const fs::path& path, const identify::ClampingData& d, double torq
   }
 }
 
-fs::path tempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("jointsim_clamping_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+using test::TempDir;
+using Result = test::CliResult;
 
-struct Result {
-  int status;
-  std::string out, err;
-};
-
-Result run(const std::string& args, const fs::path& dir) {
-  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
-  const int rc = std::system(cmd.c_str());
-  auto slurp = [](const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  };
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurp(out), slurp(err)};
-}
+Result run(const std::string& args) { return test::runCli(args); }
 
 /// "value: X" of parameter `name` in the YAML report.
 double reportValue(const fs::path& yaml, const std::string& name) {
@@ -158,18 +138,18 @@ TEST(ClampingFit, ValidationSimulationFollowsTheMeasuredAngle) {
 }
 
 TEST(ClampingFitCli, RoundTripAndGearRatioScaling) {
-  const fs::path dir = tempDir("cli_roundtrip");
+  const TempDir tmp("cli_roundtrip");
+  const fs::path& dir = tmp.path();
   const identify::ClampingData d = simulateRig(0.5, 3);
   writeCsv(dir / "motor.csv", d);
   writeCsv(dir / "arm.csv", d, 120.0);  // arm-side torque = motor torque × N (KUKA logs)
-  const Result a = run("identify clamping " + (dir / "motor.csv").string(), dir);
+  const Result a = run("identify clamping " + (dir / "motor.csv").string());
   ASSERT_EQ(a.status, 0) << a.err;
   EXPECT_THAT(a.out, HasSubstr("stiffness"));
   const fs::path ya = dir / "motor_clamping.yaml";  // default output next to the data
   ASSERT_TRUE(fs::exists(ya));
   const Result b =
-      run("identify clamping " + (dir / "arm.csv").string() + " --gear-ratio 120 -o " + (dir / "arm.yaml").string(),
-          dir);
+      run("identify clamping " + (dir / "arm.csv").string() + " --gear-ratio 120 -o " + (dir / "arm.yaml").string());
   ASSERT_EQ(b.status, 0) << b.err;
   for (const char* p : {"stiffness", "backlash", "friction"}) {
     const double va = reportValue(ya, p), vb = reportValue(dir / "arm.yaml", p);
@@ -185,29 +165,28 @@ TEST(ClampingFitCli, RoundTripAndGearRatioScaling) {
   EXPECT_THAT(ss.str(), HasSubstr("side: motor"));
   EXPECT_THAT(ss.str(), HasSubstr("std_error"));
   EXPECT_THAT(ss.str(), HasSubstr("rms_residual"));
-  fs::remove_all(dir);
 }
 
 TEST(ClampingFitCli, NeverCrossingZeroTorqueIsUnidentifiableUnlessBacklashFixed) {
-  const fs::path dir = tempDir("cli_offset");
+  const TempDir tmp("cli_offset");
+  const fs::path& dir = tmp.path();
   writeCsv(dir / "offset.csv", simulateRig(7.0, 5));  // torque 2 … 12 N·m: always in positive contact
-  const Result r = run("identify clamping " + (dir / "offset.csv").string() + " -o " + (dir / "o.yaml").string(), dir);
+  const Result r = run("identify clamping " + (dir / "offset.csv").string() + " -o " + (dir / "o.yaml").string());
   EXPECT_EQ(r.status, 3) << r.err;
   EXPECT_THAT(r.err, HasSubstr("backlash"));
   EXPECT_THAT(r.err, HasSubstr("never crosses zero torque"));
   EXPECT_FALSE(fs::exists(dir / "o.yaml"));
   const Result f = run("identify clamping " + (dir / "offset.csv").string() + " --fix-backlash 0.0102 -o " +
-                           (dir / "o.yaml").string(),
-                       dir);
+                       (dir / "o.yaml").string());
   ASSERT_EQ(f.status, 0) << f.err;
   EXPECT_NEAR(reportValue(dir / "o.yaml", "stiffness"), kC, 0.03 * kC);
   EXPECT_NEAR(reportValue(dir / "o.yaml", "friction"), kF, 0.03 * kF);
   EXPECT_NEAR(reportValue(dir / "o.yaml", "backlash"), kB, 1e-12);
-  fs::remove_all(dir);
 }
 
 TEST(ClampingFitCli, BadInputExitTwoWithOneLineMessageAndNoOutput) {
-  const fs::path dir = tempDir("cli_bad");
+  const TempDir tmp("cli_bad");
+  const fs::path& dir = tmp.path();
   auto write = [&](const std::string& name, const std::string& header, int rows, auto&& row) {
     std::ofstream f(dir / name);
     f << header << "\n";
@@ -246,17 +225,17 @@ TEST(ClampingFitCli, BadInputExitTwoWithOneLineMessageAndNoOutput) {
   };
   for (const Case& c : cases) {
     const fs::path out = dir / "out.yaml";
-    const Result r = run("identify clamping " + (dir / c.args).string() + " -o " + out.string(), dir);
+    const Result r = run("identify clamping " + (dir / c.args).string() + " -o " + out.string());
     EXPECT_EQ(r.status, 2) << c.args << ": " << r.err;
     EXPECT_THAT(r.err, HasSubstr(c.expected)) << c.args;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.args;
   }
-  fs::remove_all(dir);
 }
 
 TEST(ClampingFitCli, TooManyRejectedHalfCyclesExitThree) {
-  const fs::path dir = tempDir("cli_rejected");
+  const TempDir tmp("cli_rejected");
+  const fs::path& dir = tmp.path();
   {
     std::ofstream f(dir / "few.csv");
     f << "time[s],motor_angle[rad],motor_torque[N*m]\n";
@@ -266,18 +245,17 @@ TEST(ClampingFitCli, TooManyRejectedHalfCyclesExitThree) {
       f << 0.02 * k << "," << x << "," << 25.7 * x + (p < 15 ? 1.9 : -1.9) << "\n";
     }
   }
-  const Result r = run("identify clamping " + (dir / "few.csv").string() + " -o " + (dir / "o.yaml").string(), dir);
+  const Result r = run("identify clamping " + (dir / "few.csv").string() + " -o " + (dir / "o.yaml").string());
   EXPECT_EQ(r.status, 3) << r.err;
   EXPECT_THAT(r.err, HasSubstr("half-cycles rejected"));
   EXPECT_FALSE(fs::exists(dir / "o.yaml"));
-  fs::remove_all(dir);
 }
 
 // The shipped [KR300Thesis] config's log, as `jointsim run` writes it, identifies its own Table 6.1 parameters.
 // Its first half-cycle (loading from zero) and last one are partial; they must not hide the gap.
 TEST(ClampingFit, ShippedKr300ConfigLogIdentifiesTable61) {
-  const fs::path dir = fs::temp_directory_path() / ("jointsim_clamping_shipped_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const TempDir tmp;
+  const fs::path dir = tmp / "shipped";
   experiments::RunOptions o;
   o.output_dir = dir.string();
   const auto rep = experiments::runExperimentFile(
@@ -287,5 +265,4 @@ TEST(ClampingFit, ShippedKr300ConfigLogIdentifiesTable61) {
   EXPECT_NEAR(fit.stiffness.value / 25.7, 1.0, 0.01);
   EXPECT_NEAR(fit.backlash.value / 0.0102, 1.0, 0.01);
   EXPECT_NEAR(fit.friction.value / 1.91, 1.0, 0.01);  // + the 0.5 N·m·s/rad damper's d·δ̇ while sliding
-  fs::remove_all(dir);
 }

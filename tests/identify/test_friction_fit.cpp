@@ -103,11 +103,6 @@ void expectTable43(const FrictionFit& fit, double rel_tol, double z_tol, const s
 }
 
 // ---------------------------------------------------------------------------------------------- CLI helpers
-struct CliResult {
-  int status;
-  std::string out, err;
-};
-
 std::string slurp(const std::filesystem::path& p) {
   std::ifstream in(p);
   std::stringstream ss;
@@ -115,26 +110,10 @@ std::string slurp(const std::filesystem::path& p) {
   return ss.str();
 }
 
-CliResult runCli(const std::string& args) {
-  // Unique per process and call: CTest runs the tests of this file in parallel processes.
-  static int calls = 0;
-  const auto dir = std::filesystem::temp_directory_path();
-  const std::string tag = std::to_string(::getpid()) + "_" + std::to_string(++calls);
-  const auto out = dir / ("jointsim_friction_cli_stdout_" + tag), err = dir / ("jointsim_friction_cli_stderr_" + tag);
-  const std::string cmd = std::string(JOINTSIM_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
-  const int rc = std::system(cmd.c_str());
-  CliResult r{WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurp(out), slurp(err)};
-  std::filesystem::remove(out);
-  std::filesystem::remove(err);
-  return r;
-}
-
-std::filesystem::path tempDir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("jointsim_friction_" + name);
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
+// Output captured per call (test::runCli); a private folder per test (test::TempDir).
+using jointsim::test::CliResult;
+using jointsim::test::runCli;
+using jointsim::test::TempDir;
 
 void writeMapCsv(const std::filesystem::path& path, const Map& m) {
   std::ofstream o(path);
@@ -416,7 +395,8 @@ TEST(FrictionFitYaml, FrictionBlockIsReadByTheModelReaderAndMatchesTheMap) {
 // ================================================================================================ CLI
 
 TEST(FrictionFitCli, WritesYamlAndSummary) {
-  const auto dir = tempDir("cli_ok");
+  const TempDir tmp("cli_ok");
+  const std::filesystem::path& dir = tmp.path();
   const Map m = steadyStateMap(table43Model(), 80, 1e-3, 1.0, 0.01, 42);
   writeMapCsv(dir / "map.csv", m);
   const auto out = dir / "fitted.yaml";
@@ -458,7 +438,8 @@ TEST(FrictionFitCli, WritesYamlAndSummary) {
 }
 
 TEST(FrictionFitCli, BadInputExitTwoWithFileLineAndNoOutput) {
-  const auto dir = tempDir("cli_bad");
+  const TempDir tmp("cli_bad");
+  const std::filesystem::path& dir = tmp.path();
   struct Case {
     std::string name, csv, expected;
   };
@@ -493,7 +474,8 @@ TEST(FrictionFitCli, BadInputExitTwoWithFileLineAndNoOutput) {
 }
 
 TEST(FrictionFitCli, UnidentifiableMapsExitThree) {
-  const auto dir = tempDir("cli_unident");
+  const TempDir tmp("cli_unident");
+  const std::filesystem::path& dir = tmp.path();
   Map m = steadyStateMap(table43Model(), 30, 1e-3, 1.0, 0.01, 3), pos_only;
   for (size_t i = 0; i < m.v.size(); ++i)
     if (m.v[i] > 0) pos_only.v.push_back(m.v[i]), pos_only.tau.push_back(m.tau[i]);

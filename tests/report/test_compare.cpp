@@ -14,6 +14,7 @@
 
 #include "jointsim/common/error.hpp"
 #include "jointsim/report/compare.hpp"
+#include "test_util.hpp"
 
 using ::testing::HasSubstr;
 using namespace jointsim;
@@ -24,10 +25,9 @@ constexpr double kPi = 3.14159265358979323846;
 
 /// Writes a log with columns time[s], angle[rad], torque[N·m], mode[-] sampled every `dt` over [0, t_end]:
 /// angle = 0.5 sin(2π t) (a smooth signal crossing zero), torque = 10 cos(t), mode = sign of the angle.
-std::string writeLog(const std::string& name, double dt, double t_end,
-                     const std::function<void(double, double&, double&, double&)>& tweak = {}) {
-  const auto dir = std::filesystem::temp_directory_path() / ("jointsim_compare_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+/// The file is `name` in the folder `dir`.
+std::string writeLogIn(const std::filesystem::path& dir, const std::string& name, double dt, double t_end,
+                       const std::function<void(double, double&, double&, double&)>& tweak = {}) {
   const std::string path = (dir / name).string();
   std::ofstream out(path);
   out << "time[s],angle[rad],torque[N·m],mode[-]\n";
@@ -44,6 +44,17 @@ std::string writeLog(const std::string& name, double dt, double t_end,
   return path;
 }
 
+/// The tests' logs go to a folder of the test's own (CTest runs the tests of this file in parallel processes).
+class Compare : public ::testing::Test {
+ protected:
+  const test::TempDir dir_;
+
+  std::string writeLog(const std::string& name, double dt, double t_end,
+                       const std::function<void(double, double&, double&, double&)>& tweak = {}) const {
+    return writeLogIn(dir_, name, dt, t_end, tweak);
+  }
+};
+
 const report::ColumnComparison& column(const report::CompareResult& r, const std::string& name) {
   for (const auto& c : r.columns)
     if (c.name == name) return c;
@@ -52,7 +63,7 @@ const report::ColumnComparison& column(const report::CompareResult& r, const std
 
 }  // namespace
 
-TEST(Compare, IdenticalFilesPass) {
+TEST_F(Compare, IdenticalFilesPass) {
   const std::string a = writeLog("same_a.csv", 0.01, 2.0), b = writeLog("same_b.csv", 0.01, 2.0);
   const report::CompareResult r = report::compareCsvFiles(a, b);
   EXPECT_TRUE(r.pass());
@@ -64,7 +75,7 @@ TEST(Compare, IdenticalFilesPass) {
   EXPECT_THAT(report::formatComparison(r), HasSubstr("all 3 columns within tolerance"));
 }
 
-TEST(Compare, OnePercentChangeOfOneColumnFailsNamingItAndTheTime) {
+TEST_F(Compare, OnePercentChangeOfOneColumnFailsNamingItAndTheTime) {
   const std::string a = writeLog("pct_a.csv", 0.01, 2.0);
   const std::string b =
       writeLog("pct_b.csv", 0.01, 2.0, [](double, double&, double& torque, double&) { torque *= 1.01; });
@@ -88,7 +99,7 @@ TEST(Compare, OnePercentChangeOfOneColumnFailsNamingItAndTheTime) {
   EXPECT_THAT(report::formatComparison(r, true), ::testing::Not(HasSubstr("angle[rad]")));
 }
 
-TEST(Compare, PeakScaledToleranceAcceptsSmallErrorsNearZeroCrossings) {
+TEST_F(Compare, PeakScaledToleranceAcceptsSmallErrorsNearZeroCrossings) {
   // An error of 1e-6 × peak everywhere: pointwise relative tests would fail where the sine crosses zero.
   const std::string a = writeLog("zc_a.csv", 0.01, 2.0);
   const std::string b = writeLog("zc_b.csv", 0.01, 2.0, [](double, double& angle, double&, double&) { angle += 5e-7; });
@@ -100,7 +111,7 @@ TEST(Compare, PeakScaledToleranceAcceptsSmallErrorsNearZeroCrossings) {
   EXPECT_NEAR(column(r, "angle[rad]").max_deviation, 5e-7, 1e-15);
 }
 
-TEST(Compare, InterpolatesSmoothSignalsSampledDifferently) {
+TEST_F(Compare, InterpolatesSmoothSignalsSampledDifferently) {
   const std::string a = writeLog("interp_a.csv", 0.001, 1.0);
   const std::string b = writeLog("interp_b.csv", 0.0007, 0.9996);  // last sample 0.9996: within one interval
   report::CompareOptions o;
@@ -116,7 +127,7 @@ TEST(Compare, InterpolatesSmoothSignalsSampledDifferently) {
   EXPECT_EQ(r.rows_compared, 1000);
 }
 
-TEST(Compare, SameGridNeedsNoInterpolationAcrossSteps) {
+TEST_F(Compare, SameGridNeedsNoInterpolationAcrossSteps) {
   // A decimated reference against the full log: every time of A is a sample of B, so the step of the mode
   // column is compared sample by sample (no interpolation across it).
   const std::string full = writeLog("grid_full.csv", 0.001, 1.0);
@@ -127,7 +138,7 @@ TEST(Compare, SameGridNeedsNoInterpolationAcrossSteps) {
   EXPECT_TRUE(r.pass()) << report::formatComparison(r);
 }
 
-TEST(Compare, DiscreteColumnsFailOnAChangeOfState) {
+TEST_F(Compare, DiscreteColumnsFailOnAChangeOfState) {
   const std::string a = writeLog("mode_a.csv", 0.01, 1.0);
   const std::string b = writeLog("mode_b.csv", 0.01, 1.0, [](double t, double&, double&, double& mode) {
     if (std::abs(t - 0.3) < 1e-9) mode = 0.0;
@@ -138,7 +149,7 @@ TEST(Compare, DiscreteColumnsFailOnAChangeOfState) {
   EXPECT_NEAR(column(r, "mode[-]").time, 0.3, 1e-12);
 }
 
-TEST(Compare, TimeToleranceAcceptsShiftedEvents) {
+TEST_F(Compare, TimeToleranceAcceptsShiftedEvents) {
   // B's mode switches 5 ms late: fails at the same time, passes with a 5 ms tube.
   const std::string a = writeLog("shift_a.csv", 0.001, 1.0);
   const std::string b = writeLog("shift_b.csv", 0.001, 1.0, [](double t, double&, double&, double& mode) {
@@ -153,7 +164,7 @@ TEST(Compare, TimeToleranceAcceptsShiftedEvents) {
   EXPECT_TRUE(r.pass()) << report::formatComparison(r);
 }
 
-TEST(Compare, ColumnsSelection) {
+TEST_F(Compare, ColumnsSelection) {
   const std::string a = writeLog("sel_a.csv", 0.01, 1.0);
   const std::string b = writeLog("sel_b.csv", 0.01, 1.0, [](double, double&, double& torque, double&) { torque += 1; });
   report::CompareOptions o;
@@ -171,7 +182,7 @@ TEST(Compare, ColumnsSelection) {
   EXPECT_THROW(report::compareCsvFiles(a, b, o), InputError);
 }
 
-TEST(Compare, ColumnMissingInBIsAnInputErrorUnlessDeselected) {
+TEST_F(Compare, ColumnMissingInBIsAnInputErrorUnlessDeselected) {
   const std::string a = writeLog("miss_a.csv", 0.01, 1.0);
   const auto dir = std::filesystem::path(a).parent_path();
   const std::string b = (dir / "miss_b.csv").string();
@@ -199,16 +210,15 @@ TEST(Compare, ColumnMissingInBIsAnInputErrorUnlessDeselected) {
   EXPECT_THAT(report::formatComparison(r), HasSubstr("not compared (only in B): torque[N·m], mode[-]"));
 }
 
-TEST(Compare, DifferentUnitsAreIncompatible) {
-  const auto dir = std::filesystem::temp_directory_path() / ("jointsim_compare_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+TEST_F(Compare, DifferentUnitsAreIncompatible) {
+  const auto dir = dir_.path();
   const std::string a = (dir / "unit_a.csv").string(), b = (dir / "unit_b.csv").string();
   std::ofstream(a) << "time[s],x[m]\n0,1\n1,2\n";
   std::ofstream(b) << "time[s],x[mm]\n0,1000\n1,2000\n";
   EXPECT_THROW(report::compareCsvFiles(a, b), InputError);
 }
 
-TEST(Compare, TimeRangesThatDoNotMatchAreInputErrors) {
+TEST_F(Compare, TimeRangesThatDoNotMatchAreInputErrors) {
   const std::string a = writeLog("range_a.csv", 0.01, 1.0);
   const auto dir = std::filesystem::path(a).parent_path();
   // No overlap at all.
@@ -235,7 +245,7 @@ TEST(Compare, TimeRangesThatDoNotMatchAreInputErrors) {
   EXPECT_TRUE(r.pass());
 }
 
-TEST(Compare, UnreadableOrMalformedFilesAreInputErrors) {
+TEST_F(Compare, UnreadableOrMalformedFilesAreInputErrors) {
   const std::string a = writeLog("bad_a.csv", 0.01, 1.0);
   EXPECT_THROW(report::compareCsvFiles(a, "/nonexistent/dir/log.csv"), InputError);
   EXPECT_THROW(report::compareCsvFiles("/nonexistent/dir/log.csv", a), InputError);
@@ -254,9 +264,8 @@ TEST(Compare, UnreadableOrMalformedFilesAreInputErrors) {
   EXPECT_THROW(report::compareCsvFiles(a, a, o), InputError);
 }
 
-TEST(Compare, NonFiniteValuesMatchOnlyThemselves) {
-  const auto dir = std::filesystem::temp_directory_path() / ("jointsim_compare_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+TEST_F(Compare, NonFiniteValuesMatchOnlyThemselves) {
+  const auto dir = dir_.path();
   const std::string a = (dir / "nan_a.csv").string(), b = (dir / "nan_b.csv").string(),
                     c = (dir / "nan_c.csv").string();
   std::ofstream(a) << "time,x\n0,1\n1,nan\n2,3\n";
@@ -270,9 +279,8 @@ TEST(Compare, NonFiniteValuesMatchOnlyThemselves) {
   EXPECT_EQ(r.time_column, "time");
 }
 
-TEST(Compare, FirstColumnIsTimeWhenNoneIsNamedTime) {
-  const auto dir = std::filesystem::temp_directory_path() / ("jointsim_compare_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+TEST_F(Compare, FirstColumnIsTimeWhenNoneIsNamedTime) {
+  const auto dir = dir_.path();
   const std::string a = (dir / "first_a.csv").string(), b = (dir / "first_b.csv").string();
   std::ofstream(a) << "t[s],x[m],y[m]\n0,1,2\n1,2,3\n";
   std::ofstream(b) << "t[s],y[m],x[m]\n0,2,1\n1,3,2\n";  // other column order: matched by name
@@ -284,9 +292,8 @@ TEST(Compare, FirstColumnIsTimeWhenNoneIsNamedTime) {
 
 // Was (found by fuzz_csv): a file whose header repeats a name ("-1,-1") compared with itself failed, its second
 // column being paired with the first. Two columns with one base name make the pairing ambiguous: an error.
-TEST(Compare, RepeatedColumnNamesAreAnInputError) {
-  const auto dir = std::filesystem::temp_directory_path() / ("jointsim_compare_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+TEST_F(Compare, RepeatedColumnNamesAreAnInputError) {
+  const auto dir = dir_.path();
   const std::string path = (dir / "repeated.csv").string();
   std::ofstream(path) << "time[s],x[m],x[mm]\n0,1,1000\n1,2,2000\n";
   EXPECT_THAT([&] { report::compareCsvFiles(path, path); },

@@ -24,11 +24,10 @@ void write(const fs::path& p, const std::string& text) {
 // A two-run sweep whose run folders are written by hand (nothing is simulated), in a folder of the test's own (CTest
 // runs the tests of this file in parallel).
 struct HandMadeSweep {
-  fs::path dir = fs::temp_directory_path() /
-                 ("jointsim_dataset_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+  test::TempDir tmp;
+  fs::path dir = tmp.path();
   experiments::Sweep sweep;
   HandMadeSweep() {
-    fs::remove_all(dir);
     write(dir / "sweep.yaml",
           "sweep: {name: hand, experiment: " + test::sourcePath("config/experiments/ur5_excitation.yaml") +
               "}\nruns:\n  - name: a\n  - name: b\n");
@@ -38,7 +37,6 @@ struct HandMadeSweep {
       write(dir / "out" / run / "summary.json", R"({"status": "ok", "sim_time_s": 0.01})");
     }
   }
-  ~HandMadeSweep() { fs::remove_all(dir); }
   int leftovers() const {
     int n = 0;
     for (const auto& e : fs::directory_iterator(dir))
