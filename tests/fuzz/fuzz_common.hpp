@@ -18,13 +18,18 @@
 namespace jointsim::fuzz {
 
 /// The process's workspace: a copy of the source tree's config/ (experiments/, robots/, sweeps/) in a fresh
-/// temporary folder, removed at exit.
+/// temporary folder of its own (mkdtemp under $TMPDIR, default /tmp: no other process can get it), removed at exit.
 inline const std::filesystem::path& workspace() {
   static const std::filesystem::path dir = [] {
     namespace fs = std::filesystem;
-    const fs::path d = fs::temp_directory_path() / ("jointsim_fuzz_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
+    const char* tmpdir = std::getenv("TMPDIR");
+    std::string templ =
+        (fs::path(tmpdir != nullptr && *tmpdir != '\0' ? tmpdir : "/tmp") / "jointsim_fuzz.XXXXXX").string();
+    if (::mkdtemp(templ.data()) == nullptr) {
+      std::perror(("mkdtemp " + templ).c_str());
+      std::abort();
+    }
+    const fs::path d = templ;
     fs::copy(fs::path(JOINTSIM_SOURCE_DIR) / "config", d / "config", fs::copy_options::recursive);
     static const std::string keep = d.string();
     std::atexit([] {
