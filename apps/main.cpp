@@ -20,19 +20,6 @@ namespace {
 // not echoed whole).
 constexpr size_t kMaxMessage = 2000;
 
-extern "C" void onStopSignal(int sig) { jointsim::requestStop(sig); }
-
-/// SIGINT and SIGTERM ask the running simulation to stop (jointsim::requestStop) instead of killing the
-/// process, so temporary files are removed and the summary says "interrupted". No SA_RESTART: a blocking
-/// wait (jointsim batch) returns and forwards the signal to its runs.
-void installStopHandlers() {
-  struct sigaction sa {};
-  sa.sa_handler = onStopSignal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = 0;
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
-}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -49,7 +36,9 @@ int main(int argc, char** argv) {
   jointsim::cli::addPlotCommand(app);
   jointsim::cli::addFmuCommand(app);
   jointsim::cli::addValidateCommand(app);
-  installStopHandlers();
+  // SIGINT and SIGTERM ask the running simulation to stop instead of killing the process, so temporary files are
+  // removed and the summary says "interrupted"; a blocking wait (jointsim batch) returns and forwards the signal.
+  jointsim::installStopSignalHandlers();
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

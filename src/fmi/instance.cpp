@@ -79,6 +79,11 @@ struct Instance::Impl {
     if (experiment->type() != d.experiment_type)
       throw InputError("the experiment's type changed to '" + experiment->type() + "'");
     sim = experiments::makeSimulator(experiment);
+    // One fmi2DoStep may take at most the solver's max_num_steps internal steps (its meaning in the experiment file:
+    // per output interval, here per communication step); a longer one fails with the simulated time and the plant.
+    sim::AdvanceLimits limits;
+    limits.max_steps = sim->integratorOptions().max_num_steps;
+    sim->setLimits(limits);
     if (auto* robot = dynamic_cast<systems::RobotSystem*>(&sim->plant())) {
       for (const Variable& v : d.variables)
         if (v.causality == Causality::Input && v.port != "q" && v.port != "qd")

@@ -877,6 +877,23 @@ void CvodeIntegrator::setStepLimit(long steps) {
   impl_->step_limit = steps;
 }
 
+double CvodeIntegrator::lastStep(Eigen::Ref<Eigen::VectorXd> y) const {
+  const Impl& m = *impl_;
+  if (y.size() != m.n) {
+    throw InputError(m.prefix() + ": lastStep: output vector has " + std::to_string(y.size()) + " entries, expected " +
+                     std::to_string(m.n));
+  }
+  long steps = 0;
+  if (!m.initialized || m.fresh || CVodeGetNumSteps(m.mem, &steps) != CV_SUCCESS || steps == 0) return kNaN;
+  const double tn = m.cvodeTime();
+  N_Vector out = N_VNew_Serial(m.n, m.ctx);
+  if (out == nullptr) return kNaN;
+  const int flag = CVodeGetDky(m.mem, tn, 0, out);
+  if (flag == CV_SUCCESS) y = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(out), m.n);
+  N_VDestroy(out);
+  return flag == CV_SUCCESS ? tn : kNaN;
+}
+
 double CvodeIntegrator::time() const { return impl_->t_last; }
 
 int CvodeIntegrator::size() const { return impl_->n; }

@@ -2,6 +2,7 @@
 #include "jointsim/sim/simulate.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -16,7 +17,24 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 /// A target this close (relative to max(1, |t|)) to a sample or time event is moved onto it.
 constexpr double kSnap = 1e-12;
 bool near(double a, double b) { return std::abs(a - b) <= kSnap * std::max(1.0, std::abs(b)); }
+double clockSeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+/// Thrown through CVODE by the right-hand side's guard: the call ends (Simulator::stopped).
+struct StopAdvance {};
 }  // namespace
+
+void AdvanceLimits::validate() const {
+  if (max_steps < 0)
+    throw InputError("advance limits: max_steps: expected a number of steps >= 0 (0: none), got " +
+                     std::to_string(max_steps));
+  if (!(max_wall_time >= 0.0) || !std::isfinite(max_wall_time))
+    throw InputError("advance limits: max_wall_time: expected a finite time >= 0 s (0: none), got " +
+                     formatNumber(max_wall_time));
+  if (!(max_state >= 0.0) || !std::isfinite(max_state))
+    throw InputError("advance limits: max_state: expected a finite bound >= 0 (0: none), got " +
+                     formatNumber(max_state));
+}
 
 Simulator::Simulator(Plant& plant, const CvodeOptions& solver)
     : Simulator(std::shared_ptr<Plant>(&plant, [](Plant*) {}), solver) {}
@@ -31,8 +49,8 @@ Simulator::Simulator(std::shared_ptr<Plant> plant, const CvodeOptions& solver) :
   Plant* p = plant_.get();
   integ_ = std::make_unique<CvodeIntegrator>(
       n,
-      [p](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-        if (stopRequested()) throw SolverError(p->name() + ": interrupted", t, "INTERRUPTED", p->name());
+      [this, p](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+        guard(t, y);
         p->derivatives(t, y, yd);
       },
       options);
@@ -86,6 +104,86 @@ void Simulator::setState(const Eigen::VectorXd& y) {
   y_ = y;
   restart_ = fresh_jacobian_ = true;
   invalidate();
+}
+
+void Simulator::setLimits(const AdvanceLimits& limits) {
+  limits.validate();
+  limits_ = limits;
+}
+
+void Simulator::guard(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  if (const int sig = stopRequested()) {
+    stop_flag_ = "INTERRUPTED";
+    stop_signal_ = sig;
+    stop_message_ = "interrupted (signal " + std::to_string(sig) + ") at t = " + formatNumber(t) + " s";
+    throw StopAdvance{};
+  }
+  if (call_deadline_ > 0.0 && (++guard_calls_ & 255) == 0 && clockSeconds() > call_deadline_) {
+    stop_flag_ = "WALL_TIME_BUDGET";
+    stop_message_ = "more than the call's wall-clock limit of " + formatNumber(limits_.max_wall_time) +
+                    " s (max_wall_time) at t = " + formatNumber(t) + " s";
+    throw StopAdvance{};
+  }
+  if (limits_.max_state > 0.0) {
+    Eigen::Index i = 0;
+    const double v = y.cwiseAbs().maxCoeff(&i);
+    if (v > limits_.max_state) {
+      const std::string what = plant_->stateName(static_cast<int>(i));
+      stop_flag_ = "DIVERGED";
+      stop_message_ = "the state diverged at t = " + formatNumber(t) + " s: state " + std::to_string(i) +
+                      (what.empty() ? std::string() : " (" + what + ")") + " = " + formatNumber(y[i], 4) +
+                      ", beyond the bound max_state = " + formatNumber(limits_.max_state) +
+                      " (an unstable controller or input?)";
+      throw StopAdvance{};
+    }
+  }
+}
+
+double Simulator::integrate(double stop) {
+  for (;;) {
+    try {
+      return integ_->advance(stop, y_work_);
+    } catch (const SolverError& e) {
+      if (!stop_flag_.empty()) stopped();
+      if (e.flag() == "STEP_BUDGET") {
+        stop_flag_ = "STEP_BUDGET";
+        stop_message_ = "more than the call's " + std::to_string(limits_.max_steps) +
+                        " internal steps (max_steps) at t = " + formatNumber(e.time()) + " s";
+        stopped();
+      }
+      if (e.flag() != "CV_TOO_MUCH_WORK") throw;
+      // CVODE's cap of steps per CVode call (CvodeOptions::max_num_steps), not a failure: one advance() may be as
+      // long as wanted (its own limits end it). CVODE goes on from its last step; the simulator's state follows.
+      const double tn = integ_->lastStep(y_work_);
+      if (std::isfinite(tn) && tn > t_) {
+        t_ = tn;
+        y_ = y_work_;
+        invalidate();
+      }
+    }
+  }
+}
+
+void Simulator::stopped() {
+  // Go on from the last completed internal step at the next call (a restart: the interrupted step left CVODE's
+  // history in an unknown state).
+  const double tn = integ_->lastStep(y_work_);
+  if (std::isfinite(tn) && tn > t_ && y_work_.allFinite()) {
+    t_ = tn;
+    y_ = y_work_;
+  }
+  restart_ = fresh_jacobian_ = true;
+  invalidate();
+  const std::string flag = stop_flag_, message = plant_->name() + ": " + stop_message_;
+  const int signal = stop_signal_;
+  stop_flag_.clear();
+  if (flag == "INTERRUPTED") {
+    SimulationResult partial;
+    partial.sim_time_s = t_;
+    partial.stats = integ_->stats();
+    throw Interrupted(SolverError(message, t_, flag, component_), partial, signal);
+  }
+  throw SolverError(message, t_, flag, component_);
 }
 
 void Simulator::refreshEvents(double t_target) {
@@ -168,13 +266,18 @@ double Simulator::advanceTo(double t_target) {
   if (next_event_ < events_list_.size() && near(t_target, events_list_[next_event_]))
     t_target = events_list_[next_event_];
   refreshEvents(t_target);  // a no-op unless the snap moved the target past the horizon
+  // The call's limits: a step budget over all segments from here, a wall-clock deadline for the guard.
+  stop_flag_.clear();
+  guard_calls_ = 0;
+  call_deadline_ = limits_.max_wall_time > 0.0 ? clockSeconds() + limits_.max_wall_time : 0.0;
+  integ_->setStepLimit(limits_.max_steps > 0 ? integ_->stats().steps + limits_.max_steps : 0);
   try {
     prepare(t_target);
     while (t_ < t_target) {
       const double t_event = next_event_ < events_list_.size() ? events_list_[next_event_] : kInf;
       const double stop = std::min(t_target, std::min(t_sample_, t_event));
       integ_->setStopTime(stop);
-      const double t = integ_->advance(stop, y_work_);
+      const double t = integrate(stop);
       t_ = t;
       y_ = y_work_;
       invalidate();
@@ -218,5 +321,7 @@ int Simulator::signalIndex(const std::string& name) const { return sim::signalIn
 double Simulator::signal(const std::string& name) const { return signals()[signalIndex(name)]; }
 
 SolverStats Simulator::stats() const { return integ_->stats(); }
+
+const CvodeOptions& Simulator::integratorOptions() const { return integ_->options(); }
 
 }  // namespace jointsim::sim

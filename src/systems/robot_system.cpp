@@ -415,6 +415,26 @@ void RobotSystem::setInitialPositions(const Eigen::VectorXd& q0) {
   q0_ = q0;
 }
 
+std::string RobotSystem::stateName(int i) const {
+  const int n = model_.nq;
+  if (i < 0 || i >= n_states_) return {};
+  if (i < n) return "q_" + model_.joint_names[static_cast<size_t>(i)] + " [rad]";
+  if (i < 2 * n) return "qd_" + model_.joint_names[static_cast<size_t>(i - n)] + " [rad/s]";
+  for (int k = 0; k < n; ++k) {
+    const DriveLayout& L = layout_[static_cast<size_t>(k)];
+    const std::string d = "drive of joint '" + model_.joint_names[static_cast<size_t>(k)] + "': ";
+    auto in = [i](int first, int count) { return first >= 0 && i >= first && i < first + count; };
+    if (in(L.motor, 1)) return d + "motor angle [rad]";
+    if (in(L.motor + 1, 1) && L.motor >= 0) return d + "motor speed [rad/s]";
+    if (in(L.current, 1)) return d + "motor current [A]";
+    if (in(L.gear, L.n_gear)) return d + "transmission state " + std::to_string(i - L.gear);
+    if (in(L.friction, L.n_friction)) return d + "friction state " + std::to_string(i - L.friction);
+    if (sample_rate_ <= 0.0 && in(L.controller, L.n_controller))
+      return d + "controller state " + std::to_string(i - L.controller);
+  }
+  return {};
+}
+
 Eigen::VectorXd RobotSystem::initialState() const {
   if (q0_.size() == model_.nq) return initialState(q0_);
   Eigen::VectorXd q0 = Eigen::VectorXd::Zero(model_.nq);

@@ -257,6 +257,11 @@ class CvodeIntegrator {
   bool rootFound() const;
   const std::vector<int>& rootDirections() const;
 
+  /// The state at CVODE's last accepted internal step, where a caller may go on from after a failed or stopped
+  /// advance() (e.g. a budget or a stop request raised in the right-hand side): writes y(t_n) into `y` (size n) and
+  /// returns t_n [s]. Returns NaN and leaves `y` untouched when no step was taken since the last initialize().
+  double lastStep(Eigen::Ref<Eigen::VectorXd> y) const;
+
   /// Time of the last result [s]: t0 after initialize(), the value returned by advance(), or after a
   /// failure CVODE's internal time at the failure. NaN before initialize().
   double time() const;

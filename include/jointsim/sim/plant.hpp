@@ -80,6 +80,9 @@ class Plant {
   /// Block structure of the Jacobian (empty: dense).
   virtual JacobianStructure jacobianStructure() const { return {}; }
 
+  /// What continuous state `i` is, for messages ("q_elbow_joint [rad]"); empty when the plant does not say.
+  virtual std::string stateName(int /*i*/) const { return {}; }
+
   /// Output signals as `name[unit]` (the CSV column names after "time[s]").
   virtual const std::vector<std::string>& signalNames() const = 0;
   /// Values of the output signals at (t, y), in signalNames() order (size signalNames().size()).

@@ -22,9 +22,16 @@
 /// sample due exactly at the target time is taken at the start of the next advance, so signals() at the target
 /// show the inputs held over the interval that ends there (as sim::simulate's outputs do).
 ///
+/// One call may be as long as wanted: CVODE's per-call cap of internal steps (CvodeOptions::max_num_steps) does
+/// not end it; the call's own limits (AdvanceLimits: steps, wall-clock time, a bound on the state) do, and so does
+/// a stop request (jointsim::requestStop, or the caller's StopPoll, common/interrupt.hpp), checked in the
+/// right-hand side.
+///
 /// Errors: InputError for a bad target time or state (the simulator is unchanged); SolverError (with the
 /// simulated time, the CVODE flag and the plant's name) when the integration fails — the simulator then keeps
-/// the last state it reached and may be reset().
+/// the last state it reached and may be reset(). A call ended by its limits (flags STEP_BUDGET, WALL_TIME_BUDGET,
+/// DIVERGED) or by a stop request (sim::Interrupted, flag INTERRUPTED) leaves the simulator at the last internal
+/// step it completed, ready for the next call.
 
 #include <memory>
 #include <string>
@@ -37,6 +44,20 @@
 
 namespace jointsim::sim {
 
+/// Limits of each advance()/advanceTo() call; 0 (the default) means none. A call that exceeds one ends with a
+/// SolverError naming the simulated time, the flag and the plant.
+struct AdvanceLimits {
+  long max_steps = 0;          ///< internal solver steps per call (flag STEP_BUDGET), >= 0
+  double max_wall_time = 0.0;  ///< wall-clock time per call [s] (flag WALL_TIME_BUDGET), >= 0
+  /// Bound on the magnitude of every continuous state |y_i| [the state's own unit] (flag DIVERGED, naming the state
+  /// index and value), >= 0: a state running away (an unstable controller around the plant) ends the call at once
+  /// instead of after minutes of ever smaller steps. Non-finite states and derivatives are always caught
+  /// (CvodeOptions::check_finite).
+  double max_state = 0.0;
+  /// Throws InputError for a negative or non-finite entry.
+  void validate() const;
+};
+
 class Simulator {
  public:
   /// Steps `plant`, which must outlive the simulator; reset() to the plant's initial state at t = 0.
@@ -46,6 +67,9 @@ class Simulator {
   ~Simulator();
   Simulator(const Simulator&) = delete;
   Simulator& operator=(const Simulator&) = delete;
+
+  /// The integrator's settings (CvodeOptions::max_num_steps caps one CVODE call, not one advance()).
+  const CvodeOptions& integratorOptions() const;
 
   Plant& plant() { return *plant_; }
   const Plant& plant() const { return *plant_; }
@@ -74,6 +98,10 @@ class Simulator {
   /// Index of a signal for repeated use with signals().
   int signalIndex(const std::string& name) const;
 
+  /// Limits of every following advance()/advanceTo() call (InputError for bad values; the old ones stay).
+  void setLimits(const AdvanceLimits& limits);
+  const AdvanceLimits& limits() const { return limits_; }
+
   /// CVODE statistics since construction, over all restarts.
   SolverStats stats() const;
   long events() const { return events_; }      ///< root and time events handled
@@ -90,6 +118,10 @@ class Simulator {
   void restartIfNeeded(double h_max);  // CVODE re-initialised at (t_, y_) when needed; h_max: to the next stop
   void refreshEvents(double t_target);
   void invalidate() { signals_valid_ = false; }
+  double integrate(double stop);  // one CVODE advance towards `stop`, through its per-call step cap
+  [[noreturn]] void stopped();    // the call ended by a limit or a stop request
+  /// Checked in the right-hand side: a stop request, the wall-clock limit (every 256 calls), the state bound.
+  void guard(double t, const Eigen::Ref<const Eigen::VectorXd>& y);
 
   std::shared_ptr<Plant> plant_;
   std::unique_ptr<CvodeIntegrator> integ_;
@@ -113,6 +145,12 @@ class Simulator {
   double horizon_ = 0.0;
   size_t next_event_ = 0;
   long events_ = 0, samples_ = 0, restarts_ = 0, input_jumps_ = 0;
+  // The call's limits and why the right-hand side ended it (empty: it did not).
+  AdvanceLimits limits_;
+  double call_deadline_ = 0.0;  // steady-clock seconds at which the call's wall-clock limit runs out (0: none)
+  long guard_calls_ = 0;
+  std::string stop_flag_, stop_message_;
+  int stop_signal_ = 0;
   mutable Eigen::VectorXd signals_;
   mutable bool signals_valid_ = false;
   mutable long signals_revision_ = 0;

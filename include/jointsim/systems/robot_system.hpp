@@ -205,6 +205,8 @@ class RobotSystem : public sim::Plant {
   // sim::Plant
   std::string name() const override { return "robot with drives '" + model_.name + "'"; }
   int stateSize() const override { return n_states_; }
+  /// "q_<joint> [rad]", "qd_<joint> [rad/s]", then per drive "drive of joint '<joint>': motor angle [rad]", ...
+  std::string stateName(int i) const override;
   /// initialState(q0) with the positions of setInitialPositions().
   Eigen::VectorXd initialState() const override;
   /// ẏ = f(t, y): pure apart from the workspace; no heap allocation.
