@@ -1,5 +1,6 @@
 // `jointsim run EXPERIMENT.yaml [-o DIR]`: runs an experiment file and reports where its outputs went.
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include <unistd.h>
@@ -44,6 +45,9 @@ void addRunCommand(CLI::App& app) {
                 "  solver: %ld steps, %ld RHS evaluations, %ld error-test failures\n",
                 r.experiment.c_str(), r.status.c_str(), r.csv_path.c_str(), r.summary_path.c_str(), r.sim_time_s,
                 r.wall_time_s, r.real_time_factor, r.stats.steps, r.stats.rhs_evals, r.stats.error_test_failures);
+    if (!r.csv_path.empty())
+      std::printf("  next:    jointsim plot %s  (figures of the log: one column per signal, SI units)\n",
+                  std::filesystem::path(r.csv_path).parent_path().string().c_str());
     for (const auto& w : r.warnings) std::fprintf(stderr, "jointsim: warning: %s\n", printable(w, 2000).c_str());
   });
 }

@@ -1,5 +1,6 @@
 #include "jointsim/experiments/batch.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -16,6 +17,7 @@
 
 #include <signal.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
@@ -221,6 +223,8 @@ BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
 
 // Child process: runs one experiment with its output in `folder`, stdout/stderr to folder/run.log.
 [[noreturn]] void childRun(const Sweep& sweep, const BatchRun& run, const std::string& folder) {
+  // The parent's signal dispositions are inherited; a host's own (Python's) would only set a flag nobody reads here.
+  installStopSignalHandlers();
   const std::string log = (fs::path(folder) / "run.log").string();
   // Truncate once, then append from both streams so that their writes do not overwrite each other.
   if (std::FILE* f = std::fopen(log.c_str(), "w")) std::fclose(f);
@@ -258,8 +262,13 @@ std::string BatchRun::describe() const {
   return s;
 }
 
-Sweep loadSweep(const std::string& path) {
-  const YamlValue root = YamlValue::loadFile(path);
+Sweep loadSweep(const std::string& path) { return loadSweepDocument(YamlValue::loadFile(path), path); }
+
+Sweep loadSweepText(const std::string& text, const std::string& name) {
+  return loadSweepDocument(YamlValue::loadString(text, name), name);
+}
+
+Sweep loadSweepDocument(const YamlValue& root, const std::string& path) {
   root.expectMap("a sweep mapping {sweep, runs, grid, sample, faults}");
   root.allowKeys({"sweep", "runs", "grid", "sample", "faults"});
   Sweep s;
@@ -429,15 +438,15 @@ Sweep loadSweep(const std::string& path) {
 
 std::vector<size_t> shardRuns(size_t n_runs, int index, int count) {
   if (count < 1 || index < 0 || index >= count)
-    throw InputError("--shard: expected I/N with 0 <= I < N, got " + std::to_string(index) + "/" +
-                     std::to_string(count));
+    throw InputError("shard: expected I/N with 0 <= I < N, got " + std::to_string(index) + "/" + std::to_string(count));
   std::vector<size_t> out;
   for (size_t i = static_cast<size_t>(index); i < n_runs; i += static_cast<size_t>(count)) out.push_back(i);
   return out;
 }
 
 BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
-  if (options.jobs < 1) throw InputError("-j: expected at least 1 job, got " + std::to_string(options.jobs));
+  if (options.jobs < 1)
+    throw InputError("jobs: expected at least 1 job at a time, got " + std::to_string(options.jobs));
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<size_t> mine = shardRuns(sweep.runs.size(), options.shard_index, options.shard_count);
   const std::string dir = outputDir(sweep, options);
@@ -465,10 +474,23 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
     res.records.push_back(r);
   }
   writeManifest(res.manifest_path, res.records);
+  // Progress line (a terminal only): runs done, failed, skipped, running, and the time left, estimated from the wall
+  // time of the runs finished in this call (skipped runs excluded) spread over the jobs.
+  double finished_wall = 0.0;
+  int finished = 0;
+  const size_t to_run = queue.size();
   auto progress = [&](int running) {
     if (!options.progress) return;
-    std::fprintf(stderr, "\r[batch %s] %zu/%zu done (%d failed, %d skipped), %d running   ", sweep.name.c_str(),
-                 static_cast<size_t>(res.ok + res.failed), res.records.size(), res.failed, res.skipped, running);
+    std::string left;
+    if (finished > 0) {
+      const double per_run = finished_wall / finished;
+      const double remaining = static_cast<double>(to_run - static_cast<size_t>(finished)) * per_run /
+                               std::max(1, std::min(options.jobs, static_cast<int>(to_run)));
+      left = ", about " + formatDuration(remaining) + " left";
+    }
+    std::fprintf(stderr, "\r[batch %s] %zu/%zu done (%d failed, %d skipped), %d running%s   ", sweep.name.c_str(),
+                 static_cast<size_t>(res.ok + res.failed), res.records.size(), res.failed, res.skipped, running,
+                 left.c_str());
     std::fflush(stderr);
   };
   struct Active {
@@ -479,6 +501,7 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
   size_t next = 0;
   progress(0);
   bool forwarded = false;
+  long idle_ticks = 0;
   while ((next < queue.size() && !stopRequested()) || !active.empty()) {
     // A stop request (SIGINT/SIGTERM to the batch): no new runs; the running ones get the signal and end with an
     // "interrupted" summary, which resume treats as not done.
@@ -514,7 +537,17 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
     progress(static_cast<int>(active.size()));
     if (active.empty()) continue;
     int status = 0;
-    const pid_t pid = ::waitpid(-1, &status, 0);
+    // Not a blocking wait: a stop request of this thread (a host's StopPoll, e.g. Ctrl-C in Python) must be seen
+    // while runs are going, and the progress line refreshed.
+    const pid_t pid = ::waitpid(-1, &status, WNOHANG);
+    if (pid == 0) {
+      struct timespec pause {
+        0, 20'000'000
+      };  // 20 ms
+      ::nanosleep(&pause, nullptr);
+      if (++idle_ticks % 25 == 0) progress(static_cast<int>(active.size()));
+      continue;
+    }
     if (pid < 0) {
       if (errno == EINTR) continue;
       for (const auto& [p, a] : active) {  // no children left to wait for: count the missing ones as errors
@@ -531,6 +564,8 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
     const BatchRun& run = sweep.runs[mine[a.k]];
     BatchRecord r = recordFromFolder(run, dir);
     r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - a.start).count();
+    finished_wall += r.wall_time_s;
+    ++finished;
     if (WIFEXITED(status) && WEXITSTATUS(status) == 0 && r.status == "ok") {
       ++res.ok;
     } else {

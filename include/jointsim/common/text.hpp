@@ -13,6 +13,8 @@ namespace jointsim {
 std::string formatNumber(double value, int precision = 10);
 /// The shortest text that reads back as exactly `value` ("0.8", not "0.80000000000000004").
 std::string formatShortest(double value);
+/// A duration [s] for a progress line, rounded to what a person reads: "8 s", "2 min 05 s", "1 h 12 min".
+std::string formatDuration(double seconds);
 
 /// Items joined by `separator`.
 std::string join(const std::vector<std::string>& items, const std::string& separator);
