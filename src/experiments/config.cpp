@@ -193,7 +193,7 @@ void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& o
     const std::string spec = add ? o.substr(1) : o;
     const size_t eq = spec.find('=');
     if (eq == std::string::npos || eq == 0)
-      throw InputError("--set " + o + ": expected key.path=value or +key.path=value");
+      throw InputError("override " + o + ": expected key.path=value or +key.path=value");
     const std::string path = spec.substr(0, eq), value = spec.substr(eq + 1);
     // Split "a.b[2].c" into a, b, 2, c.
     std::vector<std::string> parts;
@@ -207,7 +207,7 @@ void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& o
       }
     }
     if (!cur.empty()) parts.push_back(cur);
-    if (parts.empty()) throw InputError("--set " + o + ": expected key.path=value or +key.path=value");
+    if (parts.empty()) throw InputError("override " + o + ": expected key.path=value or +key.path=value");
     YAML::Node node = io::yamlNode(root);
     std::string walked;
     for (const std::string& p : parts) {
@@ -222,16 +222,18 @@ void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& o
         node[p] = YAML::Node(YAML::NodeType::Null);  // a null node becomes a mapping
         child = node[p];
       } else if (add) {
-        throw InputError("--set " + o + ": cannot add '" + walked + "' to " + file +
-                         (index ? " (list entries cannot be added)" : " (its parent is not a mapping)"));
+        throw InputError(file, 0, walked,
+                         "override " + o + ": cannot add '" + walked + "'" +
+                             (index ? " (list entries cannot be added)" : " (its parent is not a mapping)"));
       } else {
-        throw InputError("--set " + o + ": " + file + " has no key '" + walked + "'" +
-                         (node.IsMap() || node.IsNull() ? " (to add it: --set +" + spec + ")" : ""));
+        throw InputError(file, 0, walked,
+                         "override " + o + ": the file has no key '" + walked + "'" +
+                             (node.IsMap() || node.IsNull() ? " (to add it, override +" + spec + ")" : ""));
       }
       node.reset(child);
     }
     if (!node.IsScalar() && !node.IsNull())
-      throw InputError("--set " + o + ": '" + path + "' in " + file + " is not a scalar");
+      throw InputError(file, 0, path, "override " + o + ": '" + path + "' is not a scalar");
     node = value;
   }
 }

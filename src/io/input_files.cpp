@@ -67,8 +67,11 @@ std::string fileHash(const std::string& path) {
 std::string readInputFile(const std::string& path, const std::string& what) {
   std::string bytes;
   std::error_code ec;
-  if (const std::string why = readAll(path, bytes); !why.empty())
+  if (const std::string why = readAll(path, bytes); !why.empty()) {
+    if (why == "cannot open" && !pathExists(path))
+      throw InputError::fileNotFound(path, "cannot open " + what + " for reading: no such file");
     throw InputError(path + ": " + why + " " + what + (why == "cannot open" ? " for reading" : ""));
+  }
   if (g_innermost) {
     InputFile f;
     f.path = std::filesystem::absolute(path, ec).lexically_normal().string();

@@ -177,12 +177,12 @@ struct TemporaryFile {
 }  // namespace
 
 void checkDatasetPath(const std::string& path) {
-  if (path.empty()) throw InputError("--dataset: expected a file name (FILE.h5)");
+  if (path.empty()) throw InputError("data set: expected a file name (FILE.h5)");
   const fs::path folder = fs::path(path).parent_path();
   std::error_code ec;
   if (!folder.empty() && !fs::is_directory(folder, ec))
-    throw InputError("--dataset " + path + ": folder '" + folder.string() + "' does not exist");
-  if (fs::is_directory(path, ec)) throw InputError("--dataset " + path + ": is a folder, expected a file name");
+    throw InputError("data set " + path + ": folder '" + folder.string() + "' does not exist");
+  if (fs::is_directory(path, ec)) throw InputError("data set " + path + ": is a folder, expected a file name");
 }
 
 DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& output_dir, const std::string& path) {

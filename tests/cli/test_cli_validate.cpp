@@ -55,7 +55,7 @@ TEST(CliSetAdd, PlusAddsAKeyTheFileLacksAndTheLoaderChecksIt) {
   // ur5_fall.yaml has no solver block.
   Result r = run("run " + fall + " --set duration=0.05 --set solver.max_step=0.001 -o " + out.string());
   EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.err, HasSubstr("has no key 'solver.max_step' (to add it: --set +solver.max_step=0.001)"));
+  EXPECT_THAT(r.err, HasSubstr("the file has no key 'solver.max_step' (to add it, override +solver.max_step=0.001)"));
   r = run("run " + fall + " --set duration=0.05 --set +solver.max_step=0.001 -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
   const std::string text = jointsim::test::readText(out / "summary.json");

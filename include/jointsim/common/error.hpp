@@ -4,6 +4,7 @@
 /// caller (and the CLI) can catch one type. The CLI maps InputError to exit status 2,
 /// UnidentifiableError to 3 and every other Error to exit status 1.
 
+#include <exception>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -50,6 +51,16 @@ class InputError : public Error {
   const std::string& message() const noexcept { return message_; }   ///< what() without the location
   /// True when the error names a file (it needs no relocation by a caller).
   bool located() const noexcept { return !file_.empty(); }
+  /// A file that does not exist: what() = "PATH: MESSAGE"; missingPath() names it (Python raises a
+  /// FileNotFoundError). Not located: a reader that named the file relocates it at its key. An InputError made while
+  /// such an error is being handled (a caller adding where the file was named) is about the same missing file.
+  static InputError fileNotFound(const std::string& path, const std::string& message) {
+    InputError e(path + ": " + message);
+    e.missing_path_ = path;
+    return e;
+  }
+  bool missingFile() const noexcept { return !missing_path_.empty(); }
+  const std::string& missingPath() const noexcept { return missing_path_; }
 
   static std::string compose(const std::string& file, int line, const std::string& key_path,
                              const std::string& message) {
@@ -60,8 +71,22 @@ class InputError : public Error {
   }
 
  private:
+  /// The missing file of the InputError being handled, if any (see fileNotFound).
+  static std::string missingInFlight() noexcept {
+    if (const std::exception_ptr p = std::current_exception()) {
+      try {
+        std::rethrow_exception(p);
+      } catch (const InputError& e) {
+        return e.missing_path_;
+      } catch (...) {
+      }
+    }
+    return {};
+  }
+
   std::string file_, key_path_, message_;
   int line_ = 0;
+  std::string missing_path_ = missingInFlight();
 };
 
 /// Data that parse and validate but cannot determine a requested quantity (e.g. a clamping curve that

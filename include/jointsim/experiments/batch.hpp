@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "jointsim/io/yaml.hpp"
 #include "jointsim/systems/faults.hpp"
 
 namespace jointsim::experiments {
@@ -38,6 +39,11 @@ struct Sweep {
 /// Reads a sweep file. Throws InputError (file:line: key.path: ...) on bad input, duplicate run names
 /// or an empty sweep.
 Sweep loadSweep(const std::string& path);
+/// A sweep from YAML (or JSON) text; `name` stands for its file in messages, and relative paths in it (the base
+/// experiment) are relative to name's folder (e.g. "/work/my_sweep (dict)" for a sweep built in memory in /work).
+Sweep loadSweepText(const std::string& text, const std::string& name);
+/// A sweep from a parsed document read from `path` (for messages and relative paths).
+Sweep loadSweepDocument(const io::YamlValue& root, const std::string& path);
 
 struct BatchOptions {
   std::string output_dir;  ///< empty: out/<sweep name>/
