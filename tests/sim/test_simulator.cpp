@@ -1,11 +1,15 @@
 // sim::Simulator: stepping with inputs, root events, samples and time events against closed forms, and
 // against the one simulate loop on a shipped experiment.
+#include <chrono>
 #include <cmath>
+#include <csignal>
 
 #include <gtest/gtest.h>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/interrupt.hpp"
 #include "jointsim/experiments/experiment.hpp"
+#include "jointsim/sim/simulate.hpp"
 #include "jointsim/sim/simulator.hpp"
 #include "test_util.hpp"
 
@@ -297,6 +301,143 @@ TEST(Simulator, SmallInputJumpsKeepTheHistoryAndLargeOnesRestart) {
   EXPECT_EQ(s.inputJumps(), kept + 1);
   const double u = 3.0 + 1e-13;
   EXPECT_NEAR(s.state()[0], u / 2 + (y06 - u / 2) * std::exp(-0.2), 1e-9);
+}
+
+/// ẍ = −ω² x from x = 1, ẋ = 0: x(t) = cos ωt, ẋ = −ω sin ωt (many steps per simulated second).
+class Oscillator : public sim::Plant {
+ public:
+  double w = 2.0 * M_PI * 10.0;
+  std::string name() const override { return "oscillator"; }
+  int stateSize() const override { return 2; }
+  Eigen::VectorXd initialState() const override { return Eigen::Vector2d(1.0, 0.0); }
+  void derivatives(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) const override {
+    yd[0] = y[1];
+    yd[1] = -w * w * y[0];
+  }
+  std::string stateName(int i) const override { return i == 0 ? "x [m]" : "v [m/s]"; }
+  const std::vector<std::string>& signalNames() const override { return names_; }
+  void signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override {
+    out[0] = y[0];
+  }
+
+ private:
+  std::vector<std::string> names_{"x[m]"};
+};
+
+sim::CvodeOptions oscillatorSolver(long max_num_steps) {
+  sim::CvodeOptions o;
+  o.method = sim::Method::Adams;
+  o.rtol = 1e-10;
+  o.atol = 1e-12;
+  o.max_num_steps = max_num_steps;
+  return o;
+}
+
+TEST(SimulatorLimits, OneAdvanceGoesOnThroughCvodesCapOfStepsPerCall) {
+  Oscillator p;
+  sim::Simulator s(p, oscillatorSolver(50));  // CVODE stops every 50 steps: not an error for a Simulator
+  EXPECT_EQ(s.advance(10.0), 10.0);
+  EXPECT_GT(s.stats().steps, 2000);
+  EXPECT_NEAR(s.state()[0], std::cos(p.w * 10.0), 1e-6);
+  EXPECT_NEAR(s.state()[1], -p.w * std::sin(p.w * 10.0), 1e-4);
+}
+
+TEST(SimulatorLimits, AStepLimitEndsTheCallAtItsLastStepAndTheNextCallGoesOn) {
+  Oscillator p;
+  sim::Simulator s(p, oscillatorSolver(500000));
+  sim::AdvanceLimits limits;
+  limits.max_steps = 100;
+  s.setLimits(limits);
+  try {
+    s.advance(5.0);
+    FAIL() << "a 5 s advance needs more than 100 steps";
+  } catch (const SolverError& e) {
+    EXPECT_EQ(e.flag(), "STEP_BUDGET");
+    EXPECT_EQ(e.component(), "oscillator");
+    EXPECT_EQ(e.time(), s.time());
+  }
+  // The simulator stands on a point of the solution (the last accepted step), inside the interval.
+  const double t = s.time();
+  EXPECT_GT(t, 0.0);
+  EXPECT_LT(t, 5.0);
+  EXPECT_NEAR(s.state()[0], std::cos(p.w * t), 1e-7);
+  // The limit is per call: 100 more steps go further; without a limit the call reaches its target.
+  EXPECT_THROW(s.advanceTo(5.0), SolverError);
+  EXPECT_GT(s.time(), t);
+  s.setLimits(sim::AdvanceLimits{});
+  EXPECT_EQ(s.advanceTo(5.0), 5.0);
+  EXPECT_NEAR(s.state()[0], std::cos(p.w * 5.0), 1e-6);
+  limits.max_steps = -1;
+  EXPECT_THROW(s.setLimits(limits), InputError);
+  limits = sim::AdvanceLimits{};
+  limits.max_wall_time = std::nan("");
+  EXPECT_THROW(s.setLimits(limits), InputError);
+}
+
+TEST(SimulatorLimits, AStateBeyondItsBoundEndsTheCallAsDiverged) {
+  FirstOrder p;
+  p.a = -5.0;  // ẏ = 5 y from y = 1: y = e^{5t} reaches 1e6 at t = ln(1e6)/5 = 2.763 s
+  sim::Simulator s(p, tight());
+  sim::AdvanceLimits limits;
+  limits.max_state = 1e6;
+  s.setLimits(limits);
+  try {
+    s.advance(100.0);
+    FAIL() << "y = e^{5t} exceeds 1e6";
+  } catch (const SolverError& e) {
+    EXPECT_EQ(e.flag(), "DIVERGED");
+    EXPECT_NE(std::string(e.what()).find("state 0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("max_state = 1000000"), std::string::npos) << e.what();
+  }
+  EXPECT_LE(s.time(), std::log(1e6) / 5.0 + 1e-9);
+  EXPECT_GT(s.time(), std::log(1e5) / 5.0);
+  EXPECT_NEAR(s.state()[0], std::exp(5.0 * s.time()), 1e-6 * s.state()[0]);
+}
+
+TEST(SimulatorLimits, AWallClockLimitEndsACallThatWouldTakeLong) {
+  Oscillator p;
+  p.w = 2.0 * M_PI * 1000.0;
+  sim::Simulator s(p, oscillatorSolver(500000));
+  sim::AdvanceLimits limits;
+  limits.max_wall_time = 0.05;
+  s.setLimits(limits);
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    s.advance(1e6);  // about 1e11 steps
+    FAIL();
+  } catch (const SolverError& e) {
+    EXPECT_EQ(e.flag(), "WALL_TIME_BUDGET");
+  }
+  // Checked every 256 right-hand sides: well within a second of the limit even on a loaded machine.
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2.0);
+  EXPECT_GT(s.time(), 0.0);
+}
+
+int stopAfterThreePolls(void* calls) noexcept { return ++*static_cast<int*>(calls) >= 3 ? SIGINT : 0; }
+
+TEST(SimulatorLimits, ACallersStopPollEndsTheCallAsInterruptedAndOnlyWhileItLives) {
+  Oscillator p;
+  sim::Simulator s(p, oscillatorSolver(500000));
+  int calls = 0;
+  {
+    StopPoll poll(&stopAfterThreePolls, &calls, 0.0);
+    try {
+      s.advance(10.0);
+      FAIL();
+    } catch (const sim::Interrupted& e) {
+      EXPECT_EQ(e.flag(), "INTERRUPTED");
+      EXPECT_EQ(e.signal(), SIGINT);
+      EXPECT_EQ(poll.tripped(), SIGINT);
+    }
+    EXPECT_EQ(calls, 3);
+    EXPECT_EQ(stopRequested(), SIGINT);  // sticky while the poll lives
+  }
+  EXPECT_EQ(stopRequested(), 0);
+  const double t = s.time();
+  EXPECT_LT(t, 10.0);
+  EXPECT_NEAR(s.state()[0], std::cos(p.w * t), 1e-7);
+  EXPECT_EQ(s.advanceTo(1.0), 1.0);
+  EXPECT_NEAR(s.state()[0], std::cos(p.w * 1.0), 1e-6);
 }
 
 }  // namespace
