@@ -1,67 +1,119 @@
 """jointsim: high-fidelity robot joint and multibody simulation (C++ core, NumPy in and out).
 
-SI units everywhere: rad, rad/s, m, s, N*m, A, V. Bad input raises ValueError (or TypeError for a value of the wrong
-type) with the library's one-line message naming the file, line and key; a failed integration raises
-jointsim.SolverError (a RuntimeError) naming the simulated time and the component.
+SI units everywhere: rad, rad/s, m, s, N*m, A, V. Every path argument takes a str or an os.PathLike. Bad input
+raises jointsim.InputError (a ValueError; a missing file also a FileNotFoundError, a wrong type a TypeError) with
+the file, line and key path as fields; a failed integration raises jointsim.SolverError (a RuntimeError) with the
+simulated time, the solver flag and the component. Ctrl-C interrupts any long call with KeyboardInterrupt.
 
-Rigid-body algorithms (a Model carries its own workspace)::
+The robot, experiment and sweep files shipped with the package are under data_path()::
 
-    model = jointsim.load_robot("config/robots/ur5.urdf")
-    tau = jointsim.rnea(model, q, qd, qdd)          # N*m
-    qdd = jointsim.aba(model, q, qd, tau)           # rad/s^2
+    model = jointsim.load_robot(jointsim.data_path("robots/ur5.urdf"))
+    tau = jointsim.rnea(model, q, qd, qdd)          # N*m; q of shape (6,) or a batch of shape (N, 6)
 
 Experiment files, as `jointsim run` does, in memory::
 
-    r = jointsim.run_experiment("config/experiments/ur5_fall.yaml", {"duration": 0.5})
-    r["q_shoulder_pan_joint"], r["summary"]["solver"]
+    r = jointsim.run_experiment(jointsim.data_path("experiments/ur5_fall.yaml"), {"duration": 0.5})
+    r["q_shoulder_pan_joint"], r.units["q_shoulder_pan_joint"], r.summary["solver_stats"], r.to_dataframe()
 
 A user's controller around the UR5 twin (command ports: setpoint, motor_velocity, current, voltage, motor_torque)::
 
-    sim = jointsim.Simulator.from_robot("config/robots/ur5_drives.yaml", q0=q0)
-    for k in range(6): sim.set_port(k, "voltage")
+    sim = jointsim.Simulator.from_robot(jointsim.data_path("robots/ur5_drives.yaml"), rtol=1e-4, max_gamma_change=0.5)
+    for k in range(sim.dof): sim.set_port(k, "voltage")
     while sim.time < 1.0:
-        sim.set_commands(kp * (q_ref - sim.joint_positions))
+        sim.set_commands(kp * (q_ref - sim.joint_positions) - kd * sim.motor_velocities)
         sim.advance(1e-3)
 """
 from __future__ import annotations
 
 import json
 import math
-from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
+import numbers
+import os
+import pathlib
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _core
-from ._core import (
-    Model,
-    SolverError,
-    UnidentifiableError,
-    aba,
-    aba_derivatives,
-    crba,
-    fit_friction_map,
-    frame_jacobian,
-    frame_placement,
-    gravity_torques,
-    identify_clamping,
-    load_robot,
-    rnea,
-    rnea_derivatives,
-)
+from .errors import InputError, InputFileNotFoundError, InputTypeError, SolverError, UnidentifiableError
 
 __version__ = _core.__version__
 
 __all__ = [
-    "Model", "SolverError", "UnidentifiableError", "Experiment", "Simulator", "aba", "aba_derivatives", "crba",
-    "fit_friction_map",
-    "frame_jacobian", "frame_placement", "gravity_torques", "identify_clamping", "load_experiment", "load_robot",
-    "rnea", "rnea_derivatives", "run_experiment", "run_experiment_file", "PORTS", "export_fmu", "validate_file", "run_batch", "write_dataset",
+    "PORTS", "Model", "Experiment", "RunResult", "Simulator", "Dataset",
+    "InputError", "InputFileNotFoundError", "InputTypeError", "SolverError", "UnidentifiableError",
+    "data_path", "load_robot", "rnea", "aba", "crba", "gravity_torques", "rnea_derivatives", "aba_derivatives",
+    "frame_placement", "frame_jacobian", "load_experiment", "run_experiment", "run_experiment_file", "validate_file",
+    "run_batch", "write_dataset", "read_dataset", "export_fmu", "identify_clamping", "fit_friction_map",
 ]
 
 #: The command ports of a drive (Simulator.set_port).
 PORTS = ("setpoint", "motor_velocity", "current", "voltage", "motor_torque")
 
+PathLike = Union[str, "os.PathLike[str]"]
 Overrides = Union[None, Mapping[str, Any], Sequence[str]]
+Model = _core.Model
+
+_DATA = pathlib.Path(__file__).resolve().parent / "data"
+
+
+# ------------------------------------------------------------------------------------------------ arguments
+def _path(value: Any, what: str) -> str:
+    """A path argument as str (str or os.PathLike; TypeError otherwise)."""
+    if isinstance(value, (bytes, bytearray)):
+        value = os.fsdecode(bytes(value))
+    try:
+        return os.fspath(value)
+    except TypeError:
+        raise InputTypeError(f"{what}: expected a path (str or os.PathLike), got {type(value).__name__}") from None
+
+
+def _input_file(value: Any, what: str) -> str:
+    """A path argument that must name an existing file (InputFileNotFoundError otherwise)."""
+    path = _path(value, what)
+    if not os.path.exists(path):
+        raise InputFileNotFoundError(f"{path}: cannot open {what} for reading: no such file", file=path,
+                                     reason="no such file")
+    return path
+
+
+def _optional_path(value: Any, what: str) -> str:
+    return "" if value is None else _path(value, what)
+
+
+def _names(value: Any, what: str) -> List[str]:
+    """A str or a sequence of str as a list (a single str is one name, not its characters)."""
+    if value is None:
+        return []
+    if isinstance(value, str):
+        return [value] if value else []
+    if isinstance(value, Mapping) or not isinstance(value, Iterable):
+        raise InputTypeError(f"{what}: expected a str or a list of str, got {type(value).__name__}")
+    out = list(value)
+    for v in out:
+        if not isinstance(v, str):
+            raise InputTypeError(f"{what}: expected a str or a list of str, got an entry of type {type(v).__name__}")
+    return out
+
+
+def _int(value: Any, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise InputTypeError(f"{what}: expected an int, got {type(value).__name__}")
+    return int(value)
+
+
+def _float(value: Any, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise InputTypeError(f"{what}: expected a number, got {type(value).__name__}")
+    return float(value)
+
+
+def _array(value: Any, what: str) -> np.ndarray:
+    """A float64 array of any shape (TypeError for what NumPy cannot read as numbers)."""
+    try:
+        return np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputTypeError(f"{what}: expected an array of numbers, got {type(value).__name__}") from None
 
 
 def _format_value(v: Any) -> str:
@@ -69,10 +121,12 @@ def _format_value(v: Any) -> str:
         return "true" if v else "false"
     if isinstance(v, float):
         if not math.isfinite(v):
-            raise ValueError(f"override value {v!r}: expected a finite number")
+            raise InputError(f"override value {v!r}: expected a finite number")
         return repr(v)
     if isinstance(v, (list, tuple, np.ndarray)):
         return "[" + ", ".join(_format_value(x) for x in v) + "]"
+    if isinstance(v, os.PathLike):
+        return os.fspath(v)
     return str(v)
 
 
@@ -83,133 +137,386 @@ def _overrides(overrides: Overrides) -> list:
     if isinstance(overrides, Mapping):
         return [f"{k}={_format_value(v)}" for k, v in overrides.items()]
     if isinstance(overrides, str):
-        raise TypeError("overrides: expected a dict {key.path: value} or a list of 'key.path=value', got a str")
+        raise InputTypeError("overrides: expected a dict {key.path: value} or a list of 'key.path=value', got a str")
     return [str(o) for o in overrides]
 
 
-def _split(column: str):
+def _split(column: str) -> Tuple[str, str]:
     if column.endswith("]") and "[" in column:
-        i = column.index("[")
-        return column[:i], column[i + 1 : -1]
+        i = column.rindex("[")
+        return column[:i], column[i + 1: -1]
     return column, ""
+
+
+def _sweep(sweep: Any, base_dir: Optional[PathLike]) -> Tuple[str, str]:
+    """A sweep file, or a sweep given as a dict: (source, text) for the core (text empty for a file)."""
+    if isinstance(sweep, Mapping):
+        base = os.path.abspath(_path(base_dir, "base_dir") if base_dir is not None else os.getcwd())
+        name = str(sweep.get("sweep", {}).get("name", "sweep")) if isinstance(sweep.get("sweep"), Mapping) else "sweep"
+        try:
+            text = json.dumps(sweep, indent=1, default=_json_default, allow_nan=False)
+        except ValueError as e:
+            raise InputError(f"sweep (dict): {e}") from None
+        return os.path.join(base, f"{name} (dict)"), text
+    if base_dir is not None:
+        raise InputError("base_dir: applies to a sweep given as a dict; a sweep file's paths are relative to the file")
+    return _input_file(sweep, "sweep file"), ""
+
+
+def _json_default(v: Any) -> Any:
+    if isinstance(v, os.PathLike):
+        return os.fspath(v)
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    raise InputTypeError(f"sweep (dict): a value of type {type(v).__name__} cannot be written as YAML")
+
+
+# ------------------------------------------------------------------------------------------------ shipped files
+def data_path(*parts: PathLike) -> pathlib.Path:
+    """The robot, experiment and sweep files shipped with the package: ``data_path()`` is the folder (with
+    ``robots/``, ``experiments/``, ``sweeps/``), ``data_path("robots/ur5_drives.yaml")`` or
+    ``data_path("robots", "ur5_drives.yaml")`` a file in it. Raises InputFileNotFoundError (a FileNotFoundError)
+    when it does not exist. The experiment files refer to the robot files by relative paths, so they work from
+    any working directory."""
+    p = _DATA.joinpath(*[_path(x, "data_path") for x in parts])
+    if not p.exists():
+        raise InputFileNotFoundError(f"{p}: no such file among jointsim's shipped files (see data_path())",
+                                     file=str(p), reason="no such file")
+    return p
+
+
+# ------------------------------------------------------------------------------------------------ multibody
+def load_robot(path: PathLike) -> Model:
+    """Loads a robot model: a URDF (.urdf) or a jointsim robot YAML (Hayati DH or tree; docs/robot_format.md).
+
+    Returns a Model with its own workspace: name, nq (number of joints), joint_names, frame_names, tip_frame and
+    gravity [m/s^2], shape (3,). Joint order is the order of the movable joints from base to tip.
+    """
+    return _core.load_robot(_input_file(path, "robot file"))
+
+
+def rnea(model: Model, q: Any, qd: Any, qdd: Any) -> np.ndarray:
+    """Inverse dynamics (recursive Newton-Euler): tau = M(q) qdd + C(q, qd) qd + g(q) [N*m].
+
+    q [rad], qd [rad/s], qdd [rad/s^2]: each of shape (nq,) for one state, or (N, nq) for N states in one call
+    (returns (N, nq)). Rotor inertias of the model (armature) are included.
+    """
+    return _core.rnea(model, _array(q, "q"), _array(qd, "qd"), _array(qdd, "qdd"))
+
+
+def aba(model: Model, q: Any, qd: Any, tau: Any) -> np.ndarray:
+    """Forward dynamics (articulated-body algorithm): qdd [rad/s^2] for q [rad], qd [rad/s], tau [N*m].
+
+    Each argument of shape (nq,), or (N, nq) for N states (returns (N, nq)).
+    """
+    return _core.aba(model, _array(q, "q"), _array(qd, "qd"), _array(tau, "tau"))
+
+
+def crba(model: Model, q: Any) -> np.ndarray:
+    """Joint-space mass matrix M(q) [kg*m^2 for revolute joints]: shape (nq, nq) for q of shape (nq,) [rad], or
+    (N, nq, nq) for q of shape (N, nq)."""
+    return _core.crba(model, _array(q, "q"))
+
+
+def gravity_torques(model: Model, q: Any) -> np.ndarray:
+    """Gravity torques g(q) [N*m] for q [rad]: shape (nq,), or (N, nq) for q of shape (N, nq)."""
+    return _core.gravity_torques(model, _array(q, "q"))
+
+
+def rnea_derivatives(model: Model, q: Any, qd: Any, qdd: Any) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Analytic derivatives of inverse dynamics at (q [rad], qd [rad/s], qdd [rad/s^2]), each of shape (nq,):
+    (dtau/dq [N*m/rad], dtau/dqd [N*m*s/rad], M = dtau/dqdd [kg*m^2]), each of shape (nq, nq)."""
+    return _core.rnea_derivatives(model, _array(q, "q"), _array(qd, "qd"), _array(qdd, "qdd"))
+
+
+def aba_derivatives(model: Model, q: Any, qd: Any, tau: Any) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Analytic derivatives of forward dynamics at (q [rad], qd [rad/s], tau [N*m]), each of shape (nq,):
+    (dqdd/dq [1/s^2], dqdd/dqd [1/s], dqdd/dtau = M^-1 [1/(kg*m^2)]), each of shape (nq, nq)."""
+    return _core.aba_derivatives(model, _array(q, "q"), _array(qd, "qd"), _array(tau, "tau"))
+
+
+def frame_placement(model: Model, q: Any, frame: Optional[str] = None) -> np.ndarray:
+    """4x4 homogeneous pose of a frame (default: the model's tip_frame) in the base frame at q [rad], shape (nq,):
+    rotation and position [m]."""
+    return _core.frame_placement(model, _array(q, "q"), frame)
+
+
+def frame_jacobian(model: Model, q: Any, frame: Optional[str] = None) -> np.ndarray:
+    """Frame Jacobian at q [rad] (shape (nq,)), shape (6, nq): rows [v; w] in world axes at the frame's origin,
+    [m/s per rad/s] and [rad/s per rad/s]."""
+    return _core.frame_jacobian(model, _array(q, "q"), frame)
+
+
+# ------------------------------------------------------------------------------------------------ experiments
+class RunResult(dict):
+    """The log of a run: a dict of the logged signals by name without unit ("time", "q_elbow_joint", ...), each a
+    float64 array of shape (rows,), so ``pandas.DataFrame(result)`` works; the rest is in attributes.
+
+    Attributes:
+        units (dict): signal name -> unit ("rad", "N*m", ...).
+        columns (list): the CSV header, names with units ("q_elbow_joint[rad]").
+        summary (dict): summary.json of the run (status, solver statistics, parameters, input hashes, ...).
+        extras (dict): extra tables of the experiment type by suffix (e.g. clamping curves), each a dict of arrays.
+    """
+
+    def __init__(self, columns: Dict[str, np.ndarray], units: Dict[str, str], header: List[str],
+                 summary: Dict[str, Any], extras: Dict[str, Dict[str, np.ndarray]]):
+        super().__init__(columns)
+        self.units = units
+        self.columns = header
+        self.summary = summary
+        self.extras = extras
+
+    def to_dataframe(self):
+        """The log as a pandas DataFrame: one column per signal (names without unit), the units in
+        ``df.attrs["units"]``; the summary stays on the result. Needs pandas."""
+        import pandas as pd
+        df = pd.DataFrame({name: values for name, values in self.items()})
+        df.attrs["units"] = dict(self.units)
+        return df
+
+    def __repr__(self) -> str:
+        rows = len(next(iter(self.values()))) if self else 0
+        return f"<jointsim.RunResult: {len(self)} signals x {rows} rows, status {self.summary.get('status')!r}>"
+
+
+def _result(raw: dict) -> RunResult:
+    values = raw["values"]
+    columns: Dict[str, np.ndarray] = {}
+    units: Dict[str, str] = {}
+    for j, column in enumerate(raw["columns"]):
+        name, unit = _split(column)
+        columns[name] = values[:, j].copy()
+        units[name] = unit
+    extras = {suffix: {_split(c)[0]: table[:, j].copy() for j, c in enumerate(cols)}
+              for suffix, (cols, table) in raw["extras"].items()}
+    return RunResult(columns, units, list(raw["columns"]), json.loads(raw["summary_json"]), extras)
 
 
 class Experiment:
     """An experiment file loaded (and its overrides applied): the model and its run settings.
 
-    Attributes: name, type (the registry's experiment type), file, columns (the log's column names with units).
+    Attributes: name, type (the registry's experiment type), file (the file it was read from), columns (the
+    log's column names with units, time first).
     """
 
     def __init__(self, core: "_core.Experiment"):
         self._core = core
 
-    name = property(lambda self: self._core.name)
-    type = property(lambda self: self._core.type)
-    file = property(lambda self: self._core.file)
-    columns = property(lambda self: list(self._core.columns))
+    name = property(lambda self: self._core.name, doc="Name of the experiment (the log's file stem).")
+    type = property(lambda self: self._core.type, doc="Experiment type (tracking, joint_rig, clamping, ...).")
+    file = property(lambda self: self._core.file, doc="The experiment file it was read from.")
+    columns = property(lambda self: list(self._core.columns), doc="Log column names with units, time[s] first.")
 
-    def run(self) -> Dict[str, Any]:
+    def run(self) -> RunResult:
         """Runs the experiment in memory (nothing written); see run_experiment for the result."""
         return _result(_core.run_in_memory(self._core))
 
     def simulator(self) -> "Simulator":
-        """A stepping Simulator over this experiment's model, with its solver settings."""
-        return Simulator(_core.Simulator.from_experiment(self._core))
+        """A stepping Simulator over this experiment's model, with its solver settings (and the limit max_state =
+        Simulator.DEFAULT_MAX_STATE, see Simulator.set_limits)."""
+        sim = Simulator(_core.Simulator.from_experiment(self._core))
+        sim.set_limits(max_state=Simulator.DEFAULT_MAX_STATE)
+        return sim
 
     def __repr__(self) -> str:
         return f"<jointsim.Experiment '{self.name}' of type {self.type}>"
 
 
-def load_experiment(path: str, overrides: Overrides = None) -> Experiment:
-    """Loads an experiment file (YAML) and applies overrides ({'key.path': value} or ['key.path=value']).
-
-    Raises ValueError naming the file, line and key for bad input (an unknown key among them).
-    """
-    return Experiment(_core.load_experiment(str(path), _overrides(overrides)))
-
-
-def _result(raw: dict) -> Dict[str, Any]:
-    values = raw["values"]
-    out: Dict[str, Any] = {}
-    units: Dict[str, str] = {}
-    for j, column in enumerate(raw["columns"]):
-        name, unit = _split(column)
-        out[name] = values[:, j].copy()
-        units[name] = unit
-    out["units"] = units
-    out["columns"] = list(raw["columns"])
-    out["summary"] = json.loads(raw["summary_json"])
-    out["extras"] = {
-        suffix: {_split(c)[0]: table[:, j].copy() for j, c in enumerate(cols)} for suffix, (cols, table) in raw["extras"].items()
-    }
-    return out
+def load_experiment(path: PathLike, overrides: Overrides = None) -> Experiment:
+    """Loads an experiment file (YAML) and applies overrides: a dict {"key.path": value} or a list of
+    "key.path=value" ("+key.path=value" adds a key the file lacks). Raises InputError naming the file, line and key
+    for bad input (an unknown key among them), InputFileNotFoundError for a missing file."""
+    return Experiment(_core.load_experiment(_input_file(path, "experiment file"), _overrides(overrides)))
 
 
-def run_experiment(experiment: Union[str, Experiment], overrides: Overrides = None) -> Dict[str, Any]:
+def run_experiment(experiment: Union[PathLike, Experiment], overrides: Overrides = None) -> RunResult:
     """Runs an experiment (a file path or a loaded Experiment) in memory: what `jointsim run` writes, as NumPy.
 
-    Returns a dict: one float64 array per log column by its name without unit ("time", "q_elbow_joint", ...), the
-    same numbers as the CLI's CSV to the last bit; "units" (name -> unit), "columns" (the CSV header), "summary"
-    (summary.json as a dict) and "extras" (extra tables such as clamping curves, by suffix).
+    Returns a RunResult: a dict of float64 arrays by signal name without unit ("time", "q_elbow_joint", ...), the
+    same numbers as the CLI's CSV to the last bit, with .units, .columns (the CSV header), .summary (summary.json as
+    a dict), .extras (extra tables such as clamping curves) and .to_dataframe().
     """
     if not isinstance(experiment, Experiment):
         experiment = load_experiment(experiment, overrides)
     elif overrides:
-        raise ValueError("overrides apply when loading: pass them to load_experiment")
+        raise InputError("overrides apply when loading: pass them to load_experiment")
     return experiment.run()
 
 
-def run_experiment_file(path: str, output_dir: Optional[str] = None, overrides: Overrides = None) -> Dict[str, Any]:
-    """As `jointsim run`: writes DIR/<name>.csv and DIR/summary.json (each renamed into place when complete; bad
-    input writes nothing). Returns status, csv_path, summary_path, sim_time_s, wall_time_s, real_time_factor."""
-    return dict(_core.run_experiment_file(str(path), "" if output_dir is None else str(output_dir), _overrides(overrides)))
+def run_experiment_file(path: PathLike, output_dir: Optional[PathLike] = None,
+                        overrides: Overrides = None) -> Dict[str, Any]:
+    """As `jointsim run`: writes DIR/<name>.csv and DIR/summary.json (default DIR: out/<name>/; each renamed into
+    place when complete; bad input writes nothing). Returns status, csv_path, summary_path, sim_time_s [s],
+    wall_time_s [s], real_time_factor and warnings."""
+    return dict(_core.run_experiment_file(_input_file(path, "experiment file"),
+                                          _optional_path(output_dir, "output_dir"), _overrides(overrides)))
 
 
-def validate_file(path: str, overrides: Overrides = None) -> Dict[str, Any]:
+def validate_file(path: PathLike, overrides: Overrides = None) -> Dict[str, Any]:
     """As `jointsim validate`: checks an experiment or sweep file completely (every key, every referenced file,
-    every run of a sweep with its settings) without running it; raises ValueError (the C++ InputError: file, line,
-    key path) for the first problem. Returns kind ("experiment"/"sweep"), name, type, runs, states, signals,
-    duration [s] and files (every file read)."""
-    return dict(_core.validate_file(str(path), _overrides(overrides)))
+    every run of a sweep with its settings) without running it; raises InputError (file, line, key path) for the
+    first problem. Returns kind ("experiment"/"sweep"), name, type, runs, states, signals, duration [s] and files
+    (every file read)."""
+    return dict(_core.validate_file(_input_file(path, "experiment or sweep file"), _overrides(overrides)))
 
 
-def run_batch(sweep: str, output_dir: Optional[str] = None, jobs: int = 1, shard: Tuple[int, int] = (0, 1),
-              collect: bool = False) -> Dict[str, Any]:
+# ------------------------------------------------------------------------------------------------ sweeps
+def run_batch(sweep: Union[PathLike, Mapping[str, Any]], output_dir: Optional[PathLike] = None, jobs: int = 1,
+              shard: Tuple[int, int] = (0, 1), collect: bool = False,
+              base_dir: Optional[PathLike] = None) -> Dict[str, Any]:
     """As `jointsim batch SWEEP [-j JOBS] [--shard I/N] [-o DIR] [--collect]`: runs a sweep, each run in its own child
-    process, into DIR/<run>/ with DIR/manifest.csv (docs/batch.md); finished runs are skipped (resume). Returns
-    manifest_path, ok, failed, skipped, wall_time_s [s] and records (one dict per run: run, status, labels, ...).
-    Bad sweep input raises ValueError; failed runs are reported in the records, not raised. While it runs, Ctrl-C
-    reaches Python only when it returns."""
+    process, into DIR/<run>/ with DIR/manifest.csv (default DIR: out/<sweep name>/; docs/batch.md); finished runs
+    are skipped (resume).
+
+    sweep: a sweep file, or the same content as a dict ({"sweep": {"name", "experiment", "set"}, "runs": [...],
+    "grid": ..., "faults": ..., "sample": ...}) whose relative paths are relative to base_dir (default: the working
+    directory). Returns manifest_path, ok, failed, skipped, wall_time_s [s] and records (one dict per run: run,
+    status, labels, ...). Bad sweep input raises InputError; failed runs are reported in the records, not raised.
+    Ctrl-C stops the runs (they end "interrupted", resumable) and raises KeyboardInterrupt.
+    """
+    source, text = _sweep(sweep, base_dir)
     index, count = shard
-    return dict(_core.run_batch(str(sweep), "" if output_dir is None else str(output_dir), int(jobs), int(index),
-                                int(count), bool(collect)))
+    jobs, index, count = _int(jobs, "jobs"), _int(index, "shard index"), _int(count, "shard count")
+    if jobs < 1:
+        raise InputError(f"jobs: expected at least 1 run at a time, got {jobs}")
+    return dict(_core.run_batch(source, text, _optional_path(output_dir, "output_dir"), jobs, index, count,
+                                bool(collect)))
 
 
-def write_dataset(sweep: str, path: str, output_dir: Optional[str] = None) -> Dict[str, Any]:
+def write_dataset(sweep: Union[PathLike, Mapping[str, Any]], path: PathLike, output_dir: Optional[PathLike] = None,
+                  base_dir: Optional[PathLike] = None) -> Dict[str, Any]:
     """As `jointsim batch SWEEP --collect -o DIR --dataset PATH` without rewriting the manifest: every run's log and
-    the labels of the sweep's results in DIR as one HDF5 file (layout in docs/batch.md; read it with h5py). Written
-    under a temporary name and renamed into place. Returns path, runs, runs_with_data, samples."""
-    return dict(_core.write_dataset(str(sweep), str(path), "" if output_dir is None else str(output_dir)))
+    the labels of the sweep's results in DIR as one HDF5 file (layout in docs/batch.md; read it with read_dataset).
+    sweep: a file or a dict (see run_batch). Written under a temporary name and renamed into place. Returns path,
+    runs, runs_with_data, samples."""
+    source, text = _sweep(sweep, base_dir)
+    return dict(_core.write_dataset(source, text, _path(path, "path"), _optional_path(output_dir, "output_dir")))
 
 
-def export_fmu(config: str, fmu_path: str, inputs: Sequence[str] = (), outputs: Sequence[str] = (),
-               overrides: Overrides = None, binary_dir: Optional[str] = None, step_size: float = 1e-3) -> Dict[str, Any]:
+class Dataset:
+    """A sweep's HDF5 data set read into pandas (read_dataset).
+
+    Attributes:
+        labels (pandas.DataFrame): one row per run (run, status, fault_type, fault_joint, fault_severity,
+            fault_onset_s, fault_count, design, seed), strings decoded.
+        runs (list of str): the runs with logged data.
+        attributes (dict): run -> its attributes (settings, overrides, faults, input hashes, summary, ...).
+        path (str): the file.
+    """
+
+    def __init__(self, path: str, labels, runs: List[str], attributes: Dict[str, Dict[str, Any]]):
+        self.path = path
+        self.labels = labels
+        self.runs = runs
+        self.attributes = attributes
+
+    def run(self, name: str):
+        """One run's log as a pandas DataFrame (one float64 column per signal, names without unit; the units in
+        ``df.attrs["units"]``, the run's attributes in ``df.attrs["attributes"]``)."""
+        import h5py
+        import pandas as pd
+        if name not in self.runs:
+            raise InputError(f"{self.path}: no run {name!r} with data (runs: {', '.join(self.runs) or 'none'})",
+                             file=self.path, key_path=f"runs/{name}")
+        with h5py.File(self.path, "r") as f:
+            g = f["runs"][name]
+            columns = {k: np.asarray(g[k][...], dtype=np.float64) for k in g.keys()}
+            units = {k: _text(g[k].attrs.get("unit", "")) for k in g.keys()}
+        order = ["time"] + sorted(k for k in columns if k != "time") if "time" in columns else sorted(columns)
+        df = pd.DataFrame({k: columns[k] for k in order})
+        df.attrs["units"] = {k: units[k] for k in order}
+        df.attrs["attributes"] = self.attributes.get(name, {})
+        return df
+
+    def __iter__(self):
+        """(name, DataFrame) of every run with data, in file order."""
+        for name in self.runs:
+            yield name, self.run(name)
+
+    def __repr__(self) -> str:
+        return f"<jointsim.Dataset {self.path!r}: {len(self.labels)} runs, {len(self.runs)} with data>"
+
+
+def _text(v: Any) -> Any:
+    if isinstance(v, bytes):
+        return v.decode("utf-8")
+    if isinstance(v, np.ndarray) and v.dtype.kind in "SO":
+        return [_text(x) for x in v.tolist()]
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
+
+
+def read_dataset(path: PathLike) -> Dataset:
+    """Reads a sweep's HDF5 data set (written by `jointsim batch --dataset` or write_dataset) into pandas: the
+    labels table with its strings decoded, the list of runs with data and each run's attributes; Dataset.run(name)
+    reads one run's log. Needs h5py and pandas (pip install h5py pandas)."""
+    import h5py
+    import pandas as pd
+    p = _input_file(path, "data set")
+    try:
+        f = h5py.File(p, "r")
+    except OSError as e:
+        raise InputError(f"{p}: not an HDF5 data set of jointsim ({e})", file=p, reason="not an HDF5 file") from None
+    with f:
+        if "labels" not in f:
+            raise InputError(f"{p}: no /labels table: not a data set of jointsim", file=p, key_path="labels")
+        table = f["labels"][...]
+        labels = pd.DataFrame({name: [_text(x) for x in table[name]] for name in table.dtype.names})
+        runs = list(f["runs"].keys()) if "runs" in f else []
+        attributes = {r: {k: _text(v) for k, v in f["runs"][r].attrs.items()} for r in runs}
+    return Dataset(p, labels, runs, attributes)
+
+
+# ------------------------------------------------------------------------------------------------ FMU export
+def export_fmu(config: PathLike, fmu_path: PathLike, inputs: Union[str, Sequence[str]] = (),
+               outputs: Union[str, Sequence[str]] = (), overrides: Overrides = None,
+               binary_dir: Optional[PathLike] = None, step_size: float = 1e-3) -> Dict[str, Any]:
     """As `jointsim fmu`: writes an FMI 2.0 Co-Simulation FMU of an experiment file (types tracking, joint_rig).
 
     inputs: command ports, "PORT" (every joint) or "JOINT:PORT" (voltage, current, motor_torque, motor_velocity,
-    setpoint) for a robot, "command" for a joint rig; outputs: signal names (default all); overrides: as --set.
-    binary_dir: the FMU binary's folder (default: the one shipped in this package). Returns the FMU's description
+    setpoint) for a robot, "command" for a joint rig; a str or a list of str. outputs: signal names (default all),
+    a str or a list. overrides: as for load_experiment. binary_dir: the FMU binary's folder (default: the one
+    shipped in this package). step_size: the FMU's default communication step [s]. Returns the FMU's description
     (model identifier, GUID, variables with their value references = their indices).
     """
-    import os
     if binary_dir is None:
         here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "fmu", "linux64")
         binary_dir = here if os.path.isfile(os.path.join(here, "jointsim_fmu.so")) else ""
-    raw = _core.export_fmu(str(config), str(fmu_path), list(inputs), list(outputs), _overrides(overrides),
-                           str(binary_dir), float(step_size))
+    raw = _core.export_fmu(_input_file(config, "experiment file"), _path(fmu_path, "fmu_path"),
+                           _names(inputs, "inputs"), _names(outputs, "outputs"), _overrides(overrides),
+                           _path(binary_dir, "binary_dir"), _float(step_size, "step_size"))
     return json.loads(raw)
 
 
+# ------------------------------------------------------------------------------------------------ identification
+def identify_clamping(time: Any, angle: Any, torque: Any, fixed_backlash: Optional[float] = None) -> Dict[str, Any]:
+    """Identifies stiffness, backlash and Coulomb friction from a clamping curve ([KR300Thesis, Algorithm II] with
+    Ceres): time [s], motor-side angle [rad] and torque [N*m], each of shape (n,). fixed_backlash [rad] fixes the
+    backlash instead of fitting it.
+
+    Returns stiffness [N*m/rad], backlash [rad], friction [N*m] and center [rad], each a dict (value, std_error,
+    fitted, initial), plus rms_residual [N*m] and points. Raises UnidentifiableError when the curve cannot
+    determine a parameter (e.g. it never crosses zero torque).
+    """
+    fb = None if fixed_backlash is None else _float(fixed_backlash, "fixed_backlash")
+    return _core.identify_clamping(_array(time, "time"), _array(angle, "angle"), _array(torque, "torque"), fb)
+
+
+def fit_friction_map(velocity: Any, torque: Any) -> Dict[str, Any]:
+    """Fits the static friction map tau = alpha0 + alpha1 exp(-(v/v_s)^2) + alpha2 v per direction
+    ([Hauschild2003]) to velocity [rad/s] and friction torque [N*m] samples, each of shape (n,).
+
+    Returns positive and negative (each: alpha0 [N*m], alpha1 [N*m], alpha2 [N*m*s/rad], v_s [rad/s] as dicts of
+    value, std_error, initial; points; rms_residual [N*m]) and delta, the asymmetry.
+    """
+    return _core.fit_friction_map(_array(velocity, "velocity"), _array(torque, "torque"))
+
+
+# ------------------------------------------------------------------------------------------------ simulator
 class Simulator:
     """Steps a simulated model: advance(dt) / advance_to(t) with events and samples handled inside; inputs
     (command ports) may change between steps, and the integrator restarts only where an input actually jumps.
@@ -224,42 +531,61 @@ class Simulator:
       "voltage"        motor voltage [V] (the PWM saturation at +-V_supply applies)
       "motor_torque"   electromagnetic torque [N*m] (electrics bypassed)
     Switching back to a controller port is bumpless (its integrators continue from the applied output).
+
+    One advance may be as long as wanted (advance(300.0) runs the whole 300 s); it ends early only by its limits
+    (set_limits: steps, wall-clock time, a bound on the state, which catches an unstable controller within a
+    fraction of a second), by a solver failure, or by Ctrl-C (KeyboardInterrupt). After any of these the simulator
+    is usable at the last internal step it completed.
     """
+
+    #: Default bound on every state's magnitude of from_robot (max_state of set_limits): far beyond any physical
+    #: joint or motor speed [rad/s], current [A] or angle [rad] of a robot in a run of an hour or less.
+    DEFAULT_MAX_STATE = 1e6
 
     def __init__(self, core: "_core.Simulator"):
         self._s = core
 
     @staticmethod
-    def from_experiment(experiment: Union[str, Experiment], overrides: Overrides = None) -> "Simulator":
+    def from_experiment(experiment: Union[PathLike, Experiment], overrides: Overrides = None) -> "Simulator":
         """A simulator over an experiment's model (a file path or a loaded Experiment) with its solver settings."""
         if not isinstance(experiment, Experiment):
             experiment = load_experiment(experiment, overrides)
         return experiment.simulator()
 
     @staticmethod
-    def from_robot(path: str, q0: Optional[Sequence[float]] = None, rtol: float = 1e-6, atol: float = 1e-9,
-                   max_order: int = 2, max_step: float = 0.0, max_gamma_change: float = 0.3) -> "Simulator":
-        """A simulator over a robot-with-drives file (e.g. config/robots/ur5_drives.yaml) starting at rest at q0
-        [rad] (default zeros) with the drives holding it; BDF of order <= max_order with rtol, atol [state units],
-        steps of at most max_step [s] (0: unlimited), a new Newton matrix when h*beta0 changes by more than
-        max_gamma_change (relative; 0.5 suits sampled control, see docs/design.md)."""
-        q = None if q0 is None else np.asarray(q0, dtype=np.float64)
-        return Simulator(_core.Simulator.from_robot(str(path), q, rtol, atol, max_order, max_step, max_gamma_change))
+    def from_robot(path: PathLike, q0: Optional[Sequence[float]] = None, rtol: float = 1e-6, atol: float = 1e-9,
+                   max_order: int = 2, max_step: float = 0.0, max_gamma_change: float = 0.3,
+                   max_state: float = DEFAULT_MAX_STATE) -> "Simulator":
+        """A simulator over a robot-with-drives file (e.g. data_path("robots/ur5_drives.yaml")) starting at rest at
+        q0 [rad], shape (dof,) (default zeros), with the drives holding it; BDF of order <= max_order with rtol and
+        atol [state units], steps of at most max_step [s] (0: unlimited), a new Newton matrix when h*beta0 changes by
+        more than max_gamma_change (relative; 0.5 suits a 1 kHz loop, docs/performance.md). max_state: the bound on
+        every state's magnitude (see set_limits; 0: none)."""
+        q = None if q0 is None else _array(q0, "q0")
+        core = _core.Simulator.from_robot(_input_file(path, "robot file"), q, _float(rtol, "rtol"),
+                                          _float(atol, "atol"), _int(max_order, "max_order"),
+                                          _float(max_step, "max_step"), _float(max_gamma_change, "max_gamma_change"))
+        sim = Simulator(core)
+        sim.set_limits(max_state=max_state)
+        return sim
 
     # --- time and state
     name = property(lambda self: self._s.name, doc="Name of the simulated model.")
     time = property(lambda self: self._s.time, doc="Simulated time [s].")
-    state = property(lambda self: self._s.state, doc="Continuous state vector (copy).")
+    state = property(lambda self: self._s.state, doc="Continuous state vector, shape (n,) (a copy; units per state, "
+                                                     "see state_name).")
     restarts = property(lambda self: self._s.restarts, doc="Integrator restarts so far.")
     steps = property(lambda self: self._s.steps, doc="Internal solver steps so far.")
 
     def advance(self, dt: float) -> float:
-        """Integrates over dt [s] > 0; returns the time reached [s]."""
-        return self._s.advance(dt)
+        """Integrates over dt [s] > 0; returns the time reached [s]. Raises SolverError when the integration fails
+        or a limit of set_limits ends it (flag STEP_BUDGET, WALL_TIME_BUDGET, DIVERGED), KeyboardInterrupt on
+        Ctrl-C; the simulator then stands at the last internal step it completed."""
+        return self._s.advance(_float(dt, "dt"))
 
     def advance_to(self, t: float) -> float:
-        """Integrates to time t [s] >= time; returns the time reached [s]."""
-        return self._s.advance_to(t)
+        """Integrates to time t [s] >= time; returns the time reached [s]. Errors as advance()."""
+        return self._s.advance_to(_float(t, "t"))
 
     def reset(self) -> None:
         """Back to the initial state at t = 0."""
@@ -267,16 +593,38 @@ class Simulator:
 
     def set_state(self, y: Sequence[float]) -> None:
         """Replaces the continuous state (shape like state); the integrator restarts."""
-        self._s.set_state(np.asarray(y, dtype=np.float64))
+        self._s.set_state(_array(y, "state"))
+
+    def state_name(self, i: int) -> str:
+        """What state i is, with its unit ("q_elbow_joint [rad]"); "" when the model does not say."""
+        return self._s.state_name(_int(i, "i"))
+
+    def set_limits(self, max_steps: Optional[int] = None, max_wall_time: Optional[float] = None,
+                   max_state: Optional[float] = None) -> None:
+        """Limits of every following advance()/advance_to() call; an argument left None keeps its value, 0 means
+        none. max_steps: internal solver steps per call; max_wall_time: wall-clock time per call [s]; max_state: bound
+        on the magnitude of every continuous state [its own unit] (an unstable controller makes states run away:
+        the call ends at once with SolverError flag DIVERGED naming the state, instead of minutes of ever smaller
+        steps). Exceeding a limit raises SolverError (flag STEP_BUDGET, WALL_TIME_BUDGET or DIVERGED)."""
+        steps, wall, bound = self._s.limits()
+        self._s.set_limits(steps if max_steps is None else _int(max_steps, "max_steps"),
+                           wall if max_wall_time is None else _float(max_wall_time, "max_wall_time"),
+                           bound if max_state is None else _float(max_state, "max_state"))
+
+    @property
+    def limits(self) -> Dict[str, float]:
+        """The limits of each advance call: max_steps, max_wall_time [s], max_state (0: none)."""
+        steps, wall, bound = self._s.limits()
+        return {"max_steps": steps, "max_wall_time": wall, "max_state": bound}
 
     # --- signals
     @property
-    def signal_names(self) -> list:
+    def signal_names(self) -> List[str]:
         """Signal names with units, as the CSV columns after time[s]."""
         return list(self._s.signal_names)
 
     def signal(self, name: str) -> float:
-        """One signal at the current time, by name with or without its unit."""
+        """One signal at the current time, by name with or without its unit (in the signal's unit)."""
         return self._s.signal(name)
 
     def signals(self) -> Dict[str, float]:
@@ -285,58 +633,68 @@ class Simulator:
         return {_split(n)[0]: float(x) for n, x in zip(self._s.signal_names, v)}
 
     def signal_values(self) -> np.ndarray:
-        """All signals at the current time in signal_names order (float64 array)."""
+        """All signals at the current time in signal_names order, shape (len(signal_names),)."""
         return self._s.signal_values()
 
     def signal_index(self, name: str) -> int:
+        """Index of a signal (name with or without unit) in signal_names, for repeated use with signal_values()."""
         return self._s.signal_index(name)
 
     # --- robot with drives
     dof = property(lambda self: self._s.dof, doc="Number of joints (robot with drives).")
-    joint_names = property(lambda self: list(self._s.joint_names))
-    joint_positions = property(lambda self: self._s.joint_positions, doc="Joint angles q [rad] (copy).")
-    joint_velocities = property(lambda self: self._s.joint_velocities, doc="Joint rates qd [rad/s] (copy).")
+    joint_names = property(lambda self: list(self._s.joint_names), doc="Joint names, base to tip.")
+    joint_positions = property(lambda self: self._s.joint_positions, doc="Joint angles q [rad], shape (dof,) (copy).")
+    joint_velocities = property(lambda self: self._s.joint_velocities,
+                                doc="Joint rates qd [rad/s], shape (dof,) (copy).")
     gear_ratios = property(lambda self: self._s.gear_ratios,
-                           doc="Gear ratio N per joint [-] (motor angle = N * joint angle for a rigid gear).")
+                           doc="Gear ratio N per joint [-], shape (dof,) (motor angle = N * joint angle, rigid gear).")
     motor_velocities = property(lambda self: self._s.motor_velocities,
-                                doc="Motor shaft speeds [rad/s] (copy): what the motor encoders measure.")
+                                doc="Motor shaft speeds [rad/s], shape (dof,) (copy): what the motor encoders measure.")
 
     def model(self) -> Model:
         """The robot's rigid-body model (with the reflected rotor inertias), for rnea/aba/... in a controller."""
         return self._s.model()
 
     def set_port(self, joint: Union[int, str], port: str) -> None:
-        """Chooses the command port of a joint (one of PORTS); ValueError if the drive lacks it."""
+        """Chooses the command port of a joint (by index or name; one of PORTS); InputError if the drive lacks it."""
         self._s.set_port(joint, port)
 
     def port(self, joint: Union[int, str]) -> str:
+        """The command port of a joint (by index or name)."""
         return self._s.port(joint)
 
     def set_command(self, joint: Union[int, str], value: float) -> None:
-        """The command of a joint's port: rad/s, A, V or N*m (ValueError for NaN or under the setpoint port)."""
-        self._s.set_command(joint, float(value))
+        """The command of a joint's port: rad/s, A, V or N*m (InputError for NaN or under the setpoint port)."""
+        self._s.set_command(joint, _float(value, "value"))
 
     def set_commands(self, values: Sequence[float]) -> None:
-        """Commands of every joint (shape (dof,)); entries of joints under the setpoint port are ignored."""
-        self._s.set_commands(np.asarray(values, dtype=np.float64))
+        """Commands of every joint, shape (dof,); entries of joints under the setpoint port are ignored."""
+        self._s.set_commands(_array(values, "commands"))
 
     def set_setpoint(self, joint: Union[int, str], q: float, qd: float = 0.0, qdd: float = 0.0) -> None:
         """Holds a joint's reference at q [rad], qd [rad/s], qdd [rad/s^2] in place of the trajectory."""
-        self._s.set_setpoint(joint, float(q), float(qd), float(qdd))
+        self._s.set_setpoint(joint, _float(q, "q"), _float(qd, "qd"), _float(qdd, "qdd"))
 
     def hold_setpoints(self, q: Sequence[float], qd: Optional[Sequence[float]] = None,
                        qdd: Optional[Sequence[float]] = None) -> None:
-        """Holds the references of every joint (shapes (dof,))."""
-        conv = lambda a: None if a is None else np.asarray(a, dtype=np.float64)
-        self._s.hold_setpoints(conv(q), conv(qd), conv(qdd))
+        """Holds the references of every joint: q [rad], qd [rad/s], qdd [rad/s^2], shapes (dof,)."""
+        conv = lambda a, what: None if a is None else _array(a, what)
+        self._s.hold_setpoints(_array(q, "q"), conv(qd, "qd"), conv(qdd, "qdd"))
 
     def release_setpoints(self) -> None:
         """Back to the experiment's trajectory for every joint."""
         self._s.release_setpoints()
 
     def set_external_wrench(self, frame: str, wrench: Sequence[float]) -> None:
-        """Holds a wrench [fx, fy, fz (N), nx, ny, nz (N*m)] in world axes at a frame's origin (zeros remove it)."""
-        self._s.set_external_wrench(frame, np.asarray(wrench, dtype=np.float64))
+        """Holds a wrench [fx, fy, fz (N), nx, ny, nz (N*m)], shape (6,), in world axes at a frame's origin (zeros
+        remove it)."""
+        self._s.set_external_wrench(frame, _array(wrench, "wrench"))
+
+    def __copy__(self):
+        raise TypeError("a jointsim.Simulator cannot be copied (it would share its plant); make a new one")
+
+    def __deepcopy__(self, memo):
+        raise TypeError("a jointsim.Simulator cannot be copied (it would share its plant); make a new one")
 
     def __repr__(self) -> str:
         return f"<jointsim.Simulator of {self.name} at t = {self.time} s>"

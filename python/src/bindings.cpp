@@ -1,11 +1,18 @@
-// jointsim._core: Python bindings of the jointsim library (pybind11). NumPy float64 arrays in and out; every
-// jointsim error becomes a Python exception with the library's one-line message:
-//   InputError → ValueError, UnidentifiableError → jointsim.UnidentifiableError (a ValueError),
-//   SolverError → jointsim.SolverError (a RuntimeError), other jointsim errors → RuntimeError.
-// The user-facing API (docstrings, dict results) is python/jointsim/__init__.py; this module is its engine.
+// jointsim._core: Python bindings of the jointsim library (pybind11), the engine of the `jointsim` package
+// (python/jointsim/__init__.py holds the user-facing API, its docstrings and argument checks). NumPy float64 arrays
+// in and out; every jointsim error becomes an exception of jointsim.errors with the C++ error's fields:
+//   InputError → jointsim.InputError (a ValueError: file, line, key_path, message), a missing file →
+//   jointsim.InputFileNotFoundError (also a FileNotFoundError), UnidentifiableError → jointsim.UnidentifiableError
+//   (a ValueError), SolverError → jointsim.SolverError (a RuntimeError: time, flag, component), a failed
+//   conversion of an argument → TypeError, other jointsim errors → RuntimeError.
+// Long calls release the GIL and watch for Python's pending signals (Interruptible): Ctrl-C ends them within
+// about 20 ms with the KeyboardInterrupt the handler raised.
+#include <csignal>
 #include <cstring>
 #include <memory>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include <pybind11/eigen.h>
@@ -13,22 +20,23 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <nlohmann/json.hpp>
+
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/version.hpp"
 #include "jointsim/experiments/batch.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
-#include "jointsim/report/dataset.hpp"
-
 #include "jointsim/identify/clamping_fit.hpp"
 #include "jointsim/identify/friction_fit.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
+#include "jointsim/report/dataset.hpp"
+#include "jointsim/sim/simulate.hpp"
 #include "jointsim/sim/simulator.hpp"
 #include "jointsim/systems/joint_rig.hpp"
 #include "jointsim/systems/robot_with_drives.hpp"
-#include <nlohmann/json.hpp>
 
 namespace py = pybind11;
 using namespace jointsim;
@@ -43,7 +51,7 @@ std::string shapeText(const py::array& a) {
   return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
-/// A 1-D float64 view of `a` with `n` entries; ValueError naming `what` otherwise.
+/// A 1-D float64 view of `a` with `n` entries; InputError naming `what` otherwise.
 Eigen::Map<const Eigen::VectorXd> vec(const Array& a, Eigen::Index n, const char* what) {
   if (a.ndim() != 1 || a.shape(0) != n)
     throw InputError(std::string(what) + ": expected an array of shape (" + std::to_string(n) + ",), got shape " +
@@ -70,6 +78,57 @@ py::array_t<double> toArray(const Eigen::MatrixXd& m) {
   return out;
 }
 
+// ------------------------------------------------------------------------------------------ interruption
+/// Python's pending signals, asked from inside a long call (a StopPoll on the calling thread): the handlers run
+/// (Ctrl-C's raises KeyboardInterrupt, which stays set as the thread's error) and a failure stops the call.
+int pythonSignals(void*) noexcept {
+  py::gil_scoped_acquire gil;
+  return PyErr_CheckSignals() != 0 ? SIGINT : 0;
+}
+
+/// Runs `f` without the GIL, stoppable by Python's signal handlers (checked every 20 ms of wall time by the
+/// simulation loops): a call that a handler's exception stopped raises that exception (KeyboardInterrupt), not the
+/// C++ interruption.
+template <class F>
+auto interruptible(F&& f) -> decltype(f()) {
+  using R = decltype(f());
+  StopPoll poll(&pythonSignals, nullptr, 0.02);
+  try {
+    if constexpr (std::is_void_v<R>) {
+      {
+        py::gil_scoped_release release;
+        f();
+      }
+      if (poll.tripped()) throw py::error_already_set();
+    } else {
+      R r = [&] {
+        py::gil_scoped_release release;
+        return f();
+      }();
+      if (poll.tripped()) throw py::error_already_set();
+      return r;
+    }
+  } catch (const py::error_already_set&) {
+    throw;
+  } catch (...) {
+    if (poll.tripped()) throw py::error_already_set();
+    throw;
+  }
+}
+
+// ------------------------------------------------------------------------------------------ errors
+/// Sets the Python error to an instance of jointsim.errors.<name>(message, **fields); a plain `fallback` error
+/// when that module cannot be imported (the extension used on its own).
+void raise(const char* name, PyObject* fallback, const std::string& message, const py::dict& fields) {
+  try {
+    py::object cls = py::module_::import("jointsim.errors").attr(name);
+    py::object exc = cls(message, **fields);
+    PyErr_SetObject(cls.ptr(), exc.ptr());
+  } catch (py::error_already_set&) {
+    PyErr_SetString(fallback, message.c_str());
+  }
+}
+
 /// A robot model with its own workspace (the Model/Data pair of the C++ API).
 struct PyModel {
   explicit PyModel(multibody::Model m) : model(std::move(m)), data(model) {}
@@ -85,6 +144,47 @@ struct PyModel {
 int frameOf(const multibody::Model& model, const py::object& frame) {
   if (frame.is_none()) return model.frameIndex(model.tip_frame);
   return model.frameIndex(frame.cast<std::string>());
+}
+
+/// States for a rigid-body call: one (shape (nq,)) or a batch (shape (N, nq)), as rows of a row-major matrix.
+struct States {
+  const double* data;
+  py::ssize_t rows;
+  bool batch;
+};
+States states(const Array& a, Eigen::Index n, const char* what) {
+  if (a.ndim() == 1 && a.shape(0) == n) return {a.data(), 1, false};
+  if (a.ndim() == 2 && a.shape(1) == n) return {a.data(), a.shape(0), true};
+  throw InputError(std::string(what) + ": expected an array of shape (" + std::to_string(n) + ",) or (N, " +
+                   std::to_string(n) + "), got shape " + shapeText(a));
+}
+/// The batch size of several state arrays of one call: all of q's shape, (nq,) or (N, nq).
+py::ssize_t batchOf(std::initializer_list<std::tuple<const States*, const Array*, const char*>> all) {
+  const auto& [first, first_array, first_name] = *all.begin();
+  for (const auto& [s, a, what] : all)
+    if (s->batch != first->batch || s->rows != first->rows)
+      throw InputError(std::string(what) + ": expected the shape of " + first_name + ", " + shapeText(*first_array) +
+                       ", got shape " + shapeText(*a));
+  return first->rows;
+}
+Eigen::Map<const Eigen::VectorXd> row(const States& s, py::ssize_t i, Eigen::Index n) { return {s.data + i * n, n}; }
+
+/// f(q, qd, x) → vector of size n per state: one array (n,) or a batch (N, n), the batch without the GIL.
+template <class F>
+py::array_t<double> perState3(PyModel& p, const Array& a, const Array& b, const Array& c, const char* na,
+                              const char* nb, const char* nc, F&& f) {
+  const auto n = p.model.nq;
+  const States A = states(a, n, na), B = states(b, n, nb), C = states(c, n, nc);
+  const py::ssize_t N = batchOf({{&A, &a, na}, {&B, &b, nb}, {&C, &c, nc}});
+  if (!A.batch) return toArray(Eigen::VectorXd(f(row(A, 0, n), row(B, 0, n), row(C, 0, n))));
+  py::array_t<double> out({N, static_cast<py::ssize_t>(n)});
+  double* o = out.mutable_data();
+  {
+    py::gil_scoped_release release;
+    for (py::ssize_t i = 0; i < N; ++i)
+      Eigen::Map<Eigen::VectorXd>(o + i * n, n) = f(row(A, i, n), row(B, i, n), row(C, i, n));
+  }
+  return out;
 }
 
 /// A loaded experiment (shared with simulators made from it).
@@ -105,6 +205,9 @@ struct PySimulator {
   int joint(const py::object& j) {
     auto& r = robot();
     if (py::isinstance<py::str>(j)) return r.model().jointIndex(j.cast<std::string>());
+    if (!py::isinstance<py::int_>(j) || py::isinstance<py::bool_>(j))
+      throw py::type_error("joint: expected an index (int) or a joint name (str), got " +
+                           std::string(py::str(py::type::of(j).attr("__name__"))));
     const long k = j.cast<long>();
     if (k < 0 || k >= r.dof())
       throw InputError(r.name() + ": joint index " + std::to_string(k) + " out of range 0.." +
@@ -151,35 +254,89 @@ py::dict direction(const identify::DirectionFit& f) {
   return d;
 }
 
+/// A sweep from a file (`text` empty) or from YAML/JSON text standing for the file `source` (a dict in Python).
+experiments::Sweep sweepFrom(const std::string& source, const std::string& text) {
+  return text.empty() ? experiments::loadSweep(source) : experiments::loadSweepText(text, source);
+}
+
+py::dict batchResult(const experiments::BatchResult& r) {
+  py::list records;
+  for (const auto& x : r.records) {
+    py::dict d;
+    d["run"] = x.run;
+    d["status"] = x.status;
+    d["output_dir"] = x.output_dir;
+    d["overrides"] = x.overrides;
+    d["wall_time_s"] = x.wall_time_s;
+    d["sim_time_s"] = x.sim_time_s;
+    d["real_time_factor"] = x.real_time_factor;
+    d["fault_type"] = x.fault_type;
+    d["fault_joint"] = x.fault_joint;
+    d["fault_severity"] = x.fault_severity;
+    d["fault_onset_s"] = x.fault_onset_s;
+    d["design"] = x.design;
+    d["seed"] = x.seed;
+    d["skipped"] = x.skipped;
+    records.append(d);
+  }
+  py::dict d;
+  d["manifest_path"] = r.manifest_path;
+  d["ok"] = r.ok;
+  d["failed"] = r.failed;
+  d["skipped"] = r.skipped;
+  d["wall_time_s"] = r.wall_time_s;
+  d["records"] = records;
+  return d;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
-  m.doc() = "jointsim C++ core (use the jointsim package)";
-  static py::exception<SolverError> solver_error(m, "SolverError", PyExc_RuntimeError);
-  static py::exception<UnidentifiableError> unidentifiable(m, "UnidentifiableError", PyExc_ValueError);
+  m.doc() = "jointsim C++ core: the engine of the jointsim package (use the package's functions)";
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const InputError& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      py::dict f;
+      f["file"] = e.file();
+      f["line"] = e.line();
+      f["key_path"] = e.keyPath();
+      f["reason"] = e.message();
+      raise(e.missingFile() ? "InputFileNotFoundError" : "InputError", PyExc_ValueError, e.what(), f);
     } catch (const UnidentifiableError& e) {
-      PyErr_SetString(unidentifiable.ptr(), e.what());
+      raise("UnidentifiableError", PyExc_ValueError, e.what(), py::dict());
     } catch (const SolverError& e) {
-      PyErr_SetString(solver_error.ptr(), e.what());
+      py::dict f;
+      f["time"] = e.time();
+      f["flag"] = e.flag();
+      f["component"] = e.component();
+      raise("SolverError", PyExc_RuntimeError, e.what(), f);
     } catch (const Error& e) {
       PyErr_SetString(PyExc_RuntimeError, e.what());
+    } catch (const py::cast_error& e) {
+      PyErr_SetString(PyExc_TypeError, e.what());
     }
   });
   m.attr("__version__") = version();
 
   // ------------------------------------------------------------------------------------------ multibody
-  py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model")
-      .def_property_readonly("name", [](const PyModel& p) { return p.model.name; })
-      .def_property_readonly("nq", [](const PyModel& p) { return p.model.nq; })
-      .def_property_readonly("joint_names", [](const PyModel& p) { return p.model.joint_names; })
-      .def_property_readonly("frame_names", &PyModel::frameNames)
-      .def_property_readonly("tip_frame", [](const PyModel& p) { return p.model.tip_frame; })
-      .def_property_readonly("gravity", [](const PyModel& p) { return Eigen::VectorXd(p.model.gravity); })
+  py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model",
+                                                "A robot's rigid-body model with its own workspace (load_robot).")
+      .def_property_readonly(
+          "name", [](const PyModel& p) { return p.model.name; }, "Name of the robot (from its file).")
+      .def_property_readonly(
+          "nq", [](const PyModel& p) { return p.model.nq; }, "Number of joints (= of generalised coordinates).")
+      .def_property_readonly(
+          "joint_names", [](const PyModel& p) { return p.model.joint_names; },
+          "Names of the movable joints, base to tip (the order of q).")
+      .def_property_readonly("frame_names", &PyModel::frameNames,
+                             "Names of the frames (bodies, joints, tool) for frame_placement/frame_jacobian.")
+      .def_property_readonly(
+          "tip_frame", [](const PyModel& p) { return p.model.tip_frame; },
+          "The default frame of frame_placement/frame_jacobian: the last link of the chain (or the tool frame).")
+      .def_property_readonly(
+          "gravity", [](const PyModel& p) { return Eigen::VectorXd(p.model.gravity); },
+          "Gravity acceleration in the base frame [m/s^2], shape (3,).")
       .def("__repr__", [](const PyModel& p) {
         return "<jointsim.Model '" + p.model.name + "' with " + std::to_string(p.model.nq) + " joints>";
       });
@@ -189,23 +346,45 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "rnea",
       [](PyModel& p, const Array& q, const Array& qd, const Array& qdd) {
-        const auto n = p.model.nq;
-        return toArray(multibody::rnea(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(qdd, n, "qdd")));
+        return perState3(p, q, qd, qdd, "q", "qd", "qdd", [&p](const auto& a, const auto& b, const auto& c) {
+          return multibody::rnea(p.model, p.data, a, b, c);
+        });
       },
-      "Inverse dynamics (recursive Newton-Euler): tau [N*m] = M(q) qdd + C(q, qd) qd + g(q); q [rad], qd [rad/s], qdd [rad/s^2], each shape (nq,).",
       py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("qdd"));
   m.def(
       "aba",
       [](PyModel& p, const Array& q, const Array& qd, const Array& tau) {
-        const auto n = p.model.nq;
-        return toArray(multibody::aba(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(tau, n, "tau")));
+        return perState3(p, q, qd, tau, "q", "qd", "tau", [&p](const auto& a, const auto& b, const auto& c) {
+          return multibody::aba(p.model, p.data, a, b, c);
+        });
       },
-      "Forward dynamics (articulated-body algorithm): qdd [rad/s^2] for q [rad], qd [rad/s], tau [N*m].",
       py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("tau"));
   m.def(
+      "gravity_torques",
+      [](PyModel& p, const Array& q) {
+        return perState3(p, q, q, q, "q", "q", "q", [&p](const auto& a, const auto&, const auto&) {
+          return multibody::gravityTorques(p.model, p.data, a);
+        });
+      },
+      py::arg("model"), py::arg("q"));
+  m.def(
       "crba",
-      [](PyModel& p, const Array& q) { return toArray(multibody::crba(p.model, p.data, vec(q, p.model.nq, "q"))); },
-      "Joint-space mass matrix M(q) [kg*m^2], shape (nq, nq).", py::arg("model"), py::arg("q"));
+      [](PyModel& p, const Array& q) {
+        const auto n = p.model.nq;
+        const States Q = states(q, n, "q");
+        if (!Q.batch) return toArray(Eigen::MatrixXd(multibody::crba(p.model, p.data, row(Q, 0, n))));
+        py::array_t<double> out({Q.rows, static_cast<py::ssize_t>(n), static_cast<py::ssize_t>(n)});
+        double* o = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          for (py::ssize_t i = 0; i < Q.rows; ++i) {
+            const Eigen::MatrixXd& M = multibody::crba(p.model, p.data, row(Q, i, n));
+            Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(o + i * n * n, n, n) = M;
+          }
+        }
+        return out;
+      },
+      py::arg("model"), py::arg("q"));
   m.def(
       "rnea_derivatives",
       [](PyModel& p, const Array& q, const Array& qd, const Array& qdd) {
@@ -213,8 +392,6 @@ PYBIND11_MODULE(_core, m) {
         multibody::computeRneaDerivatives(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(qdd, n, "qdd"));
         return py::make_tuple(toArray(p.data.dtau_dq), toArray(p.data.dtau_dqd), toArray(p.data.M));
       },
-      "Analytic derivatives of inverse dynamics at (q, qd, qdd): (dtau/dq [N*m/rad], dtau/dqd [N*m*s/rad], "
-      "M = dtau/dqdd [kg*m^2]), each shape (nq, nq).",
       py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("qdd"));
   m.def(
       "aba_derivatives",
@@ -223,15 +400,7 @@ PYBIND11_MODULE(_core, m) {
         multibody::computeAbaDerivatives(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(tau, n, "tau"));
         return py::make_tuple(toArray(p.data.ddq_dq), toArray(p.data.ddq_dqd), toArray(p.data.Minv));
       },
-      "Analytic derivatives of forward dynamics at (q, qd, tau): (dqdd/dq [1/s^2], dqdd/dqd [1/s], "
-      "dqdd/dtau = M^-1 [1/(kg*m^2)]), each shape (nq, nq).",
       py::arg("model"), py::arg("q"), py::arg("qd"), py::arg("tau"));
-  m.def(
-      "gravity_torques",
-      [](PyModel& p, const Array& q) {
-        return toArray(multibody::gravityTorques(p.model, p.data, vec(q, p.model.nq, "q")));
-      },
-      "Gravity torques g(q) [N*m].", py::arg("model"), py::arg("q"));
   m.def(
       "frame_placement",
       [](PyModel& p, const Array& q, const py::object& frame) {
@@ -243,15 +412,13 @@ PYBIND11_MODULE(_core, m) {
         T.topRightCorner<3, 1>() = X.p;
         return toArray(Eigen::MatrixXd(T));
       },
-      "4x4 homogeneous pose of a frame (default: the tool frame) in the base frame [m].", py::arg("model"),
-      py::arg("q"), py::arg("frame") = py::none());
+      py::arg("model"), py::arg("q"), py::arg("frame") = py::none());
   m.def(
       "frame_jacobian",
       [](PyModel& p, const Array& q, const py::object& frame) {
         const int f = frameOf(p.model, frame);
         return toArray(Eigen::MatrixXd(multibody::frameJacobian(p.model, p.data, vec(q, p.model.nq, "q"), f)));
       },
-      "Frame Jacobian, shape (6, nq): rows [v; w] in world axes at the frame origin [m/s, rad/s per rad/s].",
       py::arg("model"), py::arg("q"), py::arg("frame") = py::none());
 
   // ------------------------------------------------------------------------------------------ experiments
@@ -269,11 +436,7 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "run_in_memory",
       [](PyExperiment& x) {
-        experiments::ExperimentResult r;
-        {
-          py::gil_scoped_release release;
-          r = experiments::runInMemory(*x.e);
-        }
+        const experiments::ExperimentResult r = interruptible([&] { return experiments::runInMemory(*x.e); });
         py::dict out;
         out["columns"] = r.log.columns;
         out["values"] = toArray(r.log.values);
@@ -291,11 +454,7 @@ PYBIND11_MODULE(_core, m) {
         experiments::RunOptions o;
         o.output_dir = output_dir;
         o.overrides = overrides;
-        experiments::RunReport r;
-        {
-          py::gil_scoped_release release;
-          r = experiments::runExperimentFile(path, o);
-        }
+        const experiments::RunReport r = interruptible([&] { return experiments::runExperimentFile(path, o); });
         py::dict d;
         d["status"] = r.status;
         d["csv_path"] = r.csv_path;
@@ -311,7 +470,8 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "validate_file",
       [](const std::string& path, const std::vector<std::string>& overrides) {
-        const experiments::ValidationReport r = experiments::validateFile(path, overrides);
+        const experiments::ValidationReport r =
+            interruptible([&] { return experiments::validateFile(path, overrides); });
         py::dict d;
         d["kind"] = r.kind;
         d["name"] = r.name;
@@ -328,59 +488,26 @@ PYBIND11_MODULE(_core, m) {
   // ------------------------------------------------------------------------------------------ sweeps
   m.def(
       "run_batch",
-      [](const std::string& sweep_file, const std::string& output_dir, int jobs, int shard_index, int shard_count,
-         bool collect) {
-        const experiments::Sweep sweep = experiments::loadSweep(sweep_file);
+      [](const std::string& source, const std::string& text, const std::string& output_dir, int jobs, int shard_index,
+         int shard_count, bool collect) {
+        const experiments::Sweep sweep = sweepFrom(source, text);
         experiments::BatchOptions o;
         o.output_dir = output_dir;
         o.jobs = jobs;
         o.shard_index = shard_index;
         o.shard_count = shard_count;
-        experiments::BatchResult r;
-        {
-          py::gil_scoped_release release;
-          r = collect ? experiments::collectBatch(sweep, o) : experiments::runBatch(sweep, o);
-        }
-        py::list records;
-        for (const auto& x : r.records) {
-          py::dict d;
-          d["run"] = x.run;
-          d["status"] = x.status;
-          d["output_dir"] = x.output_dir;
-          d["overrides"] = x.overrides;
-          d["wall_time_s"] = x.wall_time_s;
-          d["sim_time_s"] = x.sim_time_s;
-          d["real_time_factor"] = x.real_time_factor;
-          d["fault_type"] = x.fault_type;
-          d["fault_joint"] = x.fault_joint;
-          d["fault_severity"] = x.fault_severity;
-          d["fault_onset_s"] = x.fault_onset_s;
-          d["design"] = x.design;
-          d["seed"] = x.seed;
-          d["skipped"] = x.skipped;
-          records.append(d);
-        }
-        py::dict d;
-        d["manifest_path"] = r.manifest_path;
-        d["ok"] = r.ok;
-        d["failed"] = r.failed;
-        d["skipped"] = r.skipped;
-        d["wall_time_s"] = r.wall_time_s;
-        d["records"] = records;
-        return d;
+        const experiments::BatchResult r = interruptible(
+            [&] { return collect ? experiments::collectBatch(sweep, o) : experiments::runBatch(sweep, o); });
+        return batchResult(r);
       },
-      py::arg("sweep"), py::arg("output_dir") = "", py::arg("jobs") = 1, py::arg("shard_index") = 0,
+      py::arg("source"), py::arg("text"), py::arg("output_dir") = "", py::arg("jobs") = 1, py::arg("shard_index") = 0,
       py::arg("shard_count") = 1, py::arg("collect") = false);
 
   m.def(
       "write_dataset",
-      [](const std::string& sweep_file, const std::string& path, const std::string& output_dir) {
-        const experiments::Sweep sweep = experiments::loadSweep(sweep_file);
-        report::DatasetSummary r;
-        {
-          py::gil_scoped_release release;
-          r = report::writeDataset(sweep, output_dir, path);
-        }
+      [](const std::string& source, const std::string& text, const std::string& path, const std::string& output_dir) {
+        const experiments::Sweep sweep = sweepFrom(source, text);
+        const report::DatasetSummary r = interruptible([&] { return report::writeDataset(sweep, output_dir, path); });
         py::dict d;
         d["path"] = r.path;
         d["runs"] = r.runs;
@@ -388,7 +515,7 @@ PYBIND11_MODULE(_core, m) {
         d["samples"] = r.samples;
         return d;
       },
-      py::arg("sweep"), py::arg("path"), py::arg("output_dir") = "");
+      py::arg("source"), py::arg("text"), py::arg("path"), py::arg("output_dir") = "");
 
   // ------------------------------------------------------------------------------------------ FMU export
   m.def(
@@ -402,7 +529,7 @@ PYBIND11_MODULE(_core, m) {
         o.overrides = overrides;
         o.binary_dir = binary_dir;
         o.step_size = step_size;
-        const fmi::FmuDescription d = fmi::exportFmu(config, fmu_path, o);
+        const fmi::FmuDescription d = interruptible([&] { return fmi::exportFmu(config, fmu_path, o); });
         return d.toJson().dump();
       },
       py::arg("config"), py::arg("fmu_path"), py::arg("inputs"), py::arg("outputs"), py::arg("overrides"),
@@ -436,22 +563,40 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("name", [](PySimulator& s) { return s.plant->name(); })
       .def_property_readonly("time", [](PySimulator& s) { return s.sim->time(); })
       .def_property_readonly("state", [](PySimulator& s) { return toArray(s.sim->state()); })
-      .def("set_state", [](PySimulator& s, const Array& y) { s.sim->setState(vec(y, s.plant->stateSize(), "state")); })
+      .def(
+          "set_state", [](PySimulator& s, const Array& y) { s.sim->setState(vec(y, s.plant->stateSize(), "state")); },
+          py::arg("y"))
+      .def(
+          "state_name", [](PySimulator& s, int i) { return s.plant->stateName(i); }, py::arg("i"))
       .def("reset", [](PySimulator& s) { s.sim->reset(); })
-      .def("advance",
-           [](PySimulator& s, double dt) {
-             py::gil_scoped_release release;
-             return s.sim->advance(dt);
-           })
-      .def("advance_to",
-           [](PySimulator& s, double t) {
-             py::gil_scoped_release release;
-             return s.sim->advanceTo(t);
+      .def(
+          "advance", [](PySimulator& s, double dt) { return interruptible([&] { return s.sim->advance(dt); }); },
+          py::arg("dt"))
+      .def(
+          "advance_to", [](PySimulator& s, double t) { return interruptible([&] { return s.sim->advanceTo(t); }); },
+          py::arg("t"))
+      .def(
+          "set_limits",
+          [](PySimulator& s, long max_steps, double max_wall_time, double max_state) {
+            sim::AdvanceLimits l;
+            l.max_steps = max_steps;
+            l.max_wall_time = max_wall_time;
+            l.max_state = max_state;
+            s.sim->setLimits(l);
+          },
+          py::arg("max_steps"), py::arg("max_wall_time"), py::arg("max_state"))
+      .def("limits",
+           [](PySimulator& s) {
+             const sim::AdvanceLimits& l = s.sim->limits();
+             return py::make_tuple(l.max_steps, l.max_wall_time, l.max_state);
            })
       .def_property_readonly("signal_names", [](PySimulator& s) { return s.sim->signalNames(); })
       .def("signal_values", [](PySimulator& s) { return toArray(s.sim->signals()); })
-      .def("signal", [](PySimulator& s, const std::string& name) { return s.sim->signal(name); })
-      .def("signal_index", [](PySimulator& s, const std::string& name) { return s.sim->signalIndex(name); })
+      .def(
+          "signal", [](PySimulator& s, const std::string& name) { return s.sim->signal(name); }, py::arg("name"))
+      .def(
+          "signal_index", [](PySimulator& s, const std::string& name) { return s.sim->signalIndex(name); },
+          py::arg("name"))
       .def_property_readonly("restarts", [](PySimulator& s) { return s.sim->restarts(); })
       .def_property_readonly("steps", [](PySimulator& s) { return s.sim->stats().steps; })
       .def_property_readonly("dof", [](PySimulator& s) { return s.robot().dof(); })
@@ -480,38 +625,57 @@ PYBIND11_MODULE(_core, m) {
                                return toArray(v);
                              })
       .def("model", [](PySimulator& s) { return std::make_shared<PyModel>(s.robot().model()); })
-      .def("set_port", [](PySimulator& s, const py::object& j,
-                          const std::string& port) { s.robot().setCommandPort(s.joint(j), systems::parsePort(port)); })
-      .def("port",
-           [](PySimulator& s, const py::object& j) {
-             return std::string(systems::portName(s.robot().commandPort(s.joint(j))));
-           })
-      .def("set_command",
-           [](PySimulator& s, const py::object& j, double value) {
-             if (auto* rig = dynamic_cast<systems::JointRig*>(s.plant.get())) {
-               rig->setCommand(value);
-               return;
-             }
-             s.robot().setCommand(s.joint(j), value);
-           })
-      .def("set_commands",
-           [](PySimulator& s, const Array& v) { s.robot().setCommands(vec(v, s.robot().dof(), "commands")); })
-      .def("set_setpoint", [](PySimulator& s, const py::object& j, double q, double qd,
-                              double qdd) { s.robot().setSetpoint(s.joint(j), q, qd, qdd); })
-      .def("hold_setpoints",
-           [](PySimulator& s, const Array& q, const py::object& qd, const py::object& qdd) {
-             const int n = s.robot().dof();
-             const Eigen::VectorXd qv = vec(q, n, "q");
-             const Eigen::VectorXd qdv =
-                 qd.is_none() ? Eigen::VectorXd() : Eigen::VectorXd(vec(qd.cast<Array>(), n, "qd"));
-             const Eigen::VectorXd qddv =
-                 qdd.is_none() ? Eigen::VectorXd() : Eigen::VectorXd(vec(qdd.cast<Array>(), n, "qdd"));
-             s.robot().holdSetpoints(qv, qdv, qddv);
-           })
+      .def(
+          "set_port",
+          [](PySimulator& s, const py::object& j, const std::string& port) {
+            s.robot().setCommandPort(s.joint(j), systems::parsePort(port));
+          },
+          py::arg("joint"), py::arg("port"))
+      .def(
+          "port",
+          [](PySimulator& s, const py::object& j) {
+            return std::string(systems::portName(s.robot().commandPort(s.joint(j))));
+          },
+          py::arg("joint"))
+      .def(
+          "set_command",
+          [](PySimulator& s, const py::object& j, double value) {
+            if (auto* rig = dynamic_cast<systems::JointRig*>(s.plant.get())) {
+              rig->setCommand(value);
+              return;
+            }
+            s.robot().setCommand(s.joint(j), value);
+          },
+          py::arg("joint"), py::arg("value"))
+      .def(
+          "set_commands",
+          [](PySimulator& s, const Array& v) { s.robot().setCommands(vec(v, s.robot().dof(), "commands")); },
+          py::arg("values"))
+      .def(
+          "set_setpoint",
+          [](PySimulator& s, const py::object& j, double q, double qd, double qdd) {
+            s.robot().setSetpoint(s.joint(j), q, qd, qdd);
+          },
+          py::arg("joint"), py::arg("q"), py::arg("qd"), py::arg("qdd"))
+      .def(
+          "hold_setpoints",
+          [](PySimulator& s, const Array& q, const py::object& qd, const py::object& qdd) {
+            const int n = s.robot().dof();
+            const Eigen::VectorXd qv = vec(q, n, "q");
+            const Eigen::VectorXd qdv =
+                qd.is_none() ? Eigen::VectorXd() : Eigen::VectorXd(vec(qd.cast<Array>(), n, "qd"));
+            const Eigen::VectorXd qddv =
+                qdd.is_none() ? Eigen::VectorXd() : Eigen::VectorXd(vec(qdd.cast<Array>(), n, "qdd"));
+            s.robot().holdSetpoints(qv, qdv, qddv);
+          },
+          py::arg("q"), py::arg("qd"), py::arg("qdd"))
       .def("release_setpoints", [](PySimulator& s) { s.robot().releaseSetpoints(); })
-      .def("set_external_wrench", [](PySimulator& s, const std::string& frame, const Array& w) {
-        s.robot().setExternalWrench(frame, Eigen::Matrix<double, 6, 1>(vec(w, 6, "wrench")));
-      });
+      .def(
+          "set_external_wrench",
+          [](PySimulator& s, const std::string& frame, const Array& w) {
+            s.robot().setExternalWrench(frame, Eigen::Matrix<double, 6, 1>(vec(w, 6, "wrench")));
+          },
+          py::arg("frame"), py::arg("wrench"));
 
   // ------------------------------------------------------------------------------------------ identification
   m.def(
@@ -524,11 +688,7 @@ PYBIND11_MODULE(_core, m) {
         d.torque = anyVec(torque, "torque");
         identify::ClampingFitOptions o;
         if (!fixed_backlash.is_none()) o.fixed_backlash = fixed_backlash.cast<double>();
-        identify::ClampingFitResult r;
-        {
-          py::gil_scoped_release release;
-          r = identify::identifyClamping(d, o);
-        }
+        const identify::ClampingFitResult r = interruptible([&] { return identify::identifyClamping(d, o); });
         py::dict out;
         out["stiffness"] = fitted(r.stiffness);
         out["backlash"] = fitted(r.backlash);
@@ -546,12 +706,10 @@ PYBIND11_MODULE(_core, m) {
         if (vv.size() != tt.size())
           throw InputError("fit_friction_map: velocity and torque have " + std::to_string(vv.size()) + " and " +
                            std::to_string(tt.size()) + " entries");
-        identify::FrictionFit f;
-        {
-          py::gil_scoped_release release;
-          f = identify::fitFrictionMap(std::vector<double>(vv.data(), vv.data() + vv.size()),
-                                       std::vector<double>(tt.data(), tt.data() + tt.size()));
-        }
+        const identify::FrictionFit f = interruptible([&] {
+          return identify::fitFrictionMap(std::vector<double>(vv.data(), vv.data() + vv.size()),
+                                          std::vector<double>(tt.data(), tt.data() + tt.size()));
+        });
         py::dict out;
         out["positive"] = direction(f.positive);
         out["negative"] = direction(f.negative);

@@ -90,12 +90,12 @@ def _cli_log(cli, config, overrides, tmp_path):
 def test_results_equal_the_cli_to_the_last_bit(root, cli, tmp_path, config, overrides):
     r = jointsim.run_experiment(str(root / config), overrides)
     header, values, summary = _cli_log(cli, root / config, [f"{k}={v}" for k, v in overrides.items()], tmp_path)
-    assert r["columns"] == header
+    assert r.columns == header
     for j, column in enumerate(header):
         name = column.split("[")[0]
         assert np.array_equal(r[name], values[:, j]), f"{column} differs"
-    assert r["summary"]["status"] == "ok"
-    assert r["summary"]["parameters"] == summary["parameters"]
+    assert r.summary["status"] == "ok"
+    assert r.summary["parameters"] == summary["parameters"]
 
 
 def test_overrides_and_experiment_objects(root):
@@ -103,13 +103,13 @@ def test_overrides_and_experiment_objects(root):
     assert e.type == "passive_robot" and e.name == "ur5_fall"
     r = e.run()
     assert r["time"][-1] == pytest.approx(0.1) and len(r["time"]) == 11
-    assert r["units"]["q_shoulder_pan_joint"] == "rad"
+    assert r.units["q_shoulder_pan_joint"] == "rad"
 
 
 def test_python_pd_controller_tracks_a_step_on_the_ur5_twin(root):
     """A PD law with gravity feed-forward, in Python at 1 kHz, commands the six motor voltages of the UR5 twin;
     every joint steps by 0.1 rad at 0.2 s and is within 5 mrad of its reference from 1.7 s on (the C++ example
-    examples/pd_voltage_ur5.cpp does the same, with the same solver settings: rtol 1e-4, see docs/design.md). The
+    examples/pd_voltage_ur5.cpp does the same, with the same solver settings: rtol 1e-4, see docs/performance.md). The
     damping acts on the motor speed (collocated with the voltage)."""
     q0 = np.array([0.0, -1.2, 1.2, -1.5, -1.5708, 0.0])
     sim = jointsim.Simulator.from_robot(str(root / "config/robots/ur5_drives.yaml"), q0=q0, rtol=1e-4,
@@ -192,7 +192,7 @@ def test_bad_input_raises_with_a_clear_message_and_writes_nothing(root, planar2,
         jointsim.load_experiment(cfg, {"no_such_key": 1})
     with pytest.raises(ValueError, match="duration"):
         jointsim.load_experiment(cfg, {"duration": -1})
-    with pytest.raises(ValueError, match=r"q: expected an array of shape \(2,\), got shape \(3,\)"):
+    with pytest.raises(ValueError, match=r"q: expected an array of shape \(2,\) or \(N, 2\), got shape \(3,\)"):
         jointsim.rnea(planar2, np.zeros(3), np.zeros(2), np.zeros(2))
     with pytest.raises(ValueError, match="shape"):
         jointsim.rnea(planar2, np.zeros((2, 2)), np.zeros(2), np.zeros(2))
@@ -250,9 +250,9 @@ def test_validate_file_and_added_keys(root):
     assert report["kind"] == "sweep" and report["runs"] == 25 and report["type"] == "tracking"
     assert any(f.endswith("ur5_drives_elastic.yaml") for f in report["files"])
     fall = root / "config" / "experiments" / "ur5_fall.yaml"
-    with pytest.raises(ValueError, match=r"to add it: --set \+solver.max_step=0.002"):
+    with pytest.raises(ValueError, match=r"to add it, override \+solver.max_step=0.002"):
         jointsim.validate_file(fall, ["solver.max_step=0.002"])
     base = jointsim.run_experiment(fall, {"duration": 0.1})
     added = jointsim.run_experiment(fall, ["duration=0.1", "+solver.max_step=0.002"])
-    steps = lambda r: r["summary"]["solver_stats"]["steps"]  # noqa: E731
+    steps = lambda r: r.summary["solver_stats"]["steps"]  # noqa: E731
     assert steps(added) >= 50 > steps(base)

@@ -1,0 +1,363 @@
+"""The Python API as a Python user meets it: shipped files, paths, results as pandas, sweeps as dicts, exceptions
+with fields, long calls that Ctrl-C interrupts, limits and divergence, batched rigid-body calls, docstrings and the
+stubs of the extension module."""
+import ast
+import copy
+import inspect
+import os
+import pathlib
+import signal
+import threading
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import jointsim
+from jointsim import _core
+
+
+def _sigint_after(seconds):
+    """Sends SIGINT to this process after `seconds` from a helper thread; returns a dict that gets the send time."""
+    sent = {}
+
+    def fire():
+        time.sleep(seconds)
+        sent["t"] = time.perf_counter()
+        os.kill(os.getpid(), signal.SIGINT)
+
+    threading.Thread(target=fire, daemon=True).start()
+    return sent
+
+
+# ------------------------------------------------------------------------------------------------ shipped files, paths
+def test_shipped_files_run_from_any_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    root = jointsim.data_path()
+    assert {"robots", "experiments", "sweeps"} <= {p.name for p in root.iterdir()}
+    assert jointsim.data_path("robots", "ur5_drives.yaml") == jointsim.data_path("robots/ur5_drives.yaml")
+    # An experiment that refers to a robot file by a relative path, loaded from elsewhere.
+    e = jointsim.load_experiment(jointsim.data_path("experiments/ur5_excitation.yaml"), {"duration": 0.01})
+    assert e.type == "tracking"
+    with pytest.raises(FileNotFoundError):
+        jointsim.data_path("robots/no_such_robot.yaml")
+
+
+def test_every_path_argument_takes_a_pathlike(tmp_path):
+    exp = jointsim.data_path("experiments/ur5_fall.yaml")  # a pathlib.Path
+    assert isinstance(exp, pathlib.Path)
+    model = jointsim.load_robot(jointsim.data_path("robots/ur5.urdf"))
+    assert model.nq == 6
+    r = jointsim.run_experiment(exp, {"duration": 0.05})
+    report = jointsim.run_experiment_file(exp, tmp_path / "out", {"duration": 0.05})
+    assert report["status"] == "ok" and pathlib.Path(report["csv_path"]).parent == tmp_path / "out"
+    assert jointsim.validate_file(exp)["kind"] == "experiment"
+    sim = jointsim.Simulator.from_robot(jointsim.data_path("robots/ur5_drives.yaml"))
+    assert sim.dof == 6
+    assert jointsim.Simulator.from_experiment(exp, {"duration": 0.05}).time == 0.0
+    assert len(r["time"]) > 1
+    with pytest.raises(TypeError, match="expected a path"):
+        jointsim.load_robot(42)
+
+
+# ------------------------------------------------------------------------------------------------ results
+def test_results_as_pandas_with_units_apart():
+    r = jointsim.run_experiment(jointsim.data_path("experiments/ur5_fall.yaml"), {"duration": 0.1, "log_rate": 100})
+    # The result is a dict of the columns only: pandas takes it as it is.
+    df = pd.DataFrame(r)
+    assert list(df.columns) == [c.split("[")[0] for c in r.columns] and len(df) == 11
+    d = r.to_dataframe()
+    assert list(d.columns) == list(df.columns)
+    assert d.attrs["units"]["q_elbow_joint"] == "rad" and d.attrs["units"]["time"] == "s"
+    np.testing.assert_array_equal(d["q_elbow_joint"].to_numpy(), r["q_elbow_joint"])
+    assert r.summary["status"] == "ok" and "summary" not in r and "units" not in r
+
+
+# ------------------------------------------------------------------------------------------------ sweeps as dicts
+def test_a_sweep_given_as_a_dict_equals_the_same_sweep_from_a_file(tmp_path):
+    experiment = jointsim.data_path("experiments/ur5_fall.yaml")
+    sweep = {
+        "sweep": {"name": "fall_pair", "experiment": str(experiment), "set": {"duration": 0.1, "log_rate": 50}},
+        "runs": [{"name": "nominal"}, {"name": "spin", "set": {"initial_state.qd[0]": 0.6}}],
+    }
+    from_dict = jointsim.run_batch(sweep, tmp_path / "dict", jobs=2)
+    assert from_dict["ok"] == 2 and from_dict["failed"] == 0
+    # The same sweep written as YAML text into a file.
+    f = tmp_path / "fall_pair.yaml"
+    f.write_text("sweep: {name: fall_pair, experiment: %s, set: {duration: 0.1, log_rate: 50}}\n"
+                 "runs: [{name: nominal}, {name: spin, set: {'initial_state.qd[0]': 0.6}}]\n" % experiment)
+    from_file = jointsim.run_batch(f, tmp_path / "file")
+    for run in ("nominal", "spin"):
+        a = (tmp_path / "dict" / run / "ur5_fall.csv").read_bytes()
+        assert a == (tmp_path / "file" / run / "ur5_fall.csv").read_bytes()
+    assert [x["overrides"] for x in from_dict["records"]] == [x["overrides"] for x in from_file["records"]]
+    # Relative paths in a dict are relative to base_dir.
+    rel = dict(sweep, sweep=dict(sweep["sweep"], experiment="experiments/ur5_fall.yaml"))
+    out = jointsim.run_batch(rel, tmp_path / "rel", base_dir=jointsim.data_path())
+    assert out["ok"] == 2 and out["skipped"] == 0
+    # Bad input in a dict names the key.
+    with pytest.raises(jointsim.InputError) as err:
+        jointsim.run_batch({"sweep": {"name": "x", "experiment": str(experiment)}, "runz": []}, tmp_path / "bad")
+    assert "runz" in str(err.value)
+    assert not (tmp_path / "bad").exists()
+
+
+def test_read_dataset_decodes_labels_and_matches_the_logs(tmp_path):
+    sweep = {
+        "sweep": {"name": "fall_set", "experiment": str(jointsim.data_path("experiments/ur5_excitation.yaml")),
+                  "set": {"duration": 0.05}},
+        "runs": [{"name": "nominal"},
+                 {"name": "stiff", "faults": [{"type": "gear_stiffness_scale", "joint": "elbow_joint",
+                                               "value": 0.5}]}],
+    }
+    jointsim.run_batch(sweep, tmp_path / "runs", jobs=2)
+    info = jointsim.write_dataset(sweep, tmp_path / "set.h5", tmp_path / "runs")
+    assert info["runs_with_data"] == 2
+    ds = jointsim.read_dataset(tmp_path / "set.h5")
+    assert list(ds.labels["run"]) == ["nominal", "stiff"]  # str, not bytes
+    assert list(ds.labels["fault_type"]) == ["", "gear_stiffness_scale"]
+    assert list(ds.labels["fault_joint"]) == ["", "elbow_joint"]
+    assert ds.labels["fault_severity"].iloc[1] == 0.5
+    assert sorted(ds.runs) == ["nominal", "stiff"]
+    df = ds.run("stiff")
+    csv = pd.read_csv(tmp_path / "runs" / "stiff" / "ur5_excitation.csv")
+    assert len(df) == len(csv)
+    for column in csv.columns:
+        name, unit = column.split("[")[0], column.split("[")[1].rstrip("]")
+        np.testing.assert_array_equal(df[name].to_numpy(), csv[column].to_numpy())
+        assert df.attrs["units"][name] == unit
+    with pytest.raises(jointsim.InputError, match="no run"):
+        ds.run("missing")
+    with pytest.raises(FileNotFoundError):
+        jointsim.read_dataset(tmp_path / "none.h5")
+
+
+# ------------------------------------------------------------------------------------------------ exceptions
+def test_exceptions_have_python_types_and_fields(tmp_path):
+    missing = tmp_path / "missing.yaml"
+    with pytest.raises(FileNotFoundError) as e:
+        jointsim.load_experiment(missing)
+    assert isinstance(e.value, jointsim.InputError) and isinstance(e.value, ValueError)
+    assert e.value.file == str(missing) and e.value.filename == str(missing)
+    # A robot file named inside an experiment file that does not exist: the C++ reader's error, same types.
+    exp = tmp_path / "exp.yaml"
+    exp.write_text(jointsim.data_path("experiments/ur5_fall.yaml").read_text().replace("../robots/ur5.yaml",
+                                                                                       str(tmp_path / "no.yaml")))
+    with pytest.raises(FileNotFoundError, match="no.yaml"):
+        jointsim.run_experiment(exp)
+    # A bad value in a file: file, line and key path.
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(jointsim.data_path("experiments/ur5_fall.yaml").read_text()
+                   .replace("../robots/ur5.yaml", str(jointsim.data_path("robots/ur5.yaml")))
+                   .replace("duration: ", "duration: -"))
+    with pytest.raises(jointsim.InputError) as e:
+        jointsim.load_experiment(bad)
+    assert e.value.file == str(bad) and e.value.key_path == "duration" and e.value.line > 1
+    assert e.value.reason and e.value.reason in str(e.value)
+    # An override of a key the file lacks: the key path, and no command-line wording.
+    with pytest.raises(jointsim.InputError) as e:
+        jointsim.load_experiment(jointsim.data_path("experiments/ur5_fall.yaml"), {"solver.nope": 1})
+    assert e.value.key_path == "solver.nope" and "--set" not in str(e.value)
+    # Wrong types: TypeError.
+    with pytest.raises(TypeError):
+        jointsim.run_batch(jointsim.data_path("sweeps/ur5_faults.yaml"), tmp_path / "x", jobs="2")
+    with pytest.raises(TypeError):
+        jointsim.Simulator.from_robot(jointsim.data_path("robots/ur5_drives.yaml")).set_port(1.5, "voltage")
+    with pytest.raises(TypeError):
+        jointsim.Simulator.from_robot(jointsim.data_path("robots/ur5_drives.yaml"), rtol="tight")
+    with pytest.raises(jointsim.InputError, match="jobs"):
+        jointsim.run_batch(jointsim.data_path("sweeps/ur5_faults.yaml"), tmp_path / "x", jobs=0)
+    # A solver failure: time, flag and component.
+    sim = jointsim.Simulator.from_experiment(jointsim.data_path("experiments/ur5_excitation.yaml"))
+    sim.set_limits(max_steps=5)
+    with pytest.raises(jointsim.SolverError) as e:
+        sim.advance(1.0)
+    assert isinstance(e.value, RuntimeError)
+    assert e.value.flag == "STEP_BUDGET" and 0.0 <= e.value.time < 1.0 and "ur5_twin" in e.value.component
+
+
+# ------------------------------------------------------------------------------------------------ long calls
+def test_one_long_advance_completes_and_ctrl_c_interrupts_it_promptly():
+    """advance(300.0) on the UR5 twin (Fourier excitation, ~800,000 solver steps: more than CVODE's per-call cap of
+    500,000) completes in one call; Ctrl-C during it raises KeyboardInterrupt within 0.2 s and the simulator goes on
+    from where it stood."""
+    sim = jointsim.Simulator.from_experiment(jointsim.data_path("experiments/ur5_excitation.yaml"), {"duration": 300})
+    sent = _sigint_after(0.5)
+    with pytest.raises(KeyboardInterrupt):
+        sim.advance(300.0)
+    latency = time.perf_counter() - sent["t"]
+    print(f"KeyboardInterrupt {1e3 * latency:.1f} ms after SIGINT, at t = {sim.time:.3f} s")
+    assert latency < 0.2
+    t_stop = sim.time
+    assert 0.0 < t_stop < 300.0
+    assert sim.advance(0.5) == pytest.approx(t_stop + 0.5, abs=1e-12)
+    assert sim.advance_to(300.0) == 300.0
+    assert sim.steps > 500_000
+    assert abs(sim.signal("q_elbow_joint") - sim.signal("q_set_elbow_joint")) < 0.01
+
+
+def test_ctrl_c_interrupts_run_experiment_and_run_batch(tmp_path):
+    exp = jointsim.data_path("experiments/ur5_excitation.yaml")
+    sent = _sigint_after(0.3)
+    with pytest.raises(KeyboardInterrupt):
+        jointsim.run_experiment(exp, {"duration": 300})
+    assert time.perf_counter() - sent["t"] < 0.2
+    # A batch: its runs are stopped (interrupted, resumable) and the call raises.
+    sweep = {"sweep": {"name": "long", "experiment": str(exp), "set": {"duration": 300}},
+             "runs": [{"name": "a"}, {"name": "b"}, {"name": "c"}]}
+    sent = _sigint_after(1.0)
+    with pytest.raises(KeyboardInterrupt):
+        jointsim.run_batch(sweep, tmp_path / "runs", jobs=2)
+    assert time.perf_counter() - sent["t"] < 0.5
+    statuses = {p.parent.name: p.read_text() for p in (tmp_path / "runs").glob("*/summary.json")}
+    assert statuses and all('"interrupted"' in s for s in statuses.values())
+    # Afterwards everything works as before.
+    assert jointsim.run_experiment(exp, {"duration": 0.01}).summary["status"] == "ok"
+
+
+def test_a_divergent_controller_stops_within_2_s_with_a_clear_error():
+    """Positive feedback on the motor torques: the arm runs away. The default state bound ends the call at once with
+    SolverError DIVERGED naming the state, instead of minutes of ever smaller steps."""
+    sim = jointsim.Simulator.from_robot(jointsim.data_path("robots/ur5_drives.yaml"))
+    for k in range(sim.dof):
+        sim.set_port(k, "motor_torque")
+    q0 = sim.joint_positions
+    wall = time.perf_counter()
+    with pytest.raises(jointsim.SolverError) as e:
+        while sim.time < 5.0:
+            sim.set_commands(50.0 * (sim.joint_positions - q0 + 0.01))
+            sim.advance(1e-3)
+    wall = time.perf_counter() - wall
+    print(f"diverged after {wall:.2f} s of wall time: {e.value}")
+    assert wall < 2.0
+    assert e.value.flag == "DIVERGED" and "max_state" in str(e.value) and "[rad/s]" in str(e.value)
+    assert np.all(np.isfinite(sim.state)) and sim.time == pytest.approx(e.value.time, abs=1e-3)
+
+
+def test_wall_time_and_step_limits_per_call():
+    sim = jointsim.Simulator.from_experiment(jointsim.data_path("experiments/ur5_excitation.yaml"), {"duration": 300})
+    sim.set_limits(max_wall_time=0.2)
+    assert sim.limits["max_wall_time"] == 0.2 and sim.limits["max_state"] == jointsim.Simulator.DEFAULT_MAX_STATE
+    wall = time.perf_counter()
+    with pytest.raises(jointsim.SolverError) as e:
+        sim.advance(300.0)
+    assert e.value.flag == "WALL_TIME_BUDGET" and time.perf_counter() - wall < 0.5
+    t = sim.time
+    assert t > 0.0
+    sim.set_limits(max_wall_time=0, max_steps=200)
+    with pytest.raises(jointsim.SolverError) as e:
+        sim.advance(300.0)
+    assert e.value.flag == "STEP_BUDGET" and sim.time > t
+    sim.set_limits(max_steps=0)
+    assert sim.advance(0.1) == pytest.approx(sim.time)
+    with pytest.raises(jointsim.InputError):
+        sim.set_limits(max_wall_time=-1.0)
+    with pytest.raises(TypeError):
+        copy.copy(sim)
+
+
+# ------------------------------------------------------------------------------------------------ arguments
+def test_export_fmu_takes_one_input_as_a_string(tmp_path):
+    exp = jointsim.data_path("experiments/ur5_excitation.yaml")
+    one = jointsim.export_fmu(exp, tmp_path / "a.fmu", inputs="voltage", outputs="q_elbow_joint")
+    many = jointsim.export_fmu(exp, tmp_path / "b.fmu", inputs=["voltage"], outputs=["q_elbow_joint"])
+    names = lambda d: [(v["name"], v["causality"]) for v in d["variables"]]  # noqa: E731
+    assert names(one) == names(many)
+    assert sum(1 for _, c in names(one) if c == "input") == 6
+
+
+def test_batched_rigid_body_calls_equal_one_call_per_state():
+    model = jointsim.load_robot(jointsim.data_path("robots/ur5.yaml"))
+    rng = np.random.default_rng(7)
+    Q, QD, QDD = (rng.uniform(-2, 2, (50, 6)) for _ in range(3))
+    tau = jointsim.rnea(model, Q, QD, QDD)
+    assert tau.shape == (50, 6)
+    M = jointsim.crba(model, Q)
+    assert M.shape == (50, 6, 6)
+    g = jointsim.gravity_torques(model, Q)
+    qdd = jointsim.aba(model, Q, QD, tau)
+    for i in range(50):
+        np.testing.assert_array_equal(tau[i], jointsim.rnea(model, Q[i], QD[i], QDD[i]))
+        np.testing.assert_array_equal(M[i], jointsim.crba(model, Q[i]))
+        np.testing.assert_array_equal(g[i], jointsim.gravity_torques(model, Q[i]))
+    np.testing.assert_allclose(qdd, QDD, atol=1e-9)  # ABA inverts RNEA, state by state
+    with pytest.raises(jointsim.InputError, match=r"qd: expected the shape of q, \(50, 6\), got shape \(10, 6\)"):
+        jointsim.rnea(model, Q, QD[:10], QDD)
+
+
+# ------------------------------------------------------------------------------------------------ documentation
+def _public_members():
+    for name in jointsim.__all__:
+        obj = getattr(jointsim, name)
+        yield name, obj
+        if inspect.isclass(obj) and not issubclass(obj, BaseException):
+            for attr, member in vars(obj).items():
+                if not attr.startswith("_"):
+                    yield f"{name}.{attr}", member
+
+
+def test_every_public_function_and_property_has_a_docstring():
+    missing = []
+    for name, obj in _public_members():
+        if isinstance(obj, (str, tuple, float, int)):
+            continue
+        doc = obj.__doc__ if not isinstance(obj, staticmethod) else obj.__func__.__doc__
+        if not doc or len(doc.strip()) < 10:
+            missing.append(name)
+    assert not missing, f"no docstring: {missing}"
+    # Units and shapes are stated where arrays and quantities go in or out.
+    for f in (jointsim.rnea, jointsim.aba, jointsim.crba, jointsim.gravity_torques, jointsim.frame_jacobian):
+        assert "shape" in f.__doc__ and "[" in f.__doc__, f.__name__
+
+
+def _runtime_signature(obj):
+    """Parameter names of a pybind11 function or method from its docstring signature (self excluded)."""
+    first = (obj.__doc__ or "").strip().splitlines()[0]
+    inside = first[first.index("(") + 1: first.rindex(")")]
+    names, depth, cur = [], 0, ""
+    for ch in inside + ",":
+        if ch in "[(":
+            depth += 1
+        elif ch in "])":
+            depth -= 1
+        if ch == "," and depth == 0:
+            names.append(cur.split(":")[0].strip())
+            cur = ""
+        else:
+            cur += ch
+    return [n for n in names if n and n != "self"]
+
+
+def test_the_stubs_name_every_member_of_the_extension_with_its_parameters():
+    stub = ast.parse((pathlib.Path(_core.__file__).parent / "_core.pyi").read_text())
+
+    def params(fn):
+        return [a.arg for a in fn.args.args if a.arg != "self"]
+
+    stubbed = {}
+    for node in stub.body:
+        if isinstance(node, ast.FunctionDef):
+            stubbed[node.name] = params(node)
+        elif isinstance(node, ast.ClassDef):
+            stubbed[node.name] = None
+            for f in node.body:
+                if isinstance(f, ast.FunctionDef):
+                    is_property = any(isinstance(d, ast.Name) and d.id == "property" for d in f.decorator_list)
+                    stubbed[f"{node.name}.{f.name}"] = "property" if is_property else params(f)
+    runtime = {}
+    for name, obj in vars(_core).items():
+        if name.startswith("_"):
+            continue
+        if inspect.isclass(obj):
+            runtime[name] = None
+            for attr, member in vars(obj).items():
+                if attr.startswith("_"):
+                    continue
+                runtime[f"{name}.{attr}"] = "property" if isinstance(member, property) else _runtime_signature(
+                    getattr(obj, attr))
+        elif callable(obj):
+            runtime[name] = _runtime_signature(obj)
+    assert set(stubbed) == set(runtime), (set(stubbed) ^ set(runtime))
+    for name in runtime:
+        assert stubbed[name] == runtime[name], f"{name}: stub {stubbed[name]} vs module {runtime[name]}"
