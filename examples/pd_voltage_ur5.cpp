@@ -31,9 +31,8 @@ int main(int argc, char** argv) try {
 
   // BDF2 with a direct solver: the gear and friction modes are stiff (docs/design.md). rtol 1e-4 for a 1 kHz
   // loop: against an rtol 1e-10 run of this loop the joint angles stay within 3.5 µrad, the motor currents within
-  // 6 mA (peak 37 A) and the joint rates within 5 mrad/s at every sample (docs/design.md, "Sampled control from
-  // C++ and Python"; test SampledPd.LooseToleranceStaysCloseToTightRun); the production rtol 1e-6 is about
-  // half as fast.
+  // 6 mA (peak 37 A) and the joint rates within 5 mrad/s at every sample (docs/performance.md, "A user's loop at
+  // 1 kHz"; test SampledPd.LooseToleranceStaysCloseToTightRun); the production rtol 1e-6 is about half as fast.
   sim::CvodeOptions solver = sim::stiffDriveSolver(rtol, 1e-9);
   solver.max_gamma_change = 0.5;  // fewer Newton matrix factorisations at the samples' stops and restarts
   sim::Simulator sim(robot, solver);

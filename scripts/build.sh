@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Configures (once) and builds jointsim in build/ (Release, Ninja). Extra arguments go to cmake --build.
+# Configures and builds jointsim in build/ (Release, Ninja): everything, tests and benchmarks included (what the
+# test command needs). Extra arguments go to `cmake --build` (e.g. --target jointsim_cli). JOINTSIM_WERROR=ON (set
+# by .ci/run) turns compiler warnings into errors.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ ! -f build/build.ninja ]; then
-  cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-fi
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DJOINTSIM_BUILD_TESTS=ON -DJOINTSIM_BUILD_BENCHMARKS=ON \
+      -DJOINTSIM_WERROR="${JOINTSIM_WERROR:-OFF}" >/dev/null
 cmake --build build -j "$(nproc)" "$@"

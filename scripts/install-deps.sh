@@ -1,13 +1,23 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages jointsim needs (idempotent; silent when everything is there).
-# Run as root, or with sudo available. See third_party_notes.md for what each package is for.
+# Installs the Debian 12 packages jointsim needs (idempotent; silent when everything is there). Run as root, or with
+# sudo available. See third_party_notes.md for what each package is for.
+#   scripts/install-deps.sh           what building the library and running the CLI needs (the quick start)
+#   scripts/install-deps.sh --test    that, plus what the test command and CI need: GoogleTest, Google Benchmark,
+#                                     clang 14 with the sanitizer runtimes and clang-format, Slurm and MUNGE,
+#                                     Python's venv and headers
 set -euo pipefail
 PACKAGES=(cmake ninja-build g++ pkg-config
-          libeigen3-dev libsundials-dev liburdfdom-dev libtinyxml-dev libyaml-cpp-dev libcli11-dev libceres-dev nlohmann-json3-dev libxxhash-dev libzip-dev libhdf5-dev gnuplot-nox
-          slurm-wlm munge iproute2
-          libgtest-dev libgmock-dev libbenchmark-dev
-          clang-14 libclang-rt-14-dev libomp-14-dev libgoogle-glog-dev
-          python3 python3-venv python3-dev)
+          libeigen3-dev libsundials-dev liburdfdom-dev libtinyxml-dev libyaml-cpp-dev libcli11-dev libceres-dev
+          nlohmann-json3-dev libxxhash-dev libzip-dev libhdf5-dev gnuplot-nox)
+TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev
+               clang-14 libclang-rt-14-dev libomp-14-dev clang-format-14
+               slurm-wlm munge iproute2
+               python3 python3-venv python3-dev)
+case "${1:-}" in
+  "") ;;
+  --test) PACKAGES+=("${TEST_PACKAGES[@]}") ;;
+  *) echo "usage: scripts/install-deps.sh [--test]" >&2; exit 2 ;;
+esac
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

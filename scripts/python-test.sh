@@ -11,5 +11,12 @@ if [ ! -x build/pyenv/bin/python ]; then
 fi
 build/pyenv/bin/pip install -q --disable-pip-version-check "scikit-build-core>=0.10" "pybind11>=2.10" "numpy>=1.21" "pytest>=7" "fmpy==0.3.32" "h5py>=3.8" "pandas>=2.0"
 # No build isolation: the build tools above are used, and build/wheel/ is reused between runs.
-CMAKE_BUILD_PARALLEL_LEVEL=$(nproc) build/pyenv/bin/pip install -q --disable-pip-version-check --no-build-isolation .
-JOINTSIM_CLI="$PWD/build/jointsim" build/pyenv/bin/python -m pytest -q -s tests/python "$@"
+# JOINTSIM_WERROR=ON (set by .ci/run): compiler warnings of the extension are errors too.
+CMAKE_BUILD_PARALLEL_LEVEL=$(nproc) build/pyenv/bin/pip install -q --disable-pip-version-check --no-build-isolation \
+  --config-settings=cmake.define.JOINTSIM_WERROR="${JOINTSIM_WERROR:-OFF}" .
+# pytest's temporary folders below one of this run's own (two checkouts may test at the same time).
+base=$(mktemp -d "${TMPDIR:-/tmp}/jointsim_pytest.XXXXXX")
+status=0
+JOINTSIM_CLI="$PWD/build/jointsim" build/pyenv/bin/python -m pytest -q -s --basetemp="$base/t" tests/python "$@" || status=$?
+[ "$status" -eq 0 ] && rm -rf "$base" || echo "jointsim: pytest's temporary folders kept in $base" >&2
+exit "$status"

@@ -5,7 +5,7 @@
 # Any sanitizer report, crash, leak or fuzz failure fails the script.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/install-deps.sh
+scripts/install-deps.sh --test
 FUZZ_SECONDS="${FUZZ_SECONDS:-60}"
 if [ ! -f build-san/build.ninja ]; then
   CC=clang-14 CXX=clang++-14 cmake -S . -B build-san -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \

@@ -39,4 +39,34 @@ message(STATUS "${out}")
 if(NOT rc EQUAL 0)
   fail("the consumer program failed (${rc})")
 endif()
+
+# The README's C++ snippet as a reader pastes it: its CMakeLists.txt and main.cpp blocks, built against the same
+# installed prefix and run on the installed config/ folder.
+find_program(PYTHON3 python3 REQUIRED)
+file(MAKE_DIRECTORY ${WORK_DIR}/readme_app)
+foreach(part "cmake;CMakeLists.txt" "cpp;main.cpp")
+  list(GET part 0 lang)
+  list(GET part 1 name)
+  execute_process(COMMAND ${PYTHON3} ${SOURCE_DIR}/tests/readme/snippets.py extract ${SOURCE_DIR}/README.md ${lang} 0
+                  OUTPUT_FILE ${WORK_DIR}/readme_app/${name} RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    fail("README.md has no ${lang} snippet to build (${rc})")
+  endif()
+endforeach()
+execute_process(COMMAND ${CMAKE_COMMAND} -S ${WORK_DIR}/readme_app -B ${WORK_DIR}/readme_build -G ${GENERATOR}
+                        -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release
+                RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  fail("configuring the README's C++ snippet failed (${rc})")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK_DIR}/readme_build RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  fail("building the README's C++ snippet failed (${rc})")
+endif()
+execute_process(COMMAND ${WORK_DIR}/readme_build/app ${WORK_DIR}/prefix/share/jointsim/config
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message(STATUS "README snippet: ${out}${err}")
+if(NOT rc EQUAL 0 OR NOT out MATCHES "q_elbow_joint")
+  fail("the README's C++ snippet failed (${rc})")
+endif()
 file(REMOVE_RECURSE ${WORK_DIR})
