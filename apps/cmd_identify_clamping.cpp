@@ -15,7 +15,7 @@
 namespace jointsim::cli {
 
 namespace {
-std::string defaultOutput(const std::string& data) {
+std::string clampingDefaultOutput(const std::string& data) {
   const size_t slash = data.find_last_of('/');
   const size_t dot = data.find_last_of('.');
   const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash);
@@ -69,7 +69,7 @@ void addIdentifyClampingCommand(CLI::App& identify) {
     options.rotor_inertia = opt->rotor_inertia;
     options.validation_damping = opt->damping;
     const identify::ClampingFitResult r = identify::identifyClamping(data, options);
-    const std::string out = opt->output.empty() ? defaultOutput(opt->data) : opt->output;
+    const std::string out = opt->output.empty() ? clampingDefaultOutput(opt->data) : opt->output;
     io::writeFileAtomically(out, identify::clampingReportYaml(r, opt->data, opt->gear_ratio));
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const auto& cv = r.curves;

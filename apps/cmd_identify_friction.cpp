@@ -23,7 +23,7 @@ struct FrictionOptions {
   double k_s = 300.0;
 };
 
-std::string defaultOutput(const std::string& map) {
+std::string frictionDefaultOutput(const std::string& map) {
   const std::string ext = ".csv";
   const bool has_ext = map.size() > ext.size() && map.compare(map.size() - ext.size(), ext.size(), ext) == 0;
   return (has_ext ? map.substr(0, map.size() - ext.size()) : map) + "_friction.yaml";
@@ -91,7 +91,7 @@ void addIdentifyFrictionCommand(CLI::App& identify) {
       std::fputs(yaml.c_str(), stdout);
       return;
     }
-    const std::string out = opt->output.empty() ? defaultOutput(opt->map) : opt->output;
+    const std::string out = opt->output.empty() ? frictionDefaultOutput(opt->map) : opt->output;
     io::writeFileAtomically(out, yaml);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::printf("friction map %s: %s block written to %s\n", opt->map.c_str(), yo.lugre ? "lugre" : "stribeck",

@@ -9,7 +9,7 @@ scripts/install-deps.sh --test
 FUZZ_SECONDS="${FUZZ_SECONDS:-60}"
 if [ ! -f build-san/build.ninja ]; then
   CC=clang-14 CXX=clang++-14 cmake -S . -B build-san -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DJOINTSIM_FUZZ=ON -DJOINTSIM_BUILD_BENCHMARKS=OFF >/dev/null
+    -DJOINTSIM_FUZZ=ON -DJOINTSIM_BUILD_BENCHMARKS=OFF -DJOINTSIM_UNITY_BUILD=OFF >/dev/null
 fi
 cmake --build build-san -j "$(nproc)"
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "jointsim/common/constants.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interpolate.hpp"
 #include "jointsim/common/text.hpp"
@@ -12,7 +13,6 @@
 
 namespace jointsim::control {
 namespace {
-constexpr double kTwoPi = 6.283185307179586;
 
 void requireFinite(double v, const char* what) {
   if (!std::isfinite(v)) throw InputError(std::string("profile: ") + what + " must be finite");

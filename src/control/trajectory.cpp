@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 
+#include "jointsim/common/constants.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/io/csv_reader.hpp"
@@ -13,9 +14,7 @@
 namespace jointsim::control {
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586;
-
-std::string num(double v) {
+std::string trajectoryNum(double v) {
   std::ostringstream os;
   os << v;
   return os.str();
@@ -44,7 +43,8 @@ void checkLimits(const JointTrajectory& trajectory, const std::vector<std::strin
                      std::to_string(joint_names.size()) + " joint names and " + std::to_string(limits.size()) +
                      " limits were given");
   const double T = std::max(0.0, trajectory.duration());
-  if (!std::isfinite(T)) throw InputError("the trajectory lasts " + num(T) + " s: expected a finite duration");
+  if (!std::isfinite(T))
+    throw InputError("the trajectory lasts " + trajectoryNum(T) + " s: expected a finite duration");
   const double step = std::max(1e-3, T / 1e7);
   std::vector<double> times;
   const auto count = static_cast<size_t>(std::floor(T / step));
@@ -63,12 +63,13 @@ void checkLimits(const JointTrajectory& trajectory, const std::vector<std::strin
     for (int i = 0; i < n; ++i) {
       const auto& L = limits[static_cast<size_t>(i)];
       if (!(q[i] >= L.lower - kTol && q[i] <= L.upper + kTol))
-        throw InputError("trajectory leaves the limits of joint " + joint_names[static_cast<size_t>(i)] + " at t = " +
-                         num(t) + " s: q = " + num(q[i]) + " rad outside [" + num(L.lower) + ", " + num(L.upper) + "]");
+        throw InputError("trajectory leaves the limits of joint " + joint_names[static_cast<size_t>(i)] +
+                         " at t = " + trajectoryNum(t) + " s: q = " + trajectoryNum(q[i]) + " rad outside [" +
+                         trajectoryNum(L.lower) + ", " + trajectoryNum(L.upper) + "]");
       if (std::isfinite(L.velocity) && !(std::abs(qd[i]) <= L.velocity + kTol))
         throw InputError("trajectory exceeds the velocity limit of joint " + joint_names[static_cast<size_t>(i)] +
-                         " at t = " + num(t) + " s: |qd| = " + num(std::abs(qd[i])) + " rad/s > " + num(L.velocity) +
-                         " rad/s");
+                         " at t = " + trajectoryNum(t) + " s: |qd| = " + trajectoryNum(std::abs(qd[i])) + " rad/s > " +
+                         trajectoryNum(L.velocity) + " rad/s");
     }
   }
 }
@@ -106,9 +107,9 @@ PointToPointTrajectory::PointToPointTrajectory(Eigen::VectorXd start, std::vecto
       if (s.acceleration > 0.0 && D > 0.0) {
         const double disc = T * T - 4.0 * D / s.acceleration;
         if (disc < 0.0)
-          throw InputError(where + "acceleration " + num(s.acceleration) + " rad/s^2 is too low to move " + num(D) +
-                           " rad in " + num(T) + " s (needs at least 4 D / T^2 = " + num(4.0 * D / (T * T)) +
-                           " rad/s^2)");
+          throw InputError(where + "acceleration " + trajectoryNum(s.acceleration) + " rad/s^2 is too low to move " +
+                           trajectoryNum(D) + " rad in " + trajectoryNum(T) +
+                           " s (needs at least 4 D / T^2 = " + trajectoryNum(4.0 * D / (T * T)) + " rad/s^2)");
         g.ta = 0.5 * (T - std::sqrt(disc));
       } else {
         g.ta = 0.5 * T;
@@ -135,8 +136,8 @@ PointToPointTrajectory::PointToPointTrajectory(Eigen::VectorXd start, std::vecto
       g.A = g.V / g.ta;
     }
     if (!std::isfinite(t + g.T + s.dwell) || !std::isfinite(g.V) || !std::isfinite(g.A))
-      throw InputError(where + "the move takes " + num(g.T) + " s with an acceleration phase of " + num(g.ta) +
-                       " s: velocity, acceleration or duration out of any usable range");
+      throw InputError(where + "the move takes " + trajectoryNum(g.T) + " s with an acceleration phase of " +
+                       trajectoryNum(g.ta) + " s: velocity, acceleration or duration out of any usable range");
     t += g.T + s.dwell;
     from = g.to;
     starts_.push_back(g.t0);
@@ -221,7 +222,7 @@ FourierTrajectory::FourierTrajectory(FourierParams params) : p_(std::move(params
   if (!(p_.fade_in >= 0.0 && std::isfinite(p_.fade_in))) throw InputError("fourier: fade_in must be >= 0 s");
   if (p_.duration == 0.0) p_.duration = p_.fade_in + 1.0 / p_.base_frequency;
   if (!(p_.duration > 0.0 && std::isfinite(p_.duration)) || p_.duration < p_.fade_in)
-    throw InputError("fourier: duration must be > 0 s and >= fade_in (" + num(p_.fade_in) + " s)");
+    throw InputError("fourier: duration must be > 0 s and >= fade_in (" + trajectoryNum(p_.fade_in) + " s)");
 }
 
 void FourierTrajectory::evaluateSeries(double tau, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
@@ -348,7 +349,8 @@ SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, c
                                              double gap_factor) {
   if (dof < 1) throw InputError(path + ": the number of joints must be >= 1");
   if (!(gap_factor == 0.0 || (gap_factor > 1.0 && std::isfinite(gap_factor))))
-    throw InputError(path + ": gap_factor must be > 1 (or 0 to disable the gap check), got " + num(gap_factor));
+    throw InputError(path + ": gap_factor must be > 1 (or 0 to disable the gap check), got " +
+                     trajectoryNum(gap_factor));
   if (!columns.empty() && columns.size() != static_cast<size_t>(dof))
     throw InputError(path + ": " + std::to_string(columns.size()) + " column names given for " + std::to_string(dof) +
                      " joints");
@@ -379,8 +381,8 @@ SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, c
   for (Eigen::Index r = 0; r < table.rows(); ++r) {
     const double t = table.data(r, 0);
     if (!times.empty() && !(t > times.back()))
-      throw rowError(r, "time " + num(t) + " s is not after the previous row's " + num(times.back()) +
-                            " s (time must increase strictly)");
+      throw rowError(r, "time " + trajectoryNum(t) + " s is not after the previous row's " +
+                            trajectoryNum(times.back()) + " s (time must increase strictly)");
     times.push_back(t);
     rows.push_back(r);
     for (size_t c : cols) values.push_back(table.data(r, static_cast<Eigen::Index>(c)));
@@ -396,8 +398,9 @@ SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, c
     const double median = (m % 2 == 1) ? sorted[m / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
     for (size_t k = 0; k < dt.size(); ++k)
       if (dt[k] > gap_factor * median)
-        throw rowError(rows[k + 1], "time step " + num(dt[k]) + " s is more than " + num(gap_factor) + "x the median " +
-                                        num(median) + " s (a gap)");
+        throw rowError(rows[k + 1], "time step " + trajectoryNum(dt[k]) + " s is more than " +
+                                        trajectoryNum(gap_factor) + "x the median " + trajectoryNum(median) +
+                                        " s (a gap)");
   }
 
   Eigen::MatrixXd y(dof, static_cast<Eigen::Index>(times.size()));

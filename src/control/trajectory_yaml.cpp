@@ -13,7 +13,7 @@ using io::YamlValue;
 
 namespace {
 
-std::string num(double v) {
+std::string trajectoryYamlNum(double v) {
   std::ostringstream os;
   os << v;
   return os.str();
@@ -60,8 +60,9 @@ std::unique_ptr<JointTrajectory> readPointToPoint(const YamlValue& node, int dof
         g.acceleration = positive(s["acceleration"], "a joint acceleration in rad/s^2");
         const double D = (g.target - from).cwiseAbs().maxCoeff(), T = g.duration;
         if (g.acceleration < 4.0 * D / (T * T))
-          s["acceleration"].fail("acceleration " + num(g.acceleration) + " rad/s^2 is too low to move " + num(D) +
-                                 " rad in " + num(T) + " s (needs at least 4 D / T^2 = " + num(4.0 * D / (T * T)) +
+          s["acceleration"].fail("acceleration " + trajectoryYamlNum(g.acceleration) + " rad/s^2 is too low to move " +
+                                 trajectoryYamlNum(D) + " rad in " + trajectoryYamlNum(T) +
+                                 " s (needs at least 4 D / T^2 = " + trajectoryYamlNum(4.0 * D / (T * T)) +
                                  " rad/s^2)");
       }
     } else {
@@ -111,7 +112,8 @@ std::unique_ptr<JointTrajectory> readFourier(const YamlValue& node, int dof) {
   p.fade_in = nonNegative(node["fade_in"], 1.0, "a fade-in time in s");
   if (node.has("duration")) {
     p.duration = positive(node["duration"], "a duration in s");
-    if (p.duration < p.fade_in) node["duration"].failExpected("a duration >= fade_in (" + num(p.fade_in) + " s)");
+    if (p.duration < p.fade_in)
+      node["duration"].failExpected("a duration >= fade_in (" + trajectoryYamlNum(p.fade_in) + " s)");
   }
   return std::make_unique<FourierTrajectory>(std::move(p));
 }

@@ -18,10 +18,10 @@ namespace {
 [[noreturn]] void badParameter(const char* model, const std::string& field, const std::string& rule, double value) {
   check::fail(model, field, rule, value);
 }
-void requirePositive(const char* model, const std::string& field, double v, const char* unit) {
+void frictionPositive(const char* model, const std::string& field, double v, const char* unit) {
   check::positive(model, field, v, unit);
 }
-void requireNonNegative(const char* model, const std::string& field, double v, const char* unit) {
+void frictionNonNegative(const char* model, const std::string& field, double v, const char* unit) {
   check::nonNegative(model, field, v, unit);
 }
 
@@ -30,12 +30,12 @@ inline double sgn(double v) { return static_cast<double>((v > 0.0) - (v < 0.0));
 // Checks one per-direction set; `lugre` additionally requires α0 > 0 so that g(v) >= α0 > 0.
 void validateBranch(const char* model, const std::string& side, const StribeckBranch& b, bool lugre) {
   if (lugre)
-    requirePositive(model, side + ".alpha0", b.alpha0, "N·m (g(v) >= alpha0 must stay > 0)");
+    frictionPositive(model, side + ".alpha0", b.alpha0, "N·m (g(v) >= alpha0 must stay > 0)");
   else
-    requireNonNegative(model, side + ".alpha0", b.alpha0, "N·m");
-  requireNonNegative(model, side + ".alpha1", b.alpha1, "N·m (Stribeck: g decreases from alpha0 + alpha1)");
-  requireNonNegative(model, side + ".alpha2", b.alpha2, "N·m·s/rad");
-  requirePositive(model, side + ".v_s", b.v_s, "rad/s");
+    frictionNonNegative(model, side + ".alpha0", b.alpha0, "N·m");
+  frictionNonNegative(model, side + ".alpha1", b.alpha1, "N·m (Stribeck: g decreases from alpha0 + alpha1)");
+  frictionNonNegative(model, side + ".alpha2", b.alpha2, "N·m·s/rad");
+  frictionPositive(model, side + ".v_s", b.v_s, "rad/s");
 }
 
 }  // namespace
@@ -43,9 +43,9 @@ void validateBranch(const char* model, const std::string& side, const StribeckBr
 // ------------------------------------------------------------------------------ Coulomb + viscous
 
 void CoulombViscousParams::validate() const {
-  requireNonNegative("coulomb_viscous", "f_c", f_c, "N·m");
-  requireNonNegative("coulomb_viscous", "f_v", f_v, "N·m·s/rad");
-  requirePositive("coulomb_viscous", "v_reg", v_reg, "rad/s");
+  frictionNonNegative("coulomb_viscous", "f_c", f_c, "N·m");
+  frictionNonNegative("coulomb_viscous", "f_v", f_v, "N·m·s/rad");
+  frictionPositive("coulomb_viscous", "v_reg", v_reg, "rad/s");
 }
 
 CoulombViscousFriction::CoulombViscousFriction(const CoulombViscousParams& params) : p_(params) { p_.validate(); }
@@ -66,8 +66,8 @@ void TableFrictionParams::validate() const {
   if (tau_pos.empty()) badParameter(m, "tau_pos", "at least one row [w, tau]", 0.0);
   for (size_t i = 0; i < tau_pos.size(); ++i) {
     const std::string row = "tau_pos[" + std::to_string(i) + "]";
-    requireNonNegative(m, row, tau_pos[i][0], "rad/s as the velocity w (column 1)");
-    requireNonNegative(m, row, tau_pos[i][1], "N·m as the friction torque (column 2)");
+    frictionNonNegative(m, row, tau_pos[i][0], "rad/s as the velocity w (column 1)");
+    frictionNonNegative(m, row, tau_pos[i][1], "N·m as the friction torque (column 2)");
     if (i > 0 && !(tau_pos[i][0] > tau_pos[i - 1][0]))
       badParameter(m, row, "velocities strictly increasing, w > " + formatNumber(tau_pos[i - 1][0]) + " rad/s",
                    tau_pos[i][0]);
@@ -84,8 +84,8 @@ void TableFrictionParams::validate() const {
       badParameter(m, "tau_pos", "a last slope >= 0 N·m·s/rad (extrapolated friction must stay >= 0)", slope);
   }
   if (!(peak >= 1.0) || !std::isfinite(peak)) badParameter(m, "peak", "a finite value >= 1 (-)", peak);
-  requirePositive(m, "v_stick", v_stick, "rad/s");
-  requireNonNegative(m, "d_stick", d_stick, "N·m·s/rad (0 = automatic)");
+  frictionPositive(m, "v_stick", v_stick, "rad/s");
+  frictionNonNegative(m, "d_stick", d_stick, "N·m·s/rad (0 = automatic)");
 }
 
 TableFriction::TableFriction(const TableFrictionParams& params) : p_(params) {
@@ -119,8 +119,8 @@ double TableFriction::steadyState(double v) const { return sgn(v) * tableTorque(
 void StribeckParams::validate() const {
   validateBranch("stribeck", "positive", positive, false);
   validateBranch("stribeck", "negative", negative, false);
-  requirePositive("stribeck", "delta", delta, "(-)");
-  requirePositive("stribeck", "k_s", k_s, "s/rad");
+  frictionPositive("stribeck", "delta", delta, "(-)");
+  frictionPositive("stribeck", "k_s", k_s, "s/rad");
 }
 
 StribeckFriction::StribeckFriction(const StribeckParams& params) : p_(params) { p_.validate(); }
@@ -139,8 +139,8 @@ double StribeckFriction::steadyState(double v) const {
 // ------------------------------------------------------------------------------ Dahl
 
 void DahlParams::validate() const {
-  requirePositive("dahl", "sigma", sigma, "N·m/rad");
-  requirePositive("dahl", "f_c", f_c, "N·m");
+  frictionPositive("dahl", "sigma", sigma, "N·m/rad");
+  frictionPositive("dahl", "f_c", f_c, "N·m");
   if (!(alpha >= 1.0) || !std::isfinite(alpha))
     badParameter("dahl", "alpha", "a finite value >= 1 (-) (alpha < 1 is not Lipschitz at |F| = f_c)", alpha);
 }
@@ -161,8 +161,8 @@ double DahlFriction::steadyState(double v) const { return p_.f_c * sgn(v); }
 // ------------------------------------------------------------------------------ LuGre
 
 void LuGreParams::validate() const {
-  requirePositive("lugre", "sigma0", sigma0, "N·m/rad");
-  requirePositive("lugre", "sigma1", sigma1, "N·m·s/rad");
+  frictionPositive("lugre", "sigma0", sigma0, "N·m/rad");
+  frictionPositive("lugre", "sigma1", sigma1, "N·m·s/rad");
   validateBranch("lugre", "positive", positive, true);
   validateBranch("lugre", "negative", negative, true);
 }
@@ -192,15 +192,15 @@ double LuGreFriction::steadyState(double v) const {
 
 void LuGreUr5Params::validate() const {
   const char* m = "lugre_ur5";
-  requirePositive(m, "sigma0", sigma0, "N·m/rad");
-  requirePositive(m, "sigma1", sigma1, "N·m·s/rad");
-  requirePositive(m, "qd_s", qd_s, "rad/s");
-  requireNonNegative(m, "k_static", k_static, "(-)");
-  requirePositive(m, "viscous_exponent", viscous_exponent, "(-)");
+  frictionPositive(m, "sigma0", sigma0, "N·m/rad");
+  frictionPositive(m, "sigma1", sigma1, "N·m·s/rad");
+  frictionPositive(m, "qd_s", qd_s, "rad/s");
+  frictionNonNegative(m, "k_static", k_static, "(-)");
+  frictionPositive(m, "viscous_exponent", viscous_exponent, "(-)");
   // Not given by [Raviola2023]: must be supplied (NaN = unset fails these checks).
-  requirePositive(m, "f_c", f_c, "N·m (required: not given by [Raviola2023])");
-  requireNonNegative(m, "f_v", f_v, "N·m·(s/rad)^exponent (required: not given by [Raviola2023])");
-  requireNonNegative(m, "k_q", k_q, "(-) (required: not given by [Raviola2023])");
+  frictionPositive(m, "f_c", f_c, "N·m (required: not given by [Raviola2023])");
+  frictionNonNegative(m, "f_v", f_v, "N·m·(s/rad)^exponent (required: not given by [Raviola2023])");
+  frictionNonNegative(m, "k_q", k_q, "(-) (required: not given by [Raviola2023])");
 }
 
 LuGreUr5Friction::LuGreUr5Friction(const LuGreUr5Params& params) : p_(params) { p_.validate(); }

@@ -10,42 +10,39 @@
 #include <Eigen/QR>
 
 #include "jointsim/common/check.hpp"
+#include "jointsim/common/constants.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::drive {
 namespace {
 
-const double kPi = 3.14159265358979323846;
-
 const char* const kComponent = "strain_wave_gear";
-void requirePositive(const char* field, double v, const char* unit) { check::positive(kComponent, field, v, unit); }
-void requireNonNegative(const char* field, double v, const char* unit) {
-  check::nonNegative(kComponent, field, v, unit);
-}
+void swgPositive(const char* field, double v, const char* unit) { check::positive(kComponent, field, v, unit); }
+void swgNonNegative(const char* field, double v, const char* unit) { check::nonNegative(kComponent, field, v, unit); }
 
 }  // namespace
 
 // ------------------------------------------------------------------------------------------ parameters
 
 void StrainWaveGearParams::validate() const {
-  requirePositive("r_g", r_g, "m");
+  swgPositive("r_g", r_g, "m");
   if (!std::isfinite(alpha_t) || !(alpha_t > 0.0) || !(alpha_t < 0.5 * kPi))
     check::fail(kComponent, "alpha_t", "a pressure angle in (0, pi/2) rad", alpha_t);
   if (!std::isfinite(tau) || !(tau > 1.0)) check::fail(kComponent, "tau", "a finite reduction ratio > 1", tau);
-  requirePositive("K_WG", K_WG, "N·m/rad");
-  requirePositive("K_b", K_b, "N/m");
-  requirePositive("K_FS", K_FS, "N·m/rad");
-  requirePositive("K_m", K_m, "N/m");
-  requirePositive("K_CS", K_CS, "N·m/rad");
-  requirePositive("J_WG", J_WG, "kg·m²");
-  requirePositive("J_FS", J_FS, "kg·m²");
-  requirePositive("J_CS", J_CS, "kg·m²");
+  swgPositive("K_WG", K_WG, "N·m/rad");
+  swgPositive("K_b", K_b, "N/m");
+  swgPositive("K_FS", K_FS, "N·m/rad");
+  swgPositive("K_m", K_m, "N/m");
+  swgPositive("K_CS", K_CS, "N·m/rad");
+  swgPositive("J_WG", J_WG, "kg·m²");
+  swgPositive("J_FS", J_FS, "kg·m²");
+  swgPositive("J_CS", J_CS, "kg·m²");
   const bool ratio = damping_mode == DampingMode::DampingRatio;
-  requireNonNegative("c_WG", c_WG, ratio ? "(damping ratio)" : "N·m·s/rad");
-  requireNonNegative("c_b", c_b, ratio ? "(damping ratio)" : "N·s/m");
-  requireNonNegative("c_m", c_m, ratio ? "(damping ratio)" : "N·s/m");
-  requireNonNegative("c_FS", c_FS, ratio ? "(damping ratio)" : "N·m·s/rad");
-  requireNonNegative("c_CS", c_CS, ratio ? "(damping ratio)" : "N·m·s/rad");
+  swgNonNegative("c_WG", c_WG, ratio ? "(damping ratio)" : "N·m·s/rad");
+  swgNonNegative("c_b", c_b, ratio ? "(damping ratio)" : "N·s/m");
+  swgNonNegative("c_m", c_m, ratio ? "(damping ratio)" : "N·s/m");
+  swgNonNegative("c_FS", c_FS, ratio ? "(damping ratio)" : "N·m·s/rad");
+  swgNonNegative("c_CS", c_CS, ratio ? "(damping ratio)" : "N·m·s/rad");
 }
 
 double StrainWaveGearParams::alphaN() const { return std::atan(1.0 / (tau * std::tan(alpha_t))); }

@@ -4,14 +4,13 @@
 #include <sstream>
 #include <string>
 
+#include "jointsim/common/constants.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::drive {
 namespace {
 
 using io::YamlValue;
-
-const double kPi = 3.14159265358979323846;
 
 struct Field {
   const char* key;

@@ -11,10 +11,10 @@
 
 namespace jointsim::drive {
 namespace {
-void requirePositive(double v, const std::string& name, const char* unit) {
+void transmissionPositive(double v, const std::string& name, const char* unit) {
   check::positive("transmission", name, v, unit);
 }
-void requireNonNegative(double v, const std::string& name, const char* unit) {
+void transmissionNonNegative(double v, const std::string& name, const char* unit) {
   check::nonNegative("transmission", name, v, unit);
 }
 
@@ -32,12 +32,12 @@ inline PortTorques portTorques(double tau_side, double N, ComplianceSide side) {
 }
 }  // namespace
 
-RigidGear::RigidGear(double ratio) : N_(ratio) { requirePositive(ratio, "ratio", "(-)"); }
+RigidGear::RigidGear(double ratio) : N_(ratio) { transmissionPositive(ratio, "ratio", "(-)"); }
 
 void ElasticGearParams::validate() const {
-  requirePositive(ratio, "ratio", "(-)");
-  requirePositive(stiffness, "stiffness", "N·m/rad");
-  requireNonNegative(damping, "damping", "N·m·s/rad");
+  transmissionPositive(ratio, "ratio", "(-)");
+  transmissionPositive(stiffness, "stiffness", "N·m/rad");
+  transmissionNonNegative(damping, "damping", "N·m·s/rad");
 }
 
 ElasticGear::ElasticGear(const ElasticGearParams& params) : p_(params) { p_.validate(); }
@@ -53,10 +53,10 @@ double ElasticGear::storedEnergy(const ShaftPorts& ports, const double*) const {
 }
 
 void ElastoBacklashParams::validate() const {
-  requirePositive(ratio, "ratio", "(-)");
-  requirePositive(stiffness, "stiffness", "N·m/rad");
-  requireNonNegative(damping, "damping", "N·m·s/rad");
-  requireNonNegative(backlash, "backlash", "rad");
+  transmissionPositive(ratio, "ratio", "(-)");
+  transmissionPositive(stiffness, "stiffness", "N·m/rad");
+  transmissionNonNegative(damping, "damping", "N·m·s/rad");
+  transmissionNonNegative(backlash, "backlash", "rad");
 }
 
 ElastoBacklash::ElastoBacklash(const ElastoBacklashParams& params) : p_(params) { p_.validate(); }

@@ -16,10 +16,12 @@
 namespace jointsim::fmi {
 
 namespace {
-enum class Phase { Instantiated, Initialization, StepComplete, Failed, Terminated };
-
-std::string number(double v) { return formatNumber(v, 17); }
+std::string instanceNumber(double v) { return formatNumber(v, 17); }
 }  // namespace
+
+// The FMI 2.0 state machine of a Co-Simulation slave (at namespace scope, not in an anonymous namespace: Impl's
+// members may not have types of internal linkage when this file is compiled in a unity batch).
+enum class Phase { Instantiated, Initialization, StepComplete, Failed, Terminated };
 
 struct Instance::Impl {
   std::string name;
@@ -70,7 +72,7 @@ struct Instance::Impl {
         f.value = values[i];
         faults.push_back(f);
       } else {
-        overrides.push_back(v.key + "=" + number(values[i]));
+        overrides.push_back(v.key + "=" + instanceNumber(values[i]));
       }
     }
     sim.reset();
@@ -125,8 +127,8 @@ struct Instance::Impl {
       return Status::OK;
     } catch (const SolverError& e) {
       if (fatal) phase = Phase::Failed;
-      return error(std::string(call) + ": solver failure at t = " + number(e.time()) + " s in " + e.component() + ": " +
-                   e.what());
+      return error(std::string(call) + ": solver failure at t = " + instanceNumber(e.time()) + " s in " +
+                   e.component() + ": " + e.what());
     } catch (const std::exception& e) {
       if (fatal) phase = Phase::Failed;
       return error(std::string(call) + ": " + e.what());
@@ -178,10 +180,10 @@ Status Instance::setupExperiment(bool tolerance_defined, double tolerance, doubl
                                  double /*stop_time*/) {
   Impl& m = *impl_;
   if (m.phase != Phase::Instantiated) return m.wrongPhase("fmi2SetupExperiment");
-  if (!std::isfinite(start_time)) return m.error("fmi2SetupExperiment: start time " + number(start_time));
+  if (!std::isfinite(start_time)) return m.error("fmi2SetupExperiment: start time " + instanceNumber(start_time));
   m.start_time = start_time;
   if (tolerance_defined)
-    m.log(Status::Warning, "fmi2SetupExperiment: tolerance " + number(tolerance) +
+    m.log(Status::Warning, "fmi2SetupExperiment: tolerance " + instanceNumber(tolerance) +
                                " ignored: the experiment file's solver settings (parameters solver.rtol, "
                                "solver.atol) apply");
   return Status::OK;
@@ -258,7 +260,7 @@ Status Instance::setReal(const unsigned* vr, size_t n, const double* values) {
       return m.error("fmi2SetReal: parameter " + v.name +
                      " is fixed: it may be set only before fmi2ExitInitializationMode (then fmi2Reset)");
     if (!std::isfinite(values[k]))
-      return m.error("fmi2SetReal: " + v.name + " = " + number(values[k]) + " is not finite");
+      return m.error("fmi2SetReal: " + v.name + " = " + instanceNumber(values[k]) + " is not finite");
   }
   const std::vector<double> before = m.values;
   bool params = false;
@@ -290,11 +292,12 @@ Status Instance::doStep(double t, double h) {
   Impl& m = *impl_;
   if (m.phase != Phase::StepComplete) return m.wrongPhase("fmi2DoStep");
   if (!std::isfinite(t) || !std::isfinite(h) || !(h > 0.0))
-    return m.error("fmi2DoStep: communication step size " + number(h) + " at " + number(t) +
+    return m.error("fmi2DoStep: communication step size " + instanceNumber(h) + " at " + instanceNumber(t) +
                    " s (expected a finite step > 0)");
   const double now = m.sim->time();
   if (std::abs(t - now) > 1e-9 * std::max(1.0, std::abs(now)))
-    return m.error("fmi2DoStep: communication point " + number(t) + " s, but the FMU is at " + number(now) + " s");
+    return m.error("fmi2DoStep: communication point " + instanceNumber(t) + " s, but the FMU is at " +
+                   instanceNumber(now) + " s");
   return m.guarded("fmi2DoStep", [&] {
     m.applyInputs();
     m.sim->advanceTo(now + h);

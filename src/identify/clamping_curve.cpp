@@ -15,7 +15,7 @@ namespace jointsim::identify {
 
 namespace {
 
-std::string num(double v) {
+std::string curveNum(double v) {
   std::ostringstream os;
   os.precision(6);
   os << v;
@@ -101,12 +101,12 @@ void rejectOutlierHalfCycles(std::vector<HalfCycle>& hcs, const std::vector<int>
     HalfCycle& h = hcs[i];
     if (std::abs(h.slope - m_s) > tol_s) {
       h.rejected = true;
-      h.reason = step + ": slope " + num(h.slope) + " N*m/rad differs from the mean " + num(m_s) + " by more than " +
-                 num(tol_s);
+      h.reason = step + ": slope " + curveNum(h.slope) + " N*m/rad differs from the mean " + curveNum(m_s) +
+                 " by more than " + curveNum(tol_s);
     } else if (std::abs(h.rep_torque - m_r) > tol_r) {
       h.rejected = true;
-      h.reason = step + ": representative torque " + num(h.rep_torque) + " N*m differs from the mean " + num(m_r) +
-                 " by more than " + num(tol_r);
+      h.reason = step + ": representative torque " + curveNum(h.rep_torque) + " N*m differs from the mean " +
+                 curveNum(m_r) + " by more than " + curveNum(tol_r);
     }
   }
 }
@@ -137,8 +137,8 @@ void ClampingData::validate(int min_rows) const {
       throw InputError(lineOf(k) + ": non-finite time, angle or torque");
   for (Eigen::Index k = 1; k < n; ++k)
     if (!(time[k] > time[k - 1]))
-      throw InputError(lineOf(k) + ": time[s] must be strictly increasing, got " + num(time[k]) + " after " +
-                       num(time[k - 1]));
+      throw InputError(lineOf(k) + ": time[s] must be strictly increasing, got " + curveNum(time[k]) + " after " +
+                       curveNum(time[k - 1]));
   if (n < min_rows)
     throw InputError(src + ": " + std::to_string(n) + " data rows, a clamping curve needs at least " +
                      std::to_string(min_rows));
@@ -146,7 +146,7 @@ void ClampingData::validate(int min_rows) const {
 
 ClampingData readClampingCsv(const std::string& path, double gear_ratio) {
   if (!(gear_ratio > 0.0) || !std::isfinite(gear_ratio))
-    throw InputError("gear ratio: expected a finite value > 0, got " + num(gear_ratio));
+    throw InputError("gear ratio: expected a finite value > 0, got " + curveNum(gear_ratio));
   const io::CsvTable t = io::readCsv(path);
   const int ti = t.require("time", "the sample time in s");
   const int ai = t.require("motor_angle", "the motor angle in rad");
@@ -166,7 +166,7 @@ ClampingData readClampingCsv(const std::string& path, double gear_ratio) {
 
 void ClampingCurveOptions::validate() const {
   auto bad = [](const std::string& field, double v, const std::string& rule) {
-    throw InputError("clamping curve options: " + field + ": expected " + rule + ", got " + num(v));
+    throw InputError("clamping curve options: " + field + ": expected " + rule + ", got " + curveNum(v));
   };
   if (!(step_threshold_factor >= 0)) bad("step_threshold_factor", step_threshold_factor, "a value >= 0");
   if (step_filter_window < 1 || step_filter_window % 2 == 0)
@@ -373,8 +373,8 @@ GridCurve foldCurve(const GridCurve& merged, double middle, const ClampingCurveO
   const Line lin = fitLine(f.x, f.tau, start, nj - 1);
   stiffness = lin.slope;
   if (!(stiffness > 0))
-    throw UnidentifiableError("stiffness: the linear region of the folded clamping curve has slope " + num(stiffness) +
-                              " N*m/rad (not positive)");
+    throw UnidentifiableError("stiffness: the linear region of the folded clamping curve has slope " +
+                              curveNum(stiffness) + " N*m/rad (not positive)");
   return f;
 }
 
@@ -476,7 +476,7 @@ void requireUsableHalfCycles(ClampingCurves& r, const ClampingCurveOptions& o) {
   const double frac = static_cast<double>(r.rejected) / static_cast<double>(hcs.size());
   if (frac > o.max_rejected_fraction)
     throw UnidentifiableError("clamping curve: " + std::to_string(r.rejected) + " of " + std::to_string(hcs.size()) +
-                              " half-cycles rejected (more than " + num(100 * o.max_rejected_fraction) +
+                              " half-cycles rejected (more than " + curveNum(100 * o.max_rejected_fraction) +
                               " %), too few points between the turning regions" + reasons());
   if (up.empty() || lo.empty())
     throw UnidentifiableError(std::string("friction: no ") + (up.empty() ? "upper (loading)" : "lower (unloading)") +
@@ -486,7 +486,7 @@ void requireUsableHalfCycles(ClampingCurves& r, const ClampingCurveOptions& o) {
   for (int i : lo) ms += hcs[i].slope;
   if (!(ms > 0))
     throw UnidentifiableError("stiffness: the torque decreases with the angle (mean half-cycle slope " +
-                              num(ms / static_cast<double>(up.size() + lo.size())) +
+                              curveNum(ms / static_cast<double>(up.size() + lo.size())) +
                               " N*m/rad); check the sign conventions of the angle and torque columns");
 }
 
@@ -550,7 +550,7 @@ bool backlashObservable(ClampingCurves& r, const GridCurve& u, const GridCurve& 
   const Line lin = fitLine(m.x, m.tau);
   r.stiffness = lin.slope;
   if (!(r.stiffness > 0))
-    throw UnidentifiableError("stiffness: the clamping curve's mid-line has slope " + num(r.stiffness) +
+    throw UnidentifiableError("stiffness: the clamping curve's mid-line has slope " + curveNum(r.stiffness) +
                               " N*m/rad (not positive)");
   r.center = lin.x_mean - lin.intercept / lin.slope;
   r.backlash = 0.0;

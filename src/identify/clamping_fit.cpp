@@ -23,7 +23,7 @@ namespace jointsim::identify {
 
 namespace {
 
-std::string num(double v) {
+std::string fitNum(double v) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.6g", v);
   return buf;
@@ -102,7 +102,7 @@ double elastoBacklashStatic(double x, double stiffness, double backlash) {
 void ClampingFitOptions::validate() const {
   curve.validate();
   auto bad = [](const std::string& field, double v, const std::string& rule) {
-    throw InputError("clamping fit options: " + field + ": expected " + rule + ", got " + num(v));
+    throw InputError("clamping fit options: " + field + ": expected " + rule + ", got " + fitNum(v));
   };
   if (fixed_backlash && !(*fixed_backlash >= 0 && std::isfinite(*fixed_backlash)))
     bad("fixed_backlash", *fixed_backlash, "a finite backlash >= 0 rad");
@@ -230,9 +230,9 @@ ClampingFitResult identifyClamping(const ClampingData& data, const ClampingFitOp
     fpar.std_error = se(x);
     const double effect = fpar.std_error * v_rms, limit = o.max_relative_std_error * std::max(F, 1e-12);
     if (!(effect <= limit))
-      throw UnidentifiableError(name + ": standard error " + num(fpar.std_error) + " N*m*s/rad, i.e. " + num(effect) +
-                                " N*m at the RMS speed " + num(v_rms) + " rad/s, more than " +
-                                num(o.max_relative_std_error) + " x the friction " + num(F) +
+      throw UnidentifiableError(name + ": standard error " + fitNum(fpar.std_error) + " N*m*s/rad, i.e. " +
+                                fitNum(effect) + " N*m at the RMS speed " + fitNum(v_rms) + " rad/s, more than " +
+                                fitNum(o.max_relative_std_error) + " x the friction " + fitNum(F) +
                                 " N*m: the speed hardly varies along the branches, so it is confounded with the "
                                 "Coulomb friction");
     return fpar;
@@ -248,8 +248,8 @@ std::string clampingReportYaml(const ClampingFitResult& r, const std::string& da
   std::ostringstream y;
   const ClampingCurves& cv = r.curves;
   auto par = [&](const char* name, const FittedParameter& p, const char* unit) {
-    y << "  " << name << ": {value: " << num(p.value) << ", unit: \"" << unit << "\", std_error: " << num(p.std_error)
-      << ", fitted: " << (p.fitted ? "true" : "false") << "}\n";
+    y << "  " << name << ": {value: " << fitNum(p.value) << ", unit: \"" << unit
+      << "\", std_error: " << fitNum(p.std_error) << ", fitted: " << (p.fitted ? "true" : "false") << "}\n";
   };
   auto quoted = [](const std::string& s) {
     std::string out = "\"";
@@ -263,7 +263,7 @@ std::string clampingReportYaml(const ClampingFitResult& r, const std::string& da
     << "# model (quasi-static branch response tau = EB_static(phi - center; c, b) + sgn(phi_dot) F). Motor side.\n";
   y << "data: " << quoted(data_path) << "\n";
   y << "side: motor\n";
-  y << "gear_ratio: " << num(gear_ratio) << "   # torque column divided by this\n";
+  y << "gear_ratio: " << fitNum(gear_ratio) << "   # torque column divided by this\n";
   y << "parameters:\n";
   par("stiffness", r.stiffness, "N*m/rad");
   par("backlash", r.backlash, "rad");
@@ -272,21 +272,21 @@ std::string clampingReportYaml(const ClampingFitResult& r, const std::string& da
   if (r.damping) par("damping", *r.damping, "N*m*s/rad");
   par("center", r.center, "rad");
   y << "algorithm_ii:\n";
-  y << "  stiffness: {value: " << num(cv.stiffness) << ", unit: \"N*m/rad\"}\n";
-  y << "  backlash: {value: " << num(cv.backlash) << ", unit: \"rad\"}   # 2 x fold kink position\n";
-  y << "  fold_flat_length: {value: " << num(cv.fold_flat)
+  y << "  stiffness: {value: " << fitNum(cv.stiffness) << ", unit: \"N*m/rad\"}\n";
+  y << "  backlash: {value: " << fitNum(cv.backlash) << ", unit: \"rad\"}   # 2 x fold kink position\n";
+  y << "  fold_flat_length: {value: " << fitNum(cv.fold_flat)
     << ", unit: \"rad\"}   # half the backlash ([KR300Thesis, Algorithm II step 11])\n";
-  y << "  backlash_interval_upper: {value: " << num(cv.backlash_upper) << ", unit: \"rad\"}\n";
-  y << "  backlash_interval_lower: {value: " << num(cv.backlash_lower) << ", unit: \"rad\"}\n";
-  y << "  friction: {value: " << num(cv.friction) << ", unit: \"N*m\"}\n";
-  y << "  center: {value: " << num(cv.center) << ", unit: \"rad\"}\n";
+  y << "  backlash_interval_upper: {value: " << fitNum(cv.backlash_upper) << ", unit: \"rad\"}\n";
+  y << "  backlash_interval_lower: {value: " << fitNum(cv.backlash_lower) << ", unit: \"rad\"}\n";
+  y << "  friction: {value: " << fitNum(cv.friction) << ", unit: \"N*m\"}\n";
+  y << "  center: {value: " << fitNum(cv.center) << ", unit: \"rad\"}\n";
   y << "  crosses_zero_torque: " << (cv.crosses_zero ? "true" : "false") << "\n";
   y << "fit:\n";
-  y << "  rms_residual: {value: " << num(r.rms_residual) << ", unit: \"N*m\"}\n";
+  y << "  rms_residual: {value: " << fitNum(r.rms_residual) << ", unit: \"N*m\"}\n";
   y << "  points: " << r.points << "\n";
   y << "  iterations: " << r.iterations << "\n";
   if (r.validation_angle_rms)
-    y << "  validation_angle_rms: {value: " << num(*r.validation_angle_rms) << ", unit: \"rad\"}\n";
+    y << "  validation_angle_rms: {value: " << fitNum(*r.validation_angle_rms) << ", unit: \"rad\"}\n";
   y << "half_cycles:\n";
   y << "  found: " << cv.half_cycles.size() << "\n";
   y << "  used_upper: " << cv.used_upper << "\n";

@@ -14,6 +14,7 @@
 #include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include "jointsim/common/constants.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/io/input_files.hpp"
@@ -21,8 +22,6 @@
 
 namespace jointsim::multibody {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // ----------------------------------------------------------------------------------------- URDF
 

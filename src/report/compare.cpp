@@ -48,7 +48,7 @@ std::string padded(const std::string& s, size_t width) {
   return w >= width ? s : s + std::string(width - w, ' ');
 }
 
-std::string num(double x) {
+std::string compareNum(double x) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.9g", x);
   return buf;
@@ -77,7 +77,7 @@ void checkTime(const CsvTable& t, int col) {
                        "' is not finite");
     if (r > 0 && x < t.data(r - 1, col))
       throw InputError(t.path + ":" + std::to_string(t.lines[r]) + ": time column '" + t.header[col] + "' decreases (" +
-                       num(t.data(r - 1, col)) + " -> " + num(x) + "); expected non-decreasing times");
+                       compareNum(t.data(r - 1, col)) + " -> " + compareNum(x) + "); expected non-decreasing times");
   }
 }
 
@@ -168,12 +168,15 @@ int CompareResult::failed() const {
 
 CompareResult compareTables(const CsvTable& a, const CsvTable& b, const CompareOptions& options) {
   auto bad = [](double x) { return !(x >= 0.0) || !std::isfinite(x); };
-  if (bad(options.rtol)) throw InputError("compare: rtol must be a finite number >= 0, got " + num(options.rtol));
-  if (bad(options.atol)) throw InputError("compare: atol must be a finite number >= 0, got " + num(options.atol));
+  if (bad(options.rtol))
+    throw InputError("compare: rtol must be a finite number >= 0, got " + compareNum(options.rtol));
+  if (bad(options.atol))
+    throw InputError("compare: atol must be a finite number >= 0, got " + compareNum(options.atol));
   if (bad(options.time_tolerance))
-    throw InputError("compare: time tolerance must be a finite number >= 0 s, got " + num(options.time_tolerance));
+    throw InputError("compare: time tolerance must be a finite number >= 0 s, got " +
+                     compareNum(options.time_tolerance));
   if (!std::isfinite(options.time_range_tolerance))
-    throw InputError("compare: time range tolerance must be finite, got " + num(options.time_range_tolerance));
+    throw InputError("compare: time range tolerance must be finite, got " + compareNum(options.time_range_tolerance));
 
   CompareResult res;
   res.path_a = a.path;
@@ -201,11 +204,12 @@ CompareResult compareTables(const CsvTable& a, const CsvTable& b, const CompareO
   double range_tol = options.time_range_tolerance;
   if (range_tol < 0.0) range_tol = std::max(meanInterval(a, ta), meanInterval(b, tb));
   res.options.time_range_tolerance = range_tol;
-  const std::string ranges = a.path + " covers [" + num(a0) + ", " + num(a1) + "] s, " + b.path + " covers [" +
-                             num(b0) + ", " + num(b1) + "] s";
+  const std::string ranges = a.path + " covers [" + compareNum(a0) + ", " + compareNum(a1) + "] s, " + b.path +
+                             " covers [" + compareNum(b0) + ", " + compareNum(b1) + "] s";
   if (a1 < b0 - eps || b1 < a0 - eps) throw InputError("incompatible files: the time ranges do not overlap: " + ranges);
   if (std::abs(a0 - b0) > range_tol + eps || std::abs(a1 - b1) > range_tol + eps)
-    throw InputError("incompatible files: the time ranges differ by more than " + num(range_tol) + " s: " + ranges);
+    throw InputError("incompatible files: the time ranges differ by more than " + compareNum(range_tol) +
+                     " s: " + ranges);
 
   // Columns.
   std::vector<int> cols_a;

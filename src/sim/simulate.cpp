@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "jointsim/common/constants.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/text.hpp"
@@ -12,7 +13,6 @@
 namespace jointsim::sim {
 
 namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
 /// An output due within this time after a sample is taken at the sample, before its update [s].
 constexpr double kSampleOutputTolerance = 1e-12;
 }  // namespace

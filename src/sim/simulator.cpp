@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "jointsim/common/constants.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/text.hpp"
@@ -13,7 +14,6 @@
 namespace jointsim::sim {
 
 namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
 /// A target this close (relative to max(1, |t|)) to a sample or time event is moved onto it.
 constexpr double kSnap = 1e-12;
 bool near(double a, double b) { return std::abs(a - b) <= kSnap * std::max(1.0, std::abs(b)); }

@@ -350,3 +350,29 @@ TEST(CliBatch, SampledRunsCarryDesignAndSeedAndTheirValues) {
     EXPECT_THAT(slurp(dir / "out" / name / "summary.json"), HasSubstr("\"inertia\": " + line.substr(o + 13, 6)));
   }
 }
+
+namespace {
+
+// On a terminal (here the pseudo-terminal of util-linux `script`), the progress line of `jointsim batch` says how
+// many runs are done and, once one has finished, about how long the rest will take; not on a pipe or file.
+TEST(CliBatch, TheProgressLineOnATerminalGivesTheTimeLeft) {
+  if (std::system("command -v script >/dev/null 2>&1") != 0) GTEST_SKIP() << "util-linux script not installed";
+  const TempDir dir;
+  const fs::path sweep = dir / "three.yaml";
+  std::ofstream(sweep) << "sweep:\n  name: three\n  experiment: "
+                       << jointsim::test::sourcePath("config/experiments/ur5_fall.yaml")
+                       << "\n  set: {duration: 0.2}\nruns: [{name: a}, {name: b}, {name: c}]\n";
+  const std::string batch =
+      std::string(JOINTSIM_CLI_PATH) + " batch " + sweep.string() + " -j 1 -o " + (dir / "runs").string();
+  const Result tty = jointsim::test::runCommand("script -qec '" + batch + "' /dev/null");
+  ASSERT_EQ(tty.status, 0) << tty.out << tty.err;
+  EXPECT_THAT(tty.out, HasSubstr("[batch three] 1/3 done (0 failed, 0 skipped)"));
+  EXPECT_THAT(tty.out, HasSubstr(" left")) << tty.out;
+  EXPECT_THAT(tty.out, HasSubstr("3/3 done"));
+  // Not a terminal: no progress line (the runs are skipped as done, so this is quick).
+  const Result pipe = run("batch " + sweep.string() + " -j 1 -o " + (dir / "runs").string());
+  ASSERT_EQ(pipe.status, 0) << pipe.err;
+  EXPECT_THAT(pipe.err, ::testing::Not(HasSubstr("[batch three]")));
+}
+
+}  // namespace
