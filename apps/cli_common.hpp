@@ -13,6 +13,9 @@ Eigen::VectorXd parseList(const std::string& text, const std::string& option);
 Eigen::VectorXd parseList(const std::string& text, const std::string& option, Eigen::Index expected,
                           const std::string& what);
 
+/// The command as the user typed it (argv[0], e.g. "./build/jointsim"), for "what next" hints; "jointsim" if unset.
+std::string& programName();
+
 void addDynamicsCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addIdentifyCommand(CLI::App& app);

@@ -46,8 +46,8 @@ void addRunCommand(CLI::App& app) {
                 r.experiment.c_str(), r.status.c_str(), r.csv_path.c_str(), r.summary_path.c_str(), r.sim_time_s,
                 r.wall_time_s, r.real_time_factor, r.stats.steps, r.stats.rhs_evals, r.stats.error_test_failures);
     if (!r.csv_path.empty())
-      std::printf("  next:    jointsim plot %s  (figures of the log: one column per signal, SI units)\n",
-                  std::filesystem::path(r.csv_path).parent_path().string().c_str());
+      std::printf("  next:    read the log (one column per signal, SI units) or draw it: %s plot %s\n",
+                  programName().c_str(), std::filesystem::path(r.csv_path).parent_path().string().c_str());
     for (const auto& w : r.warnings) std::fprintf(stderr, "jointsim: warning: %s\n", printable(w, 2000).c_str());
   });
 }

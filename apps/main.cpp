@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <iostream>
 #include <new>
+#include <string>
 
 #include "cli_common.hpp"
 #include "jointsim/common/error.hpp"
@@ -22,7 +23,15 @@ constexpr size_t kMaxMessage = 2000;
 
 }  // namespace
 
+namespace jointsim::cli {
+std::string& programName() {
+  static std::string name = "jointsim";
+  return name;
+}
+}  // namespace jointsim::cli
+
 int main(int argc, char** argv) {
+  if (argc > 0 && argv[0] && *argv[0]) jointsim::cli::programName() = argv[0];
   CLI::App app{"jointsim — high-fidelity robot joint and multibody simulator"};
   app.require_subcommand(1);
   app.set_version_flag("--version",

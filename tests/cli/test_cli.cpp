@@ -154,6 +154,9 @@ TEST(CliRun, WritesCsvAndSummary) {
   const Result r = runCli("run " + sourcePath("config/experiments/ur5_fall.yaml") + " -o " + dir.string());
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("real-time factor"));
+  // One line says what to look at next, with the command as it was typed.
+  EXPECT_THAT(r.out, HasSubstr("next:    read the log (one column per signal, SI units) or draw it: " +
+                               std::string(JOINTSIM_CLI_PATH) + " plot " + dir.string() + "\n"));
   std::ifstream csv(dir / "ur5_fall.csv");
   std::string header;
   std::getline(csv, header);

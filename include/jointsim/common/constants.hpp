@@ -7,7 +7,7 @@
 namespace jointsim {
 
 inline constexpr double kPi = 3.14159265358979323846;                    ///< π
-inline constexpr double kTwoPi = 2.0 * kPi;                               ///< 2π [rad per turn]
+inline constexpr double kTwoPi = 2.0 * kPi;                              ///< 2π [rad per turn]
 inline constexpr double kInf = std::numeric_limits<double>::infinity();  ///< +∞
 
 }  // namespace jointsim
