@@ -27,5 +27,12 @@ SUDO=""
 [ "$(id -u)" -ne 0 ] && SUDO="sudo"
 echo "jointsim: installing Debian packages: ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+# apt's own chatter (and harmless maintainer-script notes such as "no alternatives for petsc", from a dependency of
+# libsundials-dev) goes to a log that is shown only when apt fails.
+log=$(mktemp "${TMPDIR:-/tmp}/jointsim_apt.XXXXXX")
+if ! { $SUDO apt-get update -qq && $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"; } >"$log" 2>&1; then
+  cat "$log" >&2
+  echo "jointsim: apt-get failed (log above; kept in $log)" >&2
+  exit 1
+fi
+rm -f "$log"
