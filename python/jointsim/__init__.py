@@ -102,6 +102,13 @@ def _int(value: Any, what: str) -> int:
     return int(value)
 
 
+def _joint(value: Any) -> Union[int, str]:
+    """A joint given by index (int) or name (str)."""
+    if isinstance(value, str) or (isinstance(value, numbers.Integral) and not isinstance(value, bool)):
+        return value if isinstance(value, str) else int(value)
+    raise InputTypeError(f"joint: expected an index (int) or a joint name (str), got {type(value).__name__}")
+
+
 def _float(value: Any, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise InputTypeError(f"{what}: expected a number, got {type(value).__name__}")
@@ -538,8 +545,9 @@ class Simulator:
     is usable at the last internal step it completed.
     """
 
-    #: Default bound on every state's magnitude of from_robot (max_state of set_limits): far beyond any physical
-    #: joint or motor speed [rad/s], current [A] or angle [rad] of a robot in a run of an hour or less.
+    #: Default bound on the magnitude of every state but the joint and motor angles (max_state of set_limits), for
+    #: the simulators of from_robot and from_experiment: far beyond any physical joint or motor speed [rad/s],
+    #: current [A], gear deflection or controller state of a robot.
     DEFAULT_MAX_STATE = 1e6
 
     def __init__(self, core: "_core.Simulator"):
@@ -550,6 +558,8 @@ class Simulator:
         """A simulator over an experiment's model (a file path or a loaded Experiment) with its solver settings."""
         if not isinstance(experiment, Experiment):
             experiment = load_experiment(experiment, overrides)
+        elif overrides:
+            raise InputError("overrides apply when loading: pass them to load_experiment")
         return experiment.simulator()
 
     @staticmethod
@@ -657,15 +667,15 @@ class Simulator:
 
     def set_port(self, joint: Union[int, str], port: str) -> None:
         """Chooses the command port of a joint (by index or name; one of PORTS); InputError if the drive lacks it."""
-        self._s.set_port(joint, port)
+        self._s.set_port(_joint(joint), port)
 
     def port(self, joint: Union[int, str]) -> str:
         """The command port of a joint (by index or name)."""
-        return self._s.port(joint)
+        return self._s.port(_joint(joint))
 
     def set_command(self, joint: Union[int, str], value: float) -> None:
         """The command of a joint's port: rad/s, A, V or N*m (InputError for NaN or under the setpoint port)."""
-        self._s.set_command(joint, _float(value, "value"))
+        self._s.set_command(_joint(joint), _float(value, "value"))
 
     def set_commands(self, values: Sequence[float]) -> None:
         """Commands of every joint, shape (dof,); entries of joints under the setpoint port are ignored."""
@@ -673,7 +683,7 @@ class Simulator:
 
     def set_setpoint(self, joint: Union[int, str], q: float, qd: float = 0.0, qdd: float = 0.0) -> None:
         """Holds a joint's reference at q [rad], qd [rad/s], qdd [rad/s^2] in place of the trajectory."""
-        self._s.set_setpoint(joint, _float(q, "q"), _float(qd, "qd"), _float(qdd, "qdd"))
+        self._s.set_setpoint(_joint(joint), _float(q, "q"), _float(qd, "qd"), _float(qdd, "qdd"))
 
     def hold_setpoints(self, q: Sequence[float], qd: Optional[Sequence[float]] = None,
                        qdd: Optional[Sequence[float]] = None) -> None:

@@ -34,13 +34,19 @@ class InputError(ValueError):
 
 
 class InputFileNotFoundError(InputError, FileNotFoundError):
-    """An input file that does not exist (``file`` and ``filename`` name it); also a ``FileNotFoundError``."""
+    """An input file that does not exist; also a ``FileNotFoundError``.
 
-    def __init__(self, message: str, **fields):
+    Attributes: ``filename`` (and ``missing_path``) name the missing file; ``file``, ``line`` and ``key_path`` say
+    where it was named (the experiment file and its key, e.g. ``robot``), or the missing file itself when it was
+    given directly.
+    """
+
+    def __init__(self, message: str, *, missing_path: str = "", **fields):
         InputError.__init__(self, message, **fields)
+        self.missing_path: Optional[str] = missing_path or self.file
         self.errno = _errno.ENOENT
         self.strerror = self.reason
-        self.filename = self.file
+        self.filename = self.missing_path
 
     def __str__(self) -> str:
         return str(self.args[0]) if self.args else ""

@@ -86,13 +86,18 @@ int pythonSignals(void*) noexcept {
   return PyErr_CheckSignals() != 0 ? SIGINT : 0;
 }
 
+/// The identifier of the interpreter's main thread, the only one whose signal handlers run (set at import).
+unsigned long g_main_thread = 0;
+
 /// Runs `f` without the GIL, stoppable by Python's signal handlers (checked every 20 ms of wall time by the
 /// simulation loops): a call that a handler's exception stopped raises that exception (KeyboardInterrupt), not the
-/// C++ interruption.
+/// C++ interruption. Only on the main thread: Python runs signal handlers nowhere else, and a poll there would only
+/// contend for the GIL (and a daemon thread taking the GIL while the interpreter shuts down is ended by it).
 template <class F>
 auto interruptible(F&& f) -> decltype(f()) {
   using R = decltype(f());
-  StopPoll poll(&pythonSignals, nullptr, 0.02);
+  const bool main_thread = PyThread_get_thread_ident() == g_main_thread;
+  StopPoll poll(main_thread ? &pythonSignals : nullptr, nullptr, 0.02);
   try {
     if constexpr (std::is_void_v<R>) {
       {
@@ -119,7 +124,7 @@ auto interruptible(F&& f) -> decltype(f()) {
 // ------------------------------------------------------------------------------------------ errors
 /// Sets the Python error to an instance of jointsim.errors.<name>(message, **fields); a plain `fallback` error
 /// when that module cannot be imported (the extension used on its own).
-void raise(const char* name, PyObject* fallback, const std::string& message, const py::dict& fields) {
+void raisePython(const char* name, PyObject* fallback, const std::string& message, const py::dict& fields) {
   try {
     py::object cls = py::module_::import("jointsim.errors").attr(name);
     py::object exc = cls(message, **fields);
@@ -302,15 +307,16 @@ PYBIND11_MODULE(_core, m) {
       f["line"] = e.line();
       f["key_path"] = e.keyPath();
       f["reason"] = e.message();
-      raise(e.missingFile() ? "InputFileNotFoundError" : "InputError", PyExc_ValueError, e.what(), f);
+      if (e.missingFile()) f["missing_path"] = e.missingPath();
+      raisePython(e.missingFile() ? "InputFileNotFoundError" : "InputError", PyExc_ValueError, e.what(), f);
     } catch (const UnidentifiableError& e) {
-      raise("UnidentifiableError", PyExc_ValueError, e.what(), py::dict());
+      raisePython("UnidentifiableError", PyExc_ValueError, e.what(), py::dict());
     } catch (const SolverError& e) {
       py::dict f;
       f["time"] = e.time();
       f["flag"] = e.flag();
       f["component"] = e.component();
-      raise("SolverError", PyExc_RuntimeError, e.what(), f);
+      raisePython("SolverError", PyExc_RuntimeError, e.what(), f);
     } catch (const Error& e) {
       PyErr_SetString(PyExc_RuntimeError, e.what());
     } catch (const py::cast_error& e) {
@@ -318,6 +324,7 @@ PYBIND11_MODULE(_core, m) {
     }
   });
   m.attr("__version__") = version();
+  g_main_thread = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
 
   // ------------------------------------------------------------------------------------------ multibody
   py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model",

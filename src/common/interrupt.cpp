@@ -37,6 +37,8 @@ void installStopSignalHandlers() noexcept {
   sigaction(SIGTERM, &sa, nullptr);
 }
 
+void forgetStopPolls() noexcept { t_poll = nullptr; }
+
 StopPoll::StopPoll(Check check, void* context, double interval_s) noexcept
     : check_(check),
       context_(context),
@@ -45,7 +47,9 @@ StopPoll::StopPoll(Check check, void* context, double interval_s) noexcept
   t_poll = this;
 }
 
-StopPoll::~StopPoll() { t_poll = outer_; }
+StopPoll::~StopPoll() {
+  if (t_poll == this) t_poll = outer_;
+}
 
 int StopPoll::poll() noexcept {
   if (tripped_ || !check_) return tripped_;

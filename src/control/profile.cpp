@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "jointsim/common/constants.hpp"
+#include "common/constants.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interpolate.hpp"
 #include "jointsim/common/text.hpp"

@@ -6,7 +6,7 @@
 #include <limits>
 #include <sstream>
 
-#include "jointsim/common/constants.hpp"
+#include "common/constants.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/io/csv_reader.hpp"

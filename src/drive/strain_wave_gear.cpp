@@ -9,8 +9,8 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 
+#include "common/constants.hpp"
 #include "jointsim/common/check.hpp"
-#include "jointsim/common/constants.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::drive {

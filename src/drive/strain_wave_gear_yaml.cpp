@@ -4,7 +4,7 @@
 #include <sstream>
 #include <string>
 
-#include "jointsim/common/constants.hpp"
+#include "common/constants.hpp"
 #include "jointsim/common/error.hpp"
 
 namespace jointsim::drive {

@@ -223,7 +223,9 @@ BatchRecord recordFromFolder(const BatchRun& run, const std::string& dir) {
 
 // Child process: runs one experiment with its output in `folder`, stdout/stderr to folder/run.log.
 [[noreturn]] void childRun(const Sweep& sweep, const BatchRun& run, const std::string& folder) {
-  // The parent's signal dispositions are inherited; a host's own (Python's) would only set a flag nobody reads here.
+  // The parent's signal dispositions are inherited; a host's own (Python's) would only set a flag nobody reads here,
+  // and the host's poll of the forking thread must not be asked from this process (it would take Python's lock).
+  forgetStopPolls();
   installStopSignalHandlers();
   const std::string log = (fs::path(folder) / "run.log").string();
   // Truncate once, then append from both streams so that their writes do not overwrite each other.
@@ -479,18 +481,28 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
   double finished_wall = 0.0;
   int finished = 0;
   const size_t to_run = queue.size();
+  std::string last_line;
+  auto last_print = std::chrono::steady_clock::now();
   auto progress = [&](int running) {
     if (!options.progress) return;
     std::string left;
     if (finished > 0) {
       const double per_run = finished_wall / finished;
-      const double remaining = static_cast<double>(to_run - static_cast<size_t>(finished)) * per_run /
-                               std::max(1, std::min(options.jobs, static_cast<int>(to_run)));
+      const size_t remaining_runs = to_run - static_cast<size_t>(finished);
+      const double remaining = static_cast<double>(remaining_runs) * per_run /
+                               std::max(1, std::min(options.jobs, static_cast<int>(remaining_runs)));
       left = ", about " + formatDuration(remaining) + " left";
     }
-    std::fprintf(stderr, "\r[batch %s] %zu/%zu done (%d failed, %d skipped), %d running%s   ", sweep.name.c_str(),
-                 static_cast<size_t>(res.ok + res.failed), res.records.size(), res.failed, res.skipped, running,
-                 left.c_str());
+    char line[512];
+    std::snprintf(line, sizeof line, "%zu/%zu done (%d failed, %d skipped), %d running%s",
+                  static_cast<size_t>(res.ok + res.failed), res.records.size(), res.failed, res.skipped, running,
+                  left.c_str());
+    // A new line when something changed; the same one again at most twice a second.
+    const auto now = std::chrono::steady_clock::now();
+    if (line == last_line && std::chrono::duration<double>(now - last_print).count() < 0.5) return;
+    last_line = line;
+    last_print = now;
+    std::fprintf(stderr, "\r[batch %s] %s   ", sweep.name.c_str(), line);
     std::fflush(stderr);
   };
   struct Active {
@@ -501,7 +513,6 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
   size_t next = 0;
   progress(0);
   bool forwarded = false;
-  long idle_ticks = 0;
   while ((next < queue.size() && !stopRequested()) || !active.empty()) {
     // A stop request (SIGINT/SIGTERM to the batch): no new runs; the running ones get the signal and end with an
     // "interrupted" summary, which resume treats as not done.
@@ -538,24 +549,26 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
     if (active.empty()) continue;
     int status = 0;
     // Not a blocking wait: a stop request of this thread (a host's StopPoll, e.g. Ctrl-C in Python) must be seen
-    // while runs are going, and the progress line refreshed.
-    const pid_t pid = ::waitpid(-1, &status, WNOHANG);
-    if (pid == 0) {
-      struct timespec pause {
-        0, 20'000'000
-      };  // 20 ms
-      ::nanosleep(&pause, nullptr);
-      if (++idle_ticks % 25 == 0) progress(static_cast<int>(active.size()));
-      continue;
-    }
-    if (pid < 0) {
-      if (errno == EINTR) continue;
-      for (const auto& [p, a] : active) {  // no children left to wait for: count the missing ones as errors
-        res.records[a.k].status = "error";
-        ++res.failed;
+    // while runs are going. Only this batch's own runs are waited for (a host may have children of its own).
+    pid_t pid = 0;
+    for (const auto& entry : active) {
+      const pid_t got = ::waitpid(entry.first, &status, WNOHANG);
+      if (got < 0 && errno == EINTR) break;
+      if (got < 0) {  // not ours to wait for any more (reaped elsewhere): it ended without a known status
+        status = -1;
+        pid = entry.first;
+        break;
       }
-      active.clear();
-      break;
+      if (got > 0) {
+        pid = got;
+        break;
+      }
+    }
+    if (pid == 0) {
+      struct timespec pause {};
+      pause.tv_nsec = 20'000'000;  // 20 ms
+      ::nanosleep(&pause, nullptr);
+      continue;
     }
     const auto it = active.find(pid);
     if (it == active.end()) continue;

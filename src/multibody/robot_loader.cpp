@@ -14,7 +14,7 @@
 #include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
-#include "jointsim/common/constants.hpp"
+#include "common/constants.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/io/input_files.hpp"

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "jointsim/common/constants.hpp"
+#include "common/constants.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/text.hpp"

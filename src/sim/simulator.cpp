@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-#include "jointsim/common/constants.hpp"
+#include "common/constants.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/text.hpp"
@@ -22,11 +22,19 @@ double clockSeconds() {
 }
 /// Thrown through CVODE by the right-hand side's guard: the call ends (Simulator::stopped).
 struct StopAdvance {};
+/// Largest step limit of a call (far beyond any run; keeps the step arithmetic of the limit far from overflow).
+constexpr long kMaxStepsLimit = 1'000'000'000'000'000L;
+/// CVODE's cap of steps per call (max_num_steps) ends an advance() only where those steps covered less than this
+/// much simulated time each on average: the integration is stuck (chattering, a discontinuity the solver keeps
+/// failing on), not merely long [s].
+constexpr double kStuckMeanStep = 1e-9;
+/// In a stop message, where the simulated time at which the simulator stands is put (Simulator::stopped).
+constexpr const char* kAt = "{t}";
 }  // namespace
 
 void AdvanceLimits::validate() const {
-  if (max_steps < 0)
-    throw InputError("advance limits: max_steps: expected a number of steps >= 0 (0: none), got " +
+  if (max_steps < 0 || max_steps > kMaxStepsLimit)
+    throw InputError("advance limits: max_steps: expected a number of steps from 0 (none) to 1e15, got " +
                      std::to_string(max_steps));
   if (!(max_wall_time >= 0.0) || !std::isfinite(max_wall_time))
     throw InputError("advance limits: max_wall_time: expected a finite time >= 0 s (0: none), got " +
@@ -58,6 +66,8 @@ Simulator::Simulator(std::shared_ptr<Plant> plant, const CvodeOptions& solver) :
   if (plant_->rootCount() > 0)
     integ_->setRootFunction(plant_->rootCount(), [p](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                                                      Eigen::Ref<Eigen::VectorXd> g) { p->roots(t, y, g); });
+  bounded_.resize(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) bounded_[static_cast<size_t>(i)] = !plant_->unboundedState(i);
   Ts_ = plant_->samplePeriod();
   if (!(Ts_ >= 0.0) || !std::isfinite(Ts_)) throw InputError(plant_->name() + ": sample period must be >= 0 s");
   signals_.setZero(static_cast<Eigen::Index>(plant_->signalNames().size()));
@@ -111,28 +121,27 @@ void Simulator::setLimits(const AdvanceLimits& limits) {
   limits_ = limits;
 }
 
-void Simulator::guard(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
+void Simulator::guard(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y) {
   if (const int sig = stopRequested()) {
     stop_flag_ = "INTERRUPTED";
     stop_signal_ = sig;
-    stop_message_ = "interrupted (signal " + std::to_string(sig) + ") at t = " + formatNumber(t) + " s";
+    stop_message_ = "interrupted (signal " + std::to_string(sig) + ") at t = " + kAt + " s";
     throw StopAdvance{};
   }
   if (call_deadline_ > 0.0 && (++guard_calls_ & 255) == 0 && clockSeconds() > call_deadline_) {
     stop_flag_ = "WALL_TIME_BUDGET";
     stop_message_ = "more than the call's wall-clock limit of " + formatNumber(limits_.max_wall_time) +
-                    " s (max_wall_time) at t = " + formatNumber(t) + " s";
+                    " s (max_wall_time); stopped at t = " + kAt + " s";
     throw StopAdvance{};
   }
   if (limits_.max_state > 0.0) {
-    Eigen::Index i = 0;
-    const double v = y.cwiseAbs().maxCoeff(&i);
-    if (v > limits_.max_state) {
+    for (Eigen::Index i = 0; i < y.size(); ++i) {
+      if (!(std::abs(y[i]) > limits_.max_state) || !bounded_[static_cast<size_t>(i)]) continue;
       const std::string what = plant_->stateName(static_cast<int>(i));
       stop_flag_ = "DIVERGED";
-      stop_message_ = "the state diverged at t = " + formatNumber(t) + " s: state " + std::to_string(i) +
-                      (what.empty() ? std::string() : " (" + what + ")") + " = " + formatNumber(y[i], 4) +
-                      ", beyond the bound max_state = " + formatNumber(limits_.max_state) +
+      stop_message_ = "the state diverged after t = " + std::string(kAt) + " s: state " + std::to_string(i) +
+                      (what.empty() ? std::string() : " (" + what + ")") + " reached " + formatNumber(y[i], 4) +
+                      " in the next step, beyond the bound max_state = " + formatNumber(limits_.max_state) +
                       " (an unstable controller or input?)";
       throw StopAdvance{};
     }
@@ -140,6 +149,7 @@ void Simulator::guard(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
 }
 
 double Simulator::integrate(double stop) {
+  double chunk_start = t_;
   for (;;) {
     try {
       return integ_->advance(stop, y_work_);
@@ -148,18 +158,27 @@ double Simulator::integrate(double stop) {
       if (e.flag() == "STEP_BUDGET") {
         stop_flag_ = "STEP_BUDGET";
         stop_message_ = "more than the call's " + std::to_string(limits_.max_steps) +
-                        " internal steps (max_steps) at t = " + formatNumber(e.time()) + " s";
+                        " internal steps (max_steps); stopped at t = " + kAt + " s";
         stopped();
       }
       if (e.flag() != "CV_TOO_MUCH_WORK") throw;
       // CVODE's cap of steps per CVode call (CvodeOptions::max_num_steps), not a failure: one advance() may be as
       // long as wanted (its own limits end it). CVODE goes on from its last step; the simulator's state follows.
+      // Unless those steps hardly moved: then the integration is stuck, and going on would never end.
       const double tn = integ_->lastStep(y_work_);
-      if (std::isfinite(tn) && tn > t_) {
-        t_ = tn;
-        y_ = y_work_;
-        invalidate();
+      const long cap = integ_->options().max_num_steps;
+      if (!std::isfinite(tn) || tn - chunk_start < static_cast<double>(cap) * kStuckMeanStep) {
+        stop_flag_ = "CV_TOO_MUCH_WORK";
+        stop_message_ = std::to_string(cap) + " internal steps covered only " +
+                        formatNumber(std::isfinite(tn) ? tn - chunk_start : 0.0, 3) + " s up to t = " + kAt +
+                        " s: the integration is stuck (chattering modes, or a discontinuity the solver keeps "
+                        "failing on; see the solver settings)";
+        stopped();
       }
+      t_ = tn;
+      y_ = y_work_;
+      invalidate();
+      chunk_start = tn;
     }
   }
 }
@@ -174,7 +193,11 @@ void Simulator::stopped() {
   }
   restart_ = fresh_jacobian_ = true;
   invalidate();
-  const std::string flag = stop_flag_, message = plant_->name() + ": " + stop_message_;
+  std::string text = stop_message_;
+  const std::string at = formatNumber(t_);
+  for (size_t k = text.find(kAt); k != std::string::npos; k = text.find(kAt, k + at.size()))
+    text.replace(k, std::char_traits<char>::length(kAt), at);
+  const std::string flag = stop_flag_, message = plant_->name() + ": " + text;
   const int signal = stop_signal_;
   stop_flag_.clear();
   if (flag == "INTERRUPTED") {

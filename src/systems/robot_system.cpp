@@ -415,6 +415,13 @@ void RobotSystem::setInitialPositions(const Eigen::VectorXd& q0) {
   q0_ = q0;
 }
 
+bool RobotSystem::unboundedState(int i) const {
+  if (i >= 0 && i < model_.nq) return true;
+  for (const DriveLayout& L : layout_)
+    if (L.motor >= 0 && i == L.motor) return true;
+  return false;
+}
+
 std::string RobotSystem::stateName(int i) const {
   const int n = model_.nq;
   if (i < 0 || i >= n_states_) return {};

@@ -72,7 +72,7 @@ class InputError : public Error {
 
  private:
   /// The missing file of the InputError being handled, if any (see fileNotFound).
-  static std::string missingInFlight() noexcept {
+  static std::string missingInFlight() {
     if (const std::exception_ptr p = std::current_exception()) {
       try {
         std::rethrow_exception(p);

@@ -24,6 +24,10 @@ void clearStopRequest() noexcept;
 /// the caller sees the request): for the command-line tool and for the child processes of jointsim batch.
 void installStopSignalHandlers() noexcept;
 
+/// Forgets this thread's StopPolls without calling them: for a child process made by fork(), which inherits the
+/// forking thread's polls but not the host they ask (e.g. Python's interpreter, whose lock it must never take).
+void forgetStopPolls() noexcept;
+
 /// While alive, stopRequested() on the constructing thread also calls `check(context)` at most once every
 /// `interval_s` seconds (wall clock); a non-zero result (the signal, e.g. SIGINT) is a stop request of this thread
 /// from then on (sticky for the poll's lifetime). Polls nest; the innermost is asked. `check` runs on the calling

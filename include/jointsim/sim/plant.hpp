@@ -82,6 +82,9 @@ class Plant {
 
   /// What continuous state `i` is, for messages ("q_elbow_joint [rad]"); empty when the plant does not say.
   virtual std::string stateName(int /*i*/) const { return {}; }
+  /// True for a state that may grow without bound in normal use (the angle of a joint or motor that keeps turning),
+  /// which a divergence bound (sim::AdvanceLimits::max_state) must therefore not apply to.
+  virtual bool unboundedState(int /*i*/) const { return false; }
 
   /// Output signals as `name[unit]` (the CSV column names after "time[s]").
   virtual const std::vector<std::string>& signalNames() const = 0;

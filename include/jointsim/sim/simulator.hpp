@@ -23,8 +23,9 @@
 /// show the inputs held over the interval that ends there (as sim::simulate's outputs do).
 ///
 /// One call may be as long as wanted: CVODE's per-call cap of internal steps (CvodeOptions::max_num_steps) does
-/// not end it; the call's own limits (AdvanceLimits: steps, wall-clock time, a bound on the state) do, and so does
-/// a stop request (jointsim::requestStop, or the caller's StopPoll, common/interrupt.hpp), checked in the
+/// not end it, unless those steps covered less than 1 ns each on average (the integration is stuck: flag
+/// CV_TOO_MUCH_WORK); the call's own limits (AdvanceLimits: steps, wall-clock time, a bound on the state) do, and
+/// so does a stop request (jointsim::requestStop, or the caller's StopPoll, common/interrupt.hpp), checked in the
 /// right-hand side.
 ///
 /// Errors: InputError for a bad target time or state (the simulator is unchanged); SolverError (with the
@@ -47,12 +48,13 @@ namespace jointsim::sim {
 /// Limits of each advance()/advanceTo() call; 0 (the default) means none. A call that exceeds one ends with a
 /// SolverError naming the simulated time, the flag and the plant.
 struct AdvanceLimits {
-  long max_steps = 0;          ///< internal solver steps per call (flag STEP_BUDGET), >= 0
+  long max_steps = 0;          ///< internal solver steps per call (flag STEP_BUDGET), 0 to 1e15
   double max_wall_time = 0.0;  ///< wall-clock time per call [s] (flag WALL_TIME_BUDGET), >= 0
   /// Bound on the magnitude of every continuous state |y_i| [the state's own unit] (flag DIVERGED, naming the state
-  /// index and value), >= 0: a state running away (an unstable controller around the plant) ends the call at once
-  /// instead of after minutes of ever smaller steps. Non-finite states and derivatives are always caught
-  /// (CvodeOptions::check_finite).
+  /// and the value it reached), >= 0: a state running away (an unstable controller around the plant) ends the call
+  /// at once instead of after minutes of ever smaller steps. States that grow in normal use (angles of joints and
+  /// motors that may keep turning: Plant::unboundedState) are not bounded. Non-finite states and derivatives are
+  /// always caught (CvodeOptions::check_finite).
   double max_state = 0.0;
   /// Throws InputError for a negative or non-finite entry.
   void validate() const;
@@ -147,6 +149,7 @@ class Simulator {
   long events_ = 0, samples_ = 0, restarts_ = 0, input_jumps_ = 0;
   // The call's limits and why the right-hand side ended it (empty: it did not).
   AdvanceLimits limits_;
+  std::vector<char> bounded_;   // per state: subject to max_state (not Plant::unboundedState)
   double call_deadline_ = 0.0;  // steady-clock seconds at which the call's wall-clock limit runs out (0: none)
   long guard_calls_ = 0;
   std::string stop_flag_, stop_message_;

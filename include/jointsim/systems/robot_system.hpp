@@ -207,6 +207,8 @@ class RobotSystem : public sim::Plant {
   int stateSize() const override { return n_states_; }
   /// "q_<joint> [rad]", "qd_<joint> [rad/s]", then per drive "drive of joint '<joint>': motor angle [rad]", ...
   std::string stateName(int i) const override;
+  /// The joint angles and the motor angles (joints and motors may keep turning).
+  bool unboundedState(int i) const override;
   /// initialState(q0) with the positions of setInitialPositions().
   Eigen::VectorXd initialState() const override;
   /// ẏ = f(t, y): pure apart from the workspace; no heap allocation.

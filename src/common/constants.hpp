@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Mathematical constants shared by every layer (one definition, so that no source file needs its own).
+/// Mathematical constants shared by the library's sources (one definition, so that no source file needs its own, and
+/// unity batches see one); internal: not installed, not part of the public API.
 
 #include <limits>
 
