@@ -372,3 +372,46 @@ def test_the_stubs_name_every_member_of_the_extension_with_its_parameters():
     assert set(stubbed) == set(runtime), (set(stubbed) ^ set(runtime))
     for name in runtime:
         assert stubbed[name] == runtime[name], f"{name}: stub {stubbed[name]} vs module {runtime[name]}"
+
+
+# ------------------------------------------------------------------------------------------------ threads and processes
+def _python(code, tmp_path, timeout=120):
+    """Runs `code` in a fresh interpreter (a hang or an abort there cannot take the test session with it)."""
+    import subprocess
+    import sys
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
+    return subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def test_a_batch_from_a_process_with_busy_python_threads_completes(tmp_path):
+    """The runs of a batch are forked from the calling thread: they must not ask the parent's Python for its
+    signals (in the child nobody would ever release the GIL another thread held at the fork)."""
+    p = _python(f"""
+import threading, jointsim
+stop = False
+def spin():
+    x = 0
+    while not stop:
+        x += 1
+threading.Thread(target=spin, daemon=True).start()
+sweep = {{"sweep": {{"name": "busy", "experiment": str(jointsim.data_path("experiments/msl_friction.yaml"))}},
+         "runs": [{{"name": "a"}}, {{"name": "b"}}, {{"name": "c"}}]}}
+r = jointsim.run_batch(sweep, {str(tmp_path / 'runs')!r}, jobs=1)
+stop = True
+print(r["ok"], r["failed"])
+""", tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split() == ["3", "0"]
+
+
+def test_a_long_call_in_a_daemon_thread_does_not_abort_the_interpreter_at_exit(tmp_path):
+    p = _python("""
+import threading, time, jointsim
+sim = jointsim.Simulator.from_experiment(jointsim.data_path("experiments/ur5_excitation.yaml"), {"duration": 300})
+threading.Thread(target=lambda: sim.advance(300.0), daemon=True).start()
+time.sleep(0.5)
+print("main thread done")
+""", tmp_path)
+    assert p.returncode == 0, (p.returncode, p.stderr)
+    assert "main thread done" in p.stdout and "terminate" not in p.stderr
