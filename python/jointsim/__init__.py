@@ -35,13 +35,15 @@ from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 
 from . import _core
-from .errors import InputError, InputFileNotFoundError, InputTypeError, SolverError, UnidentifiableError
+from .errors import (ConcurrentUseError, InputError, InputFileNotFoundError, InputTypeError, SolverError,
+                     UnidentifiableError)
 
 __version__ = _core.__version__
 
 __all__ = [
     "PORTS", "Model", "Experiment", "RunResult", "Simulator", "Dataset",
     "InputError", "InputFileNotFoundError", "InputTypeError", "SolverError", "UnidentifiableError",
+    "ConcurrentUseError",
     "data_path", "load_robot", "rnea", "aba", "crba", "gravity_torques", "rnea_derivatives", "aba_derivatives",
     "frame_placement", "frame_jacobian", "load_experiment", "run_experiment", "run_experiment_file", "validate_file",
     "run_batch", "write_dataset", "read_dataset", "export_fmu", "identify_clamping", "fit_friction_map",
@@ -63,9 +65,14 @@ def _path(value: Any, what: str) -> str:
     if isinstance(value, (bytes, bytearray)):
         value = os.fsdecode(bytes(value))
     try:
-        return os.fspath(value)
+        path = os.fspath(value)
     except TypeError:
         raise InputTypeError(f"{what}: expected a path (str or os.PathLike), got {type(value).__name__}") from None
+    if not isinstance(path, str):
+        path = os.fsdecode(path)
+    if "\0" in path:
+        raise InputError(f"{what}: a path cannot contain a NUL character, got {path!r}", reason="NUL in a path")
+    return path
 
 
 def _input_file(value: Any, what: str) -> str:
@@ -244,16 +251,22 @@ def aba_derivatives(model: Model, q: Any, qd: Any, tau: Any) -> Tuple[np.ndarray
     return _core.aba_derivatives(model, _array(q, "q"), _array(qd, "qd"), _array(tau, "tau"))
 
 
+def _frame(frame: Any) -> Optional[str]:
+    if frame is None or isinstance(frame, str):
+        return frame
+    raise InputTypeError(f"frame: expected a frame name (str; see Model.frame_names) or None, got {type(frame).__name__}")
+
+
 def frame_placement(model: Model, q: Any, frame: Optional[str] = None) -> np.ndarray:
     """4x4 homogeneous pose of a frame (default: the model's tip_frame) in the base frame at q [rad], shape (nq,):
     rotation and position [m]."""
-    return _core.frame_placement(model, _array(q, "q"), frame)
+    return _core.frame_placement(model, _array(q, "q"), _frame(frame))
 
 
 def frame_jacobian(model: Model, q: Any, frame: Optional[str] = None) -> np.ndarray:
     """Frame Jacobian at q [rad] (shape (nq,)), shape (6, nq): rows [v; w] in world axes at the frame's origin,
     [m/s per rad/s] and [rad/s per rad/s]."""
-    return _core.frame_jacobian(model, _array(q, "q"), frame)
+    return _core.frame_jacobian(model, _array(q, "q"), _frame(frame))
 
 
 # ------------------------------------------------------------------------------------------------ experiments

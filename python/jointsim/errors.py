@@ -9,7 +9,8 @@ from __future__ import annotations
 import errno as _errno
 from typing import Optional
 
-__all__ = ["InputError", "InputFileNotFoundError", "InputTypeError", "UnidentifiableError", "SolverError"]
+__all__ = ["InputError", "InputFileNotFoundError", "InputTypeError", "UnidentifiableError", "SolverError",
+           "ConcurrentUseError"]
 
 
 class InputError(ValueError):
@@ -79,3 +80,12 @@ class SolverError(RuntimeError):
         self.time: float = float(time)
         self.flag: str = flag
         self.component: Optional[str] = component or None
+
+
+class ConcurrentUseError(RuntimeError):
+    """One object (a Simulator, an Experiment and the simulators made from it, a Model) used from two threads at
+    once: the second call raises this instead of racing the first. Give each thread its own object, or hold a lock
+    around the calls."""
+
+    def __init__(self, message: str):
+        RuntimeError.__init__(self, message)

@@ -10,6 +10,7 @@
 #include <csignal>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -134,11 +135,38 @@ void raisePython(const char* name, PyObject* fallback, const std::string& messag
   }
 }
 
+// ------------------------------------------------------------------------------------------ threads
+/// Two threads in one object at once (one advancing a simulator, which releases the GIL, another setting its
+/// commands): a RuntimeError (jointsim.ConcurrentUseError) for the second, never a data race.
+class ConcurrentUse : public Error {
+ public:
+  using Error::Error;
+};
+
+/// The lock of one Python object (shared by an Experiment and the simulators made from it: they share a plant).
+using Gate = std::shared_ptr<std::mutex>;
+
+/// Holds an object's gate for one call; throws ConcurrentUse when another thread holds it.
+class Use {
+ public:
+  Use(const Gate& gate, const char* what) : lock_(*gate, std::try_to_lock) {
+    if (!lock_.owns_lock())
+      throw ConcurrentUse(std::string("jointsim.") + what +
+                          ": used from two threads at once (another thread is in one of its calls, e.g. advance); give "
+                          "each thread its own " +
+                          what + ", or hold a lock around its calls");
+  }
+
+ private:
+  std::unique_lock<std::mutex> lock_;
+};
+
 /// A robot model with its own workspace (the Model/Data pair of the C++ API).
 struct PyModel {
   explicit PyModel(multibody::Model m) : model(std::move(m)), data(model) {}
   multibody::Model model;
   multibody::Data data;
+  Gate gate = std::make_shared<std::mutex>();
   std::vector<std::string> frameNames() const {
     std::vector<std::string> out;
     for (const auto& f : model.frames) out.push_back(f.name);
@@ -195,12 +223,14 @@ py::array_t<double> perState3(PyModel& p, const Array& a, const Array& b, const 
 /// A loaded experiment (shared with simulators made from it).
 struct PyExperiment {
   std::shared_ptr<experiments::Experiment> e;
+  Gate gate = std::make_shared<std::mutex>();
 };
 
 /// A stepping simulator and its plant.
 struct PySimulator {
   std::shared_ptr<sim::Plant> plant;
   std::unique_ptr<sim::Simulator> sim;
+  Gate gate = std::make_shared<std::mutex>();
 
   systems::RobotSystem& robot() {
     auto* r = dynamic_cast<systems::RobotSystem*>(plant.get());
@@ -317,6 +347,8 @@ PYBIND11_MODULE(_core, m) {
       f["flag"] = e.flag();
       f["component"] = e.component();
       raisePython("SolverError", PyExc_RuntimeError, e.what(), f);
+    } catch (const ConcurrentUse& e) {
+      raisePython("ConcurrentUseError", PyExc_RuntimeError, e.what(), py::dict());
     } catch (const Error& e) {
       PyErr_SetString(PyExc_RuntimeError, e.what());
     } catch (const py::cast_error& e) {
@@ -353,6 +385,7 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "rnea",
       [](PyModel& p, const Array& q, const Array& qd, const Array& qdd) {
+        const Use use(p.gate, "Model");
         return perState3(p, q, qd, qdd, "q", "qd", "qdd", [&p](const auto& a, const auto& b, const auto& c) {
           return multibody::rnea(p.model, p.data, a, b, c);
         });
@@ -361,6 +394,7 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "aba",
       [](PyModel& p, const Array& q, const Array& qd, const Array& tau) {
+        const Use use(p.gate, "Model");
         return perState3(p, q, qd, tau, "q", "qd", "tau", [&p](const auto& a, const auto& b, const auto& c) {
           return multibody::aba(p.model, p.data, a, b, c);
         });
@@ -369,6 +403,7 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "gravity_torques",
       [](PyModel& p, const Array& q) {
+        const Use use(p.gate, "Model");
         return perState3(p, q, q, q, "q", "q", "q", [&p](const auto& a, const auto&, const auto&) {
           return multibody::gravityTorques(p.model, p.data, a);
         });
@@ -377,6 +412,7 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "crba",
       [](PyModel& p, const Array& q) {
+        const Use use(p.gate, "Model");
         const auto n = p.model.nq;
         const States Q = states(q, n, "q");
         if (!Q.batch) return toArray(Eigen::MatrixXd(multibody::crba(p.model, p.data, row(Q, 0, n))));
@@ -395,6 +431,7 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "rnea_derivatives",
       [](PyModel& p, const Array& q, const Array& qd, const Array& qdd) {
+        const Use use(p.gate, "Model");
         const auto n = p.model.nq;
         multibody::computeRneaDerivatives(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(qdd, n, "qdd"));
         return py::make_tuple(toArray(p.data.dtau_dq), toArray(p.data.dtau_dqd), toArray(p.data.M));
@@ -403,6 +440,7 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "aba_derivatives",
       [](PyModel& p, const Array& q, const Array& qd, const Array& tau) {
+        const Use use(p.gate, "Model");
         const auto n = p.model.nq;
         multibody::computeAbaDerivatives(p.model, p.data, vec(q, n, "q"), vec(qd, n, "qd"), vec(tau, n, "tau"));
         return py::make_tuple(toArray(p.data.ddq_dq), toArray(p.data.ddq_dqd), toArray(p.data.Minv));
@@ -411,6 +449,7 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "frame_placement",
       [](PyModel& p, const Array& q, const py::object& frame) {
+        const Use use(p.gate, "Model");
         const int f = frameOf(p.model, frame);
         multibody::forwardKinematics(p.model, p.data, vec(q, p.model.nq, "q"));
         const auto& X = p.data.oMf[static_cast<size_t>(f)];
@@ -423,6 +462,7 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "frame_jacobian",
       [](PyModel& p, const Array& q, const py::object& frame) {
+        const Use use(p.gate, "Model");
         const int f = frameOf(p.model, frame);
         return toArray(Eigen::MatrixXd(multibody::frameJacobian(p.model, p.data, vec(q, p.model.nq, "q"), f)));
       },
@@ -443,6 +483,7 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "run_in_memory",
       [](PyExperiment& x) {
+        const Use use(x.gate, "Experiment");
         const experiments::ExperimentResult r = interruptible([&] { return experiments::runInMemory(*x.e); });
         py::dict out;
         out["columns"] = r.log.columns;
@@ -547,9 +588,11 @@ PYBIND11_MODULE(_core, m) {
       .def_static(
           "from_experiment",
           [](PyExperiment& x) {
+            const Use use(x.gate, "Experiment");
             PySimulator s;
             s.plant = std::shared_ptr<sim::Plant>(x.e, &x.e->plant());
             s.sim = experiments::makeSimulator(x.e);
+            s.gate = x.gate;  // the same plant: one lock
             return s;
           },
           py::arg("experiment"))
@@ -567,24 +610,58 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("path"), py::arg("q0") = py::none(), py::arg("rtol") = 1e-6, py::arg("atol") = 1e-9,
           py::arg("max_order") = 2, py::arg("max_step") = 0.0, py::arg("max_gamma_change") = 0.3)
-      .def_property_readonly("name", [](PySimulator& s) { return s.plant->name(); })
-      .def_property_readonly("time", [](PySimulator& s) { return s.sim->time(); })
-      .def_property_readonly("state", [](PySimulator& s) { return toArray(s.sim->state()); })
+      .def_property_readonly("name",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               return s.plant->name();
+                             })
+      .def_property_readonly("time",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               return s.sim->time();
+                             })
+      .def_property_readonly("state",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               return toArray(s.sim->state());
+                             })
       .def(
-          "set_state", [](PySimulator& s, const Array& y) { s.sim->setState(vec(y, s.plant->stateSize(), "state")); },
+          "set_state",
+          [](PySimulator& s, const Array& y) {
+            const Use use(s.gate, "Simulator");
+            s.sim->setState(vec(y, s.plant->stateSize(), "state"));
+          },
           py::arg("y"))
       .def(
-          "state_name", [](PySimulator& s, int i) { return s.plant->stateName(i); }, py::arg("i"))
-      .def("reset", [](PySimulator& s) { s.sim->reset(); })
+          "state_name",
+          [](PySimulator& s, int i) {
+            const Use use(s.gate, "Simulator");
+            return s.plant->stateName(i);
+          },
+          py::arg("i"))
+      .def("reset",
+           [](PySimulator& s) {
+             const Use use(s.gate, "Simulator");
+             s.sim->reset();
+           })
       .def(
-          "advance", [](PySimulator& s, double dt) { return interruptible([&] { return s.sim->advance(dt); }); },
+          "advance",
+          [](PySimulator& s, double dt) {
+            const Use use(s.gate, "Simulator");
+            return interruptible([&] { return s.sim->advance(dt); });
+          },
           py::arg("dt"))
       .def(
-          "advance_to", [](PySimulator& s, double t) { return interruptible([&] { return s.sim->advanceTo(t); }); },
+          "advance_to",
+          [](PySimulator& s, double t) {
+            const Use use(s.gate, "Simulator");
+            return interruptible([&] { return s.sim->advanceTo(t); });
+          },
           py::arg("t"))
       .def(
           "set_limits",
           [](PySimulator& s, long max_steps, double max_wall_time, double max_state) {
+            const Use use(s.gate, "Simulator");
             sim::AdvanceLimits l;
             l.max_steps = max_steps;
             l.max_wall_time = max_wall_time;
@@ -594,31 +671,68 @@ PYBIND11_MODULE(_core, m) {
           py::arg("max_steps"), py::arg("max_wall_time"), py::arg("max_state"))
       .def("limits",
            [](PySimulator& s) {
+             const Use use(s.gate, "Simulator");
              const sim::AdvanceLimits& l = s.sim->limits();
              return py::make_tuple(l.max_steps, l.max_wall_time, l.max_state);
            })
-      .def_property_readonly("signal_names", [](PySimulator& s) { return s.sim->signalNames(); })
-      .def("signal_values", [](PySimulator& s) { return toArray(s.sim->signals()); })
+      .def_property_readonly("signal_names",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               return s.sim->signalNames();
+                             })
+      .def("signal_values",
+           [](PySimulator& s) {
+             const Use use(s.gate, "Simulator");
+             return toArray(s.sim->signals());
+           })
       .def(
-          "signal", [](PySimulator& s, const std::string& name) { return s.sim->signal(name); }, py::arg("name"))
-      .def(
-          "signal_index", [](PySimulator& s, const std::string& name) { return s.sim->signalIndex(name); },
+          "signal",
+          [](PySimulator& s, const std::string& name) {
+            const Use use(s.gate, "Simulator");
+            return s.sim->signal(name);
+          },
           py::arg("name"))
-      .def_property_readonly("restarts", [](PySimulator& s) { return s.sim->restarts(); })
-      .def_property_readonly("steps", [](PySimulator& s) { return s.sim->stats().steps; })
-      .def_property_readonly("dof", [](PySimulator& s) { return s.robot().dof(); })
-      .def_property_readonly("joint_names", [](PySimulator& s) { return s.robot().model().joint_names; })
+      .def(
+          "signal_index",
+          [](PySimulator& s, const std::string& name) {
+            const Use use(s.gate, "Simulator");
+            return s.sim->signalIndex(name);
+          },
+          py::arg("name"))
+      .def_property_readonly("restarts",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               return s.sim->restarts();
+                             })
+      .def_property_readonly("steps",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               return s.sim->stats().steps;
+                             })
+      .def_property_readonly("dof",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               return s.robot().dof();
+                             })
+      .def_property_readonly("joint_names",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               return s.robot().model().joint_names;
+                             })
       .def_property_readonly("joint_positions",
                              [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
                                return toArray(Eigen::VectorXd(s.sim->state().head(s.robot().dof())));
                              })
       .def_property_readonly("joint_velocities",
                              [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
                                const int n = s.robot().dof();
                                return toArray(Eigen::VectorXd(s.sim->state().segment(n, n)));
                              })
       .def_property_readonly("gear_ratios",
                              [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
                                const int n = s.robot().dof();
                                Eigen::VectorXd r(n);
                                for (int k = 0; k < n; ++k) r[k] = s.robot().layout(k).ratio;
@@ -626,27 +740,35 @@ PYBIND11_MODULE(_core, m) {
                              })
       .def_property_readonly("motor_velocities",
                              [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
                                const int n = s.robot().dof();
                                Eigen::VectorXd v(n);
                                for (int k = 0; k < n; ++k) v[k] = s.robot().motorVelocity(s.sim->state(), k);
                                return toArray(v);
                              })
-      .def("model", [](PySimulator& s) { return std::make_shared<PyModel>(s.robot().model()); })
+      .def("model",
+           [](PySimulator& s) {
+             const Use use(s.gate, "Simulator");
+             return std::make_shared<PyModel>(s.robot().model());
+           })
       .def(
           "set_port",
           [](PySimulator& s, const py::object& j, const std::string& port) {
+            const Use use(s.gate, "Simulator");
             s.robot().setCommandPort(s.joint(j), systems::parsePort(port));
           },
           py::arg("joint"), py::arg("port"))
       .def(
           "port",
           [](PySimulator& s, const py::object& j) {
+            const Use use(s.gate, "Simulator");
             return std::string(systems::portName(s.robot().commandPort(s.joint(j))));
           },
           py::arg("joint"))
       .def(
           "set_command",
           [](PySimulator& s, const py::object& j, double value) {
+            const Use use(s.gate, "Simulator");
             if (auto* rig = dynamic_cast<systems::JointRig*>(s.plant.get())) {
               rig->setCommand(value);
               return;
@@ -656,17 +778,22 @@ PYBIND11_MODULE(_core, m) {
           py::arg("joint"), py::arg("value"))
       .def(
           "set_commands",
-          [](PySimulator& s, const Array& v) { s.robot().setCommands(vec(v, s.robot().dof(), "commands")); },
+          [](PySimulator& s, const Array& v) {
+            const Use use(s.gate, "Simulator");
+            s.robot().setCommands(vec(v, s.robot().dof(), "commands"));
+          },
           py::arg("values"))
       .def(
           "set_setpoint",
           [](PySimulator& s, const py::object& j, double q, double qd, double qdd) {
+            const Use use(s.gate, "Simulator");
             s.robot().setSetpoint(s.joint(j), q, qd, qdd);
           },
           py::arg("joint"), py::arg("q"), py::arg("qd"), py::arg("qdd"))
       .def(
           "hold_setpoints",
           [](PySimulator& s, const Array& q, const py::object& qd, const py::object& qdd) {
+            const Use use(s.gate, "Simulator");
             const int n = s.robot().dof();
             const Eigen::VectorXd qv = vec(q, n, "q");
             const Eigen::VectorXd qdv =
@@ -676,10 +803,15 @@ PYBIND11_MODULE(_core, m) {
             s.robot().holdSetpoints(qv, qdv, qddv);
           },
           py::arg("q"), py::arg("qd"), py::arg("qdd"))
-      .def("release_setpoints", [](PySimulator& s) { s.robot().releaseSetpoints(); })
+      .def("release_setpoints",
+           [](PySimulator& s) {
+             const Use use(s.gate, "Simulator");
+             s.robot().releaseSetpoints();
+           })
       .def(
           "set_external_wrench",
           [](PySimulator& s, const std::string& frame, const Array& w) {
+            const Use use(s.gate, "Simulator");
             s.robot().setExternalWrench(frame, Eigen::Matrix<double, 6, 1>(vec(w, 6, "wrench")));
           },
           py::arg("frame"), py::arg("wrench"));

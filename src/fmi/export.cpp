@@ -3,6 +3,7 @@
 #include <unistd.h>
 #include <zip.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
 #include "jointsim/io/input_files.hpp"
@@ -92,6 +94,10 @@ std::string defaultBinaryDir() {
 }
 
 FmuDescription exportFmu(const std::string& config, const std::string& fmu_path, const ExportOptions& options) {
+  // The DefaultExperiment's stepSize: a schema-valid, usable communication step.
+  if (!(options.step_size > 0.0) || !std::isfinite(options.step_size) || options.step_size > 1e6)
+    throw InputError("FMU export: step size: expected a communication step > 0 s and at most 1e6 s, got " +
+                     formatNumber(options.step_size));
   const fs::path out(fmu_path);
   if (out.extension() != ".fmu") throw InputError("FMU export: output file " + fmu_path + " must end in .fmu");
   const std::string model_identifier = out.stem().string();

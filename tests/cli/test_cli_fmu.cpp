@@ -57,6 +57,12 @@ TEST(CliFmu, BadInputExitTwoAndNothingWritten) {
       {ur5 + " -o " + (dir / "m.fmu").string() + " --set no.such.key=1", "no.such.key"},
       {kConfig + "msl_friction.yaml -o " + (dir / "m.fmu").string(), "not supported"},
       {kConfig + "ur5_swg_joint_velocity.yaml -o " + (dir / "m.fmu").string() + " --inputs voltage", "command"},
+      // A step size the FMI schema or any importer would refuse (before: a description FMPy rejects).
+      {ur5 + " -o " + (dir / "m.fmu").string() + " --step-size nan", "step size"},
+      {ur5 + " -o " + (dir / "m.fmu").string() + " --step-size inf", "step size"},
+      {ur5 + " -o " + (dir / "m.fmu").string() + " --step-size -1", "step size"},
+      {ur5 + " -o " + (dir / "m.fmu").string() + " --step-size 0", "step size"},
+      {ur5 + " -o " + (dir / "m.fmu").string() + " --step-size 1e400", "step"},
   };
   for (const Case& c : cases) {
     const Result r = run("fmu " + c.args);
