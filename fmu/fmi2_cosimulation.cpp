@@ -5,7 +5,9 @@
 #include <cctype>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <new>
+#include <set>
 #include <string>
 
 #include "fmi2Functions.h"
@@ -23,6 +25,16 @@ struct Component {
   bool logging = true;
   std::unique_ptr<Instance> instance;
 };
+
+/// The instances made by fmi2Instantiate and not yet freed: a handle that is not among them (freed twice, used after
+/// fmi2FreeInstance, never made) gets fmi2Error instead of touching freed memory.
+std::mutex g_live_mutex;
+std::set<const void*> g_live;
+
+Component* live(fmi2Component c) {
+  const std::lock_guard<std::mutex> lock(g_live_mutex);
+  return c != nullptr && g_live.count(c) ? static_cast<Component*>(c) : nullptr;
+}
 
 void emit(const fmi2CallbackFunctions& cb, const std::string& name, fmi2Status status, const char* category,
           const std::string& message) {
@@ -59,7 +71,7 @@ std::string pathFromUri(const char* uri) {
 
 template <class F>
 fmi2Status call(fmi2Component c, const char* what, F&& f) {
-  auto* comp = static_cast<Component*>(c);
+  Component* comp = live(c);
   if (comp == nullptr || !comp->instance) return fmi2Error;
   try {
     return toC(f(*comp->instance));
@@ -72,7 +84,7 @@ fmi2Status call(fmi2Component c, const char* what, F&& f) {
 }
 
 fmi2Status unsupported(fmi2Component c, const char* what) {
-  auto* comp = static_cast<Component*>(c);
+  Component* comp = live(c);
   if (comp != nullptr)
     emit(comp->callbacks, comp->name, fmi2Error, "logError", std::string(what) + " is not supported by this FMU");
   return fmi2Error;
@@ -113,6 +125,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                                                   if (raw->logging || s >= Status::Warning)
                                                     emit(raw->callbacks, raw->name, toC(s), category, message);
                                                 });
+    {
+      const std::lock_guard<std::mutex> lock(g_live_mutex);
+      g_live.insert(raw);
+    }
     return comp.release();
   } catch (const std::exception& e) {
     emit(cb, name, fmi2Error, "logError", std::string("fmi2Instantiate: ") + e.what());
@@ -122,10 +138,16 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
   return nullptr;
 }
 
-void fmi2FreeInstance(fmi2Component c) { delete static_cast<Component*>(c); }
+void fmi2FreeInstance(fmi2Component c) {
+  {
+    const std::lock_guard<std::mutex> lock(g_live_mutex);
+    if (c == nullptr || g_live.erase(c) == 0) return;  // not an instance of ours (any more): nothing to free
+  }
+  delete static_cast<Component*>(c);
+}
 
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t, const fmi2String[]) {
-  auto* comp = static_cast<Component*>(c);
+  Component* comp = live(c);
   if (comp == nullptr) return fmi2Error;
   comp->logging = loggingOn != fmi2False;
   return fmi2OK;
@@ -209,7 +231,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, "fmi2CancelStep (doStep is synchronous)"); }
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind, fmi2Status*) { return unsupported(c, "fmi2GetStatus"); }
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value) {
-  auto* comp = static_cast<Component*>(c);
+  Component* comp = live(c);
   if (comp == nullptr || !comp->instance || value == nullptr) return fmi2Error;
   if (s != fmi2LastSuccessfulTime) return unsupported(c, "fmi2GetRealStatus for this status kind");
   *value = comp->instance->time();

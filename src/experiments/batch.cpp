@@ -76,11 +76,19 @@ void readTimeLaw(const YamlValue& n, systems::Fault& f) {
     n["progression"].failExpected("step, linear or exponential");
   f.ramp_time = n["ramp_time"].asDouble(0.0, "a ramp time in s");
   f.rate = n["rate"].asDouble(0.0, "a rate in 1/s");
-  if (n["steps"].defined())
-    f.steps = static_cast<int>(std::clamp(n["steps"].asInt("a number of steps"), -1L, 1000000L));
+  if (n["steps"].defined()) {  // checked here, with the value as written (a clamp once reported 10^9 as 1000000)
+    const long steps = n["steps"].asInt("a number of steps");
+    if (steps < 1 || steps > 100000)
+      n["steps"].fail("expected 1 to 100000 parameter updates, got " + std::to_string(steps));
+    f.steps = static_cast<int>(steps);
+  }
   f.period = n["period"].asDouble(0.0, "a period in s");
-  if (n["count"].defined())
-    f.count = static_cast<int>(std::clamp(n["count"].asInt("a number of episodes"), -1L, 1000000000L));
+  if (n["count"].defined()) {
+    const long count = n["count"].asInt("a number of episodes");
+    if (count < 0 || count > 1000000000L)
+      n["count"].fail("expected a number of episodes from 0 (unlimited) to 1e9, got " + std::to_string(count));
+    f.count = static_cast<int>(count);
+  }
   f.width = n["width"].asDouble(f.width, "a spike width in s");
   f.order = n["order"].asDouble(1.0, "an order (cycles per revolution)");
 }

@@ -100,6 +100,8 @@ FmuDescription exportFmu(const std::string& config, const std::string& fmu_path,
                      formatNumber(options.step_size));
   const fs::path out(fmu_path);
   if (out.extension() != ".fmu") throw InputError("FMU export: output file " + fmu_path + " must end in .fmu");
+  if (std::error_code ec; !out.parent_path().empty() && !fs::is_directory(out.parent_path(), ec))
+    throw InputError("FMU export: output folder '" + out.parent_path().string() + "' does not exist");
   const std::string model_identifier = out.stem().string();
   if (!isIdentifier(model_identifier))
     throw InputError("FMU export: the file name '" + model_identifier +

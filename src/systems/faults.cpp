@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/strain_wave_gear.hpp"
 #include "jointsim/drive/transmissions.hpp"
@@ -149,21 +150,23 @@ FaultType faultTypeFromString(const std::string& name) {
 }
 
 std::string describe(const Fault& f) {
-  std::ostringstream os;
-  os.precision(12);
-  os << toString(f.type) << "@" << f.joint << "=" << f.value;
-  if (f.onset > 0.0) os << " from " << f.onset << " s";
-  if (f.progression != Progression::Step)
-    os << (f.progression == Progression::Linear ? " linear" : " exponential") << " over " << f.ramp_time << " s"
-       << (f.progression == Progression::Exponential ? " at rate " : "")
-       << (f.progression == Progression::Exponential ? std::to_string(f.rate) + " 1/s" : "") << " (" << f.steps
-       << " steps)";
-  if (f.intermittent()) {
-    if (f.type == FaultType::SensorSpike) os << " width " << f.width << " s";
-    if (f.period > 0.0) os << " every " << f.period << " s" << (f.count > 0 ? " x" + std::to_string(f.count) : "");
+  // Every number as the shortest text that reads back as exactly it: the description is part of a batch run's
+  // fingerprint (resume), so two different faults must never read alike (rates 1e-7 and 5e-7 once did: "0.000000").
+  auto n = [](double v) { return formatShortest(v); };
+  std::string s = std::string(toString(f.type)) + "@" + f.joint + "=" + n(f.value);
+  if (f.onset > 0.0) s += " from " + n(f.onset) + " s";
+  if (f.progression != Progression::Step) {
+    s += std::string(f.progression == Progression::Linear ? " linear" : " exponential") + " over " + n(f.ramp_time) +
+         " s";
+    if (f.progression == Progression::Exponential) s += " at rate " + n(f.rate) + " 1/s";
+    s += " (" + std::to_string(f.steps) + " steps)";
   }
-  if (f.type == FaultType::BearingRipple) os << " order " << f.order;
-  return os.str();
+  if (f.intermittent()) {
+    if (f.type == FaultType::SensorSpike) s += " width " + n(f.width) + " s";
+    if (f.period > 0.0) s += " every " + n(f.period) + " s" + (f.count > 0 ? " x" + std::to_string(f.count) : "");
+  }
+  if (f.type == FaultType::BearingRipple) s += " order " + n(f.order);
+  return s;
 }
 
 void checkFault(const Fault& f) {
@@ -211,6 +214,9 @@ double faultProgress(const Fault& f, double t) {
   if (tau < 0.0) return 0.0;
   if (f.progression == Progression::Step || tau >= f.ramp_time) return 1.0;
   if (f.progression == Progression::Linear) return tau / f.ramp_time;
+  // p = (e^{λτ} − 1)/(e^{λT} − 1); for λT below 1e-12 its limit τ/T (within λT/2 relative): expm1 of a rate near
+  // the smallest double underflows to 0/0.
+  if (f.rate * f.ramp_time < 1e-12) return tau / f.ramp_time;
   return std::expm1(f.rate * tau) / std::expm1(f.rate * f.ramp_time);
 }
 

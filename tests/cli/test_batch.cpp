@@ -233,6 +233,14 @@ TEST(CliBatch, BadSweepFilesExitTwoWithFileAndLine) {
        "ramp_time"},
       {head + "faults:\n  - {type: sensor_dropout, joints: [j], values: [0.5], period: 0.1}\n",
        "longer than the period"},
+      // Counts are reported as written (a clamp once turned 10^9 into "1000000" and -5 into "-1").
+      {head + "faults:\n  - {type: coulomb_friction_scale, joints: [j], values: [2], progression: linear, "
+              "ramp_time: 1, steps: 1000000000}\n",
+       "expected 1 to 100000 parameter updates, got 1000000000"},
+      {head + "faults:\n  - {type: coulomb_friction_scale, joints: [j], values: [2], progression: linear, "
+              "ramp_time: 1, steps: -5}\n",
+       "expected 1 to 100000 parameter updates, got -5"},
+      {head + "faults:\n  - {type: sensor_dropout, joints: [j], values: [0.01], period: 0.1, count: -5}\n", "got -5"},
   };
   for (size_t i = 0; i < cases.size(); ++i) {
     const fs::path p = dir / ("bad" + std::to_string(i) + ".yaml");

@@ -63,6 +63,7 @@ TEST(CliFmu, BadInputExitTwoAndNothingWritten) {
       {ur5 + " -o " + (dir / "m.fmu").string() + " --step-size -1", "step size"},
       {ur5 + " -o " + (dir / "m.fmu").string() + " --step-size 0", "step size"},
       {ur5 + " -o " + (dir / "m.fmu").string() + " --step-size 1e400", "step"},
+      {ur5 + " -o " + (dir / "missing" / "m.fmu").string(), "does not exist"},  // bad input: exit 2 (was 1)
   };
   for (const Case& c : cases) {
     const Result r = run("fmu " + c.args);

@@ -186,3 +186,35 @@ def test_fmu_speed_against_stepping_simulator(root, tmp_path):
     sim_wall = time.perf_counter() - t0
     print(f"UR5 twin, 1 s at 1 ms steps: FMU under FMPy RTF {1.0 / fmu_wall:.2f}, "
           f"jointsim.Simulator RTF {1.0 / sim_wall:.2f}")
+
+
+def test_fmu_freed_twice_or_used_after_free_returns_errors(root, tmp_path):
+    """fmi2FreeInstance twice, or a call on a freed instance, is an importer's bug: the FMU answers fmi2Error (or
+    nothing, for the second free) instead of touching freed memory. In a fresh interpreter, so that a crash there
+    cannot take the test session with it."""
+    import subprocess
+    import sys
+    fmu = tmp_path / "rig.fmu"
+    jointsim.export_fmu(root / "config" / "experiments" / "ur5_swg_joint_velocity.yaml", fmu, inputs="command")
+    code = f"""
+import fmpy
+from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi1 import FMICallException
+d = fmpy.extract({str(fmu)!r})
+md = fmpy.read_model_description(d)
+s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="x")
+s.instantiate(loggingOn=False, callbacks=None)
+s.setupExperiment(startTime=0.0); s.enterInitializationMode(); s.exitInitializationMode()
+s.doStep(0.0, 1e-3)
+s.fmi2FreeInstance(s.component)
+s.fmi2FreeInstance(s.component)          # a second free of the same handle
+try:
+    s.doStep(1e-3, 1e-3)                  # a call after the free
+    print("no error")
+except FMICallException as e:
+    print("error", e.status)
+s.freeLibrary()
+"""
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, (p.returncode, p.stderr)
+    assert p.stdout.split() == ["error", "3"]  # fmi2Error

@@ -285,3 +285,16 @@ TEST(FaultLaws, BearingRippleAddsASineOfTheShaftAngle) {
     }
   }
 }
+
+TEST(FaultLaws, AnExponentialLawWithAVanishingRateIsItsLinearLimit) {
+  // (e^{λτ} − 1)/(e^{λT} − 1) → τ/T as λ → 0; at the smallest double λ both expm1 underflow to 0 (0/0 before).
+  for (const double rate : {5e-324, 1e-300, 1e-15}) {
+    const Fault f = ramp(FaultType::GearStiffnessScale, 0.5, Progression::Exponential, 0.0, 2.0, 100, rate);
+    for (const double t : {0.0, 0.5, 1.0, 1.5}) EXPECT_NEAR(systems::faultProgress(f, t), t / 2.0, 1e-12) << rate;
+  }
+  // The description (part of a batch run's fingerprint) tells nearby rates apart.
+  const Fault a = ramp(FaultType::GearStiffnessScale, 0.5, Progression::Exponential, 0.0, 2.0, 100, 1e-7);
+  const Fault b = ramp(FaultType::GearStiffnessScale, 0.5, Progression::Exponential, 0.0, 2.0, 100, 5e-7);
+  EXPECT_NE(systems::describe(a), systems::describe(b));
+  EXPECT_THAT(systems::describe(a), HasSubstr("at rate 1e-07 1/s"));
+}
