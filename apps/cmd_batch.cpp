@@ -50,7 +50,7 @@ void addBatchCommand(CLI::App& app) {
     o.progress = ::isatty(2) != 0;
     const experiments::Sweep sweep = experiments::loadSweep(opt->sweep);
     if (!opt->dataset.empty()) {
-      report::checkDatasetPath(opt->dataset);  // a missing folder fails before any run
+      report::checkDatasetPath(sweep, o.output_dir, opt->dataset);  // fails before any run
       if (o.shard_count > 1 && !opt->collect)
         throw InputError(
             "--dataset needs the whole sweep: use it with --collect once the shards are done, not with --shard " +

@@ -48,6 +48,9 @@ int main(int argc, char** argv) {
   // SIGINT and SIGTERM ask the running simulation to stop instead of killing the process, so temporary files are
   // removed and the summary says "interrupted"; a blocking wait (jointsim batch) returns and forwards the signal.
   jointsim::installStopSignalHandlers();
+  // A file-size limit (ulimit -f) is a full disk for this tool: writes fail with EFBIG and are reported (file and
+  // reason, nothing half-written) instead of the process being killed with a temporary file left behind.
+  std::signal(SIGXFSZ, SIG_IGN);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -15,7 +16,9 @@
 
 #include <csignal>
 
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -129,6 +132,8 @@ struct SummaryInfo {
   std::string status, version, commit, started;
   double sim = 0, wall = 0, rtf = 0;
   std::vector<io::InputFile> inputs;
+  std::vector<std::pair<std::string, std::uintmax_t>> outputs;  ///< files of the run's folder and their sizes
+  bool has_outputs = false;
 };
 SummaryInfo readSummary(const fs::path& p) {
   SummaryInfo s;
@@ -158,15 +163,40 @@ SummaryInfo readSummary(const fs::path& p) {
       if (in.is_object() && in.contains("path") && in.contains("hash") && in["path"].is_string() &&
           in["hash"].is_string())
         s.inputs.push_back({in["path"].get<std::string>(), in["hash"].get<std::string>(), 0});
+  if (j.contains("outputs") && j["outputs"].is_array()) {
+    s.has_outputs = true;
+    for (const auto& out : j["outputs"])
+      if (out.is_object() && out.contains("file") && out["file"].is_string() && out.contains("bytes") &&
+          out["bytes"].is_number_unsigned())
+        s.outputs.emplace_back(out["file"].get<std::string>(), out["bytes"].get<std::uintmax_t>());
+      else
+        s.has_outputs = false;  // unreadable: not reused
+  }
   return s;
+}
+
+// The outputs of a finished run are still there as written: each file its summary lists exists in the run's folder
+// with the size it had (a deleted or emptied log makes the run run again instead of a data set without its data).
+bool outputsIntact(const SummaryInfo& s, const fs::path& folder) {
+  if (!s.has_outputs || s.outputs.empty()) return false;
+  for (const auto& [file, bytes] : s.outputs) {
+    if (file.empty() || file.find('/') != std::string::npos || file == "." || file == "..") return false;
+    std::error_code ec;
+    if (fs::file_size(folder / file, ec) != bytes || ec) return false;
+  }
+  return true;
 }
 
 // The inputs a finished run read still have the content they had: every file listed in its summary hashes to
 // the recorded value. A run without recorded inputs (an older summary) does not count as current.
-bool inputsUnchanged(const SummaryInfo& s) {
+// `hashes` caches the hash of each file for one batch (a sweep's runs read the same few files).
+bool inputsUnchanged(const SummaryInfo& s, std::map<std::string, std::string>& hashes) {
   if (s.inputs.empty()) return false;
-  for (const auto& in : s.inputs)
-    if (io::fileHash(in.path) != in.hash) return false;
+  for (const auto& in : s.inputs) {
+    auto it = hashes.find(in.path);
+    if (it == hashes.end()) it = hashes.emplace(in.path, io::fileHash(in.path)).first;
+    if (it->second != in.hash) return false;
+  }
   return true;
 }
 
@@ -181,11 +211,15 @@ std::string runSettings(const Sweep& sweep, const BatchRun& run) {
 
 namespace {
 
+// An RFC 4180 field: quoted, with quotes doubled.
 std::string csvQuote(const std::string& s) {
   std::string out = "\"";
   for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
   return out + "\"";
 }
+// An RFC 4180 field, quoted when it has to be (a comma, a quote, a line break; e.g. a joint name or a summary's
+// version string), plain otherwise.
+std::string csvField(const std::string& s) { return s.find_first_of(",\"\r\n") == std::string::npos ? s : csvQuote(s); }
 
 void writeManifest(const std::string& path, const std::vector<BatchRecord>& records) {
   std::ostringstream os;
@@ -193,12 +227,78 @@ void writeManifest(const std::string& path, const std::vector<BatchRecord>& reco
         "inputs,fault_type,fault_joint,fault_severity,fault_onset_s,design,seed\n";
   os.precision(6);
   for (const auto& r : records)
-    os << r.run << ',' << r.status << ',' << r.wall_time_s << ',' << r.sim_time_s << ',' << r.real_time_factor << ','
-       << r.output_dir << ',' << csvQuote(r.overrides) << ',' << r.jointsim_version << ',' << r.git_commit << ','
-       << r.started_utc << ',' << csvQuote(r.inputs) << ',' << r.fault_type << ',' << r.fault_joint << ','
-       << r.fault_severity << ',' << r.fault_onset_s << ',' << r.design << ',' << r.seed << '\n';
-  io::writeFileAtomically(path, os.str());
+    os << csvField(r.run) << ',' << csvField(r.status) << ',' << r.wall_time_s << ',' << r.sim_time_s << ','
+       << r.real_time_factor << ',' << csvField(r.output_dir) << ',' << csvQuote(r.overrides) << ','
+       << csvField(r.jointsim_version) << ',' << csvField(r.git_commit) << ',' << csvField(r.started_utc) << ','
+       << csvQuote(r.inputs) << ',' << csvField(r.fault_type) << ',' << csvField(r.fault_joint) << ','
+       << csvField(r.fault_severity) << ',' << csvField(r.fault_onset_s) << ',' << csvField(r.design) << ','
+       << csvField(r.seed) << '\n';
+  if (!os) throw Error(path + ": cannot format the manifest (out of memory?)");
+  io::writeFileAtomically(path, os.str());  // checks every write; the old manifest stays on a failure
 }
+
+// The batch's hold on its output folder: an exclusive flock on <dir>/.jointsim-batch.lock for a whole-sweep batch
+// or --collect, a shared one for a shard (the shards of a job array write disjoint run folders at the same time),
+// and an exclusive one on the manifest it writes (<manifest>.lock). A second batch into the same folder (or the
+// same shard) is refused at once instead of deleting the first one's files. Locks end with the process
+// (also on kill -9); flock works across the nodes of an NFS (v4) file system.
+class FolderLock {
+ public:
+  FolderLock(const std::string& dir, const std::string& manifest, bool shard) {
+    take((std::filesystem::path(dir) / ".jointsim-batch.lock").string(), shard ? LOCK_SH : LOCK_EX, dir);
+    take(manifest + ".lock", LOCK_EX, dir);
+  }
+  ~FolderLock() {
+    for (int fd : fds_) ::close(fd);
+  }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  void take(const std::string& path, int how, const std::string& dir) {
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) throw InputError(dir + ": cannot create the batch's lock file " + path + ": " + std::strerror(errno));
+    if (::flock(fd, how | LOCK_NB) != 0) {
+      const int err = errno;
+      ::close(fd);
+      if (err == EWOULDBLOCK)
+        throw InputError(dir + ": another jointsim batch is writing into this folder (it holds " + path +
+                         "); wait for it to end, or give this one another output folder (-o)");
+      throw InputError(dir + ": cannot lock " + path + ": " + std::strerror(err));
+    }
+    fds_.push_back(fd);
+  }
+  std::vector<int> fds_;
+};
+
+// Removes temporary files ("NAME.tmp.PID") left in `folder` by a process that was killed (kill -9, a node lost)
+// while writing; the caller holds the lock that makes it the only writer there.
+void removeLeftovers(const std::string& folder, const std::string& prefix = "") {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(folder, ec)) {
+    const std::string f = e.path().filename().string();
+    if (f.find(".tmp.") != std::string::npos && f.rfind(prefix, 0) == 0 && e.is_regular_file(ec))
+      fs::remove(e.path(), ec);
+  }
+}
+
+// When to rewrite the manifest while runs finish: at least 10 times as much time between rewrites as the last one
+// took, so that rewriting costs at most ~10 % of the batch whatever the size of the sweep (a 100,000-run sweep once
+// spent its time rewriting a 20 MB file after every run); always at the start and at the end.
+class ManifestPacer {
+ public:
+  bool due(double now_s) const { return now_s - last_end_s_ >= 10.0 * last_cost_s_; }
+  void wrote(double start_s, double end_s) {
+    last_cost_s_ = end_s - start_s;
+    last_end_s_ = end_s;
+    ++writes_;
+  }
+  int writes() const { return writes_; }
+
+ private:
+  double last_end_s_ = 0.0, last_cost_s_ = 0.0;
+  int writes_ = 0;
+};
 
 std::string outputDir(const Sweep& s, const BatchOptions& o) { return batchOutputDir(s, o.output_dir); }
 
@@ -467,12 +567,25 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
                                                       std::to_string(options.shard_count) + ".csv"
                                                 : std::string("manifest.csv")))
           .string();
+  const FolderLock lock(dir, res.manifest_path, options.shard_count > 1);
+  removeLeftovers(dir, fs::path(res.manifest_path).filename().string() + ".tmp.");
+  std::map<std::string, std::string> hashes;
   std::vector<size_t> queue;
   for (size_t k = 0; k < mine.size(); ++k) {
+    if (const int sig = stopRequested()) {  // reading the folders of a large sweep takes a while
+      res.interrupted = sig;
+      return res;
+    }
     const BatchRun& run = sweep.runs[mine[k]];
     BatchRecord r = recordFromFolder(run, dir);
-    const bool same = slurpFile(fs::path(dir) / run.name / "run.settings") == runSettings(sweep, run) &&
-                      inputsUnchanged(readSummary(fs::path(dir) / run.name / "summary.json"));
+    const fs::path folder = fs::path(dir) / run.name;
+    bool same = false;
+    if (r.status == "ok") {
+      const SummaryInfo summary = readSummary(folder / "summary.json");
+      same = slurpFile(folder / "run.settings") == runSettings(sweep, run) && inputsUnchanged(summary, hashes) &&
+             outputsIntact(summary, folder);
+      if (same) removeLeftovers(folder.string());
+    }
     if (r.status == "ok" && same) {
       r.skipped = true;
       ++res.skipped;
@@ -483,7 +596,15 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
     }
     res.records.push_back(r);
   }
-  writeManifest(res.manifest_path, res.records);
+  ManifestPacer pacer;
+  const auto seconds = [t0] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+  auto rewrite = [&](bool always) {
+    const double start = seconds();
+    if (!always && !pacer.due(start)) return;
+    writeManifest(res.manifest_path, res.records);
+    pacer.wrote(start, seconds());
+  };
+  rewrite(true);
   // Progress line (a terminal only): runs done, failed, skipped, running, and the time left, estimated from the wall
   // time of the runs finished in this call (skipped runs excluded) spread over the jobs.
   double finished_wall = 0.0;
@@ -605,8 +726,10 @@ BatchResult runBatch(const Sweep& sweep, const BatchOptions& options) {
       ++res.failed;
     }
     res.records[a.k] = r;
-    writeManifest(res.manifest_path, res.records);
+    rewrite(false);
   }
+  rewrite(true);
+  res.manifest_writes = pacer.writes();
   progress(0);
   if (options.progress) std::fputc('\n', stderr);
   res.interrupted = stopRequested();
@@ -629,15 +752,23 @@ BatchResult collectBatch(const Sweep& sweep, const BatchOptions& options) {
   const std::string dir = outputDir(sweep, options);
   BatchResult res;
   res.manifest_path = (fs::path(dir) / "manifest.csv").string();
-  for (BatchRecord& r : batchRecords(sweep, dir)) {
+  io::createDirectories(dir);
+  const FolderLock lock(dir, res.manifest_path, false);
+  removeLeftovers(dir, "manifest.csv.tmp.");
+  for (const BatchRun& run : sweep.runs) {
+    if (const int sig = stopRequested()) {  // nothing written: the old manifest stays
+      res.interrupted = sig;
+      return res;
+    }
+    BatchRecord r = recordFromFolder(run, dir);
     if (r.status == "ok")
       ++res.ok;
     else if (r.status != "pending")
       ++res.failed;
     res.records.push_back(r);
   }
-  io::createDirectories(dir);
   writeManifest(res.manifest_path, res.records);
+  res.manifest_writes = 1;
   return res;
 }
 
@@ -662,11 +793,18 @@ ValidationReport validateFile(const std::string& path, const std::vector<std::st
     if (seen.insert(std::filesystem::absolute(path).lexically_normal().string()).second)
       r.files.push_back(std::filesystem::absolute(path).lexically_normal().string());
     for (const BatchRun& run : sweep.runs) {
+      if (const int sig = stopRequested())
+        throw sim::Interrupted(SolverError("validate interrupted (signal " + std::to_string(sig) + ") after " +
+                                               std::to_string(r.runs) + " of " + std::to_string(sweep.runs.size()) +
+                                               " runs",
+                                           0.0, "INTERRUPTED", "validate"),
+                               sim::SimulationResult{}, sig);
       std::vector<std::string> o = run.overrides;
       o.insert(o.end(), overrides.begin(), overrides.end());
       std::unique_ptr<Experiment> e;
       try {
         e = loadExperiment(sweep.experiment, o, run.faults);
+        checkRunSettings(*e);
       } catch (const InputError& err) {
         throw InputError(sweep.file + ": run '" + run.name + "': " + err.what());
       }
@@ -677,6 +815,7 @@ ValidationReport validateFile(const std::string& path, const std::vector<std::st
     return r;
   }
   std::unique_ptr<Experiment> e = loadExperiment(path, overrides);
+  checkRunSettings(*e);
   r.kind = "experiment";
   r.name = e->name();
   r.runs = 1;

@@ -2,6 +2,7 @@
 #include "jointsim/experiments/experiment.hpp"
 
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 
@@ -134,6 +135,7 @@ struct SummaryFields {
   std::string status, reason, csv;
   double failed_at = 0.0;
   std::vector<std::string> extra_files;
+  std::vector<std::pair<std::string, std::uintmax_t>> outputs;  ///< file name (in the summary's folder), bytes
 };
 
 std::string summaryJson(Experiment& e, const std::string& started, const SummaryFields& f,
@@ -172,6 +174,11 @@ std::string summaryJson(Experiment& e, const std::string& started, const Summary
   }
   s["csv"] = f.csv;
   if (!f.extra_files.empty()) s["extra_csv"] = f.extra_files;
+  if (f.status == "ok") {
+    // What resume checks before it reuses the run: each output still there with the size it was written with.
+    auto& outputs = s["outputs"] = nlohmann::ordered_json::array();
+    for (const auto& [file, bytes] : f.outputs) outputs.push_back({{"file", file}, {"bytes", bytes}});
+  }
   s["columns"] = sim::tableColumns(e.plant());
   auto& inputs = s["inputs"] = nlohmann::ordered_json::array();
   for (const auto& in : e.inputs()) inputs.push_back({{"path", in.path}, {"hash", in.hash}, {"bytes", in.size}});
@@ -185,6 +192,16 @@ std::string summaryJson(Experiment& e, const std::string& started, const Summary
 }
 
 }  // namespace
+
+void checkRunSettings(Experiment& experiment) {
+  const sim::SimulateOptions options = runOptions(experiment);
+  try {
+    experiment.plant().timeEvents(options.t_end);  // e.g. the episodes of an intermittent fault, bounded
+  } catch (const InputError& err) {
+    throw InputError((experiment.file().empty() ? "experiment '" + experiment.name() + "'" : experiment.file()) + ": " +
+                     err.what());
+  }
+}
 
 std::unique_ptr<sim::Simulator> makeSimulator(std::shared_ptr<Experiment> experiment) {
   if (!experiment) throw InputError("makeSimulator: no experiment given");
@@ -233,7 +250,7 @@ RunReport runAndRecord(Experiment& experiment, const RunOptions& options) {
   if (options.max_steps >= 0) limits.steps = options.max_steps;
   if (options.max_wall_time >= 0.0) limits.wall_time = options.max_wall_time;
   experiment.setLimits(limits);
-  runOptions(experiment);  // bad settings: InputError before anything is touched
+  checkRunSettings(experiment);  // bad settings: InputError before anything is touched
   RunReport report;
   report.experiment = name;
   const std::string dir = options.output_dir.empty() ? "out/" + name : options.output_dir;
@@ -295,6 +312,11 @@ RunReport runAndRecord(Experiment& experiment, const RunOptions& options) {
   }
   report.csv_path = f.csv = csv_path;
   f.status = report.status = "ok";
+  for (const auto& w : writers) {
+    std::error_code ec;
+    const std::uintmax_t bytes = fs::file_size(w->path(), ec);
+    f.outputs.emplace_back(fs::path(w->path()).filename().string(), ec ? 0 : bytes);
+  }
   report.stats = r.stats;
   report.sim_time_s = r.sim_time_s;
   report.wall_time_s = r.wall_time_s;

@@ -108,6 +108,7 @@ FmuDescription exportFmu(const std::string& config, const std::string& fmu_path,
                      "' is the FMU's model identifier and must be a C identifier (letters, digits, _)");
 
   std::unique_ptr<experiments::Experiment> e = experiments::loadExperiment(config, options.overrides);
+  experiments::checkRunSettings(*e);  // what jointsim run refuses, the FMU refuses at export
   FmuDescription d = describe(*e, options, model_identifier);
   d.overrides = options.overrides;
 

@@ -80,7 +80,10 @@ struct Instance::Impl {
         experiments::loadExperiment(resources + "/" + d.experiment_file, overrides, faults));
     if (experiment->type() != d.experiment_type)
       throw InputError("the experiment's type changed to '" + experiment->type() + "'");
-    sim = experiments::makeSimulator(experiment);
+    experiments::checkRunSettings(*experiment);  // the checks of jointsim run (e.g. a log rate beyond its limit)
+    auto made = experiments::makeSimulator(experiment);
+    checkVariables(made->plant());  // before the simulator is kept: a failed check leaves none to read from
+    sim = std::move(made);
     // One fmi2DoStep may take at most the solver's max_num_steps internal steps (its meaning in the experiment file:
     // per output interval, here per communication step); a longer one fails with the simulated time and the plant.
     sim::AdvanceLimits limits;
@@ -94,6 +97,36 @@ struct Instance::Impl {
     applyInputs();
     if (start_time != 0.0) sim->reset(start_time, sim->plant().initialState());
     params_changed = false;
+  }
+
+  /// The description (resources/jointsim_fmu.json) against the plant it was loaded for: every output names a signal
+  /// of the plant under the same name, every input a joint of the robot and a port it has. An edited description
+  /// (the GUID is only a string in it) is an error here instead of a read out of bounds in fmi2GetReal.
+  void checkVariables(const sim::Plant& plant) const {
+    const auto& signals = plant.signalNames();
+    const auto* robot = dynamic_cast<const systems::RobotSystem*>(&plant);
+    const std::string where = resources + "/jointsim_fmu.json: variable ";
+    for (const Variable& v : d.variables) {
+      if (v.causality == Causality::Output) {
+        if (v.signal < 0 || static_cast<size_t>(v.signal) >= signals.size())
+          throw InputError(where + v.name + ": signal " + std::to_string(v.signal) + " out of range (the plant has " +
+                           std::to_string(signals.size()) + " signals); the FMU's resources were edited");
+        if (splitColumn(signals[static_cast<size_t>(v.signal)]).first != v.name)
+          throw InputError(where + v.name + ": signal " + std::to_string(v.signal) + " is '" +
+                           signals[static_cast<size_t>(v.signal)] + "'; the FMU's resources were edited");
+      } else if (v.causality == Causality::Input) {
+        if (robot != nullptr) {
+          if (v.joint < 0 || static_cast<size_t>(v.joint) >= robot->model().joint_names.size())
+            throw InputError(where + v.name + ": joint " + std::to_string(v.joint) + " out of range (the robot has " +
+                             std::to_string(robot->model().joint_names.size()) +
+                             " joints); the FMU's resources were edited");
+          if (v.port != "q" && v.port != "qd") systems::parsePort(v.port);  // InputError for an unknown port
+        } else if (v.joint != -1 || v.port != "input") {
+          throw InputError(where + v.name + ": expected the input of a joint rig (joint -1, port 'input')" +
+                           "; the FMU's resources were edited");
+        }
+      }
+    }
   }
 
   void applyInputs() {

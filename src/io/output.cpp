@@ -73,10 +73,15 @@ void writeFileAtomically(const std::string& path, const std::string& content) {
   const std::string tmp = temporaryName(path);
   std::FILE* f = std::fopen(tmp.c_str(), "w");
   if (f == nullptr) throw Error(path + ": cannot write output file: " + std::strerror(errno));
-  const bool ok = std::fwrite(content.data(), 1, content.size(), f) == content.size();
-  if (std::fclose(f) != 0 || !ok) {
+  bool ok = std::fwrite(content.data(), 1, content.size(), f) == content.size() && std::fflush(f) == 0;
+  int err = ok ? 0 : errno;
+  if (std::fclose(f) != 0 && ok) {
+    ok = false;
+    err = errno;
+  }
+  if (!ok) {
     std::remove(tmp.c_str());
-    throw Error(path + ": writing failed");
+    throw Error(path + ": writing failed: " + std::strerror(err));  // e.g. "No space left on device"
   }
   moveIntoPlace(tmp, path);
 }

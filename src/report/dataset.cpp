@@ -10,25 +10,54 @@
 #include <type_traits>
 #include <vector>
 
+#include <fcntl.h>
 #include <hdf5.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/common/version.hpp"
 #include "jointsim/io/csv_reader.hpp"
 #include "jointsim/io/input_files.hpp"
 #include "jointsim/io/output.hpp"
+#include "jointsim/sim/simulate.hpp"
 
 namespace jointsim::report {
 namespace {
 
 namespace fs = std::filesystem;
 
+// The system's reason for the innermost HDF5 failure, e.g. "No space left on device": HDF5's file drivers record
+// "..., errno = 28, error message = 'No space left on device', ..." on the error stack. Empty when there is none.
+std::string hdf5Reason() {
+  std::string reason;
+  auto visit = [](unsigned, const H5E_error2_t* e, void* data) -> herr_t {
+    const std::string desc = e->desc != nullptr ? e->desc : "";
+    const std::string key = "error message = '";
+    if (const size_t at = desc.find(key); at != std::string::npos) {
+      const size_t end = desc.find('\'', at + key.size());
+      *static_cast<std::string*>(data) = desc.substr(at + key.size(), end - at - key.size());
+    }
+    return 0;
+  };
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, visit, &reason);
+  return reason;
+}
+
+[[noreturn]] void hdf5Failure(const std::string& what) {
+  const std::string reason = hdf5Reason();
+  throw Error("HDF5: cannot " + what + (reason.empty() ? "" : ": " + reason));
+}
+
 // An HDF5 identifier closed by its own close function when it goes out of scope; a negative id is HDF5's error.
 class Handle {
  public:
   Handle(hid_t id, herr_t (*close)(hid_t), const std::string& what) : id_(id), close_(close) {
-    if (id_ < 0) throw Error("HDF5: cannot " + what);
+    if (id_ < 0) hdf5Failure(what);
   }
   ~Handle() {
     if (id_ >= 0) close_(id_);
@@ -36,14 +65,23 @@ class Handle {
   Handle(const Handle&) = delete;
   Handle& operator=(const Handle&) = delete;
   operator hid_t() const { return id_; }
+  /// Closes now and reports a failure (the close of a file writes what is still cached).
+  void close(const std::string& what) {
+    const hid_t id = id_;
+    id_ = -1;
+    check(close_(id), what);
+  }
 
  private:
+  static void check(herr_t status, const std::string& what) {
+    if (status < 0) hdf5Failure(what);
+  }
   hid_t id_;
   herr_t (*close_)(hid_t);
 };
 
 void check(herr_t status, const std::string& what) {
-  if (status < 0) throw Error("HDF5: cannot " + what);
+  if (status < 0) hdf5Failure(what);
 }
 
 // A variable-length UTF-8 string attribute (h5py reads it as str).
@@ -178,27 +216,69 @@ struct TemporaryFile {
 
 void checkDatasetPath(const std::string& path) {
   if (path.empty()) throw InputError("data set: expected a file name (FILE.h5)");
+  if (path.find('\0') != std::string::npos) throw InputError("data set: the file name contains a NUL byte");
   const fs::path folder = fs::path(path).parent_path();
   std::error_code ec;
   if (!folder.empty() && !fs::is_directory(folder, ec))
     throw InputError("data set " + path + ": folder '" + folder.string() + "' does not exist");
   if (fs::is_directory(path, ec)) throw InputError("data set " + path + ": is a folder, expected a file name");
+  // The file is written as NAME.tmp.PID beside the target: that name must fit the usual 255-byte limit as well.
+  const std::string name = fs::path(path).filename().string();
+  constexpr size_t kMaxName = 255 - std::char_traits<char>::length(".tmp.") - 10;
+  if (name.size() > kMaxName)
+    throw InputError("data set " + path + ": a file name of " + std::to_string(name.size()) +
+                     " bytes is too long (at most " + std::to_string(kMaxName) +
+                     ", room for the temporary name written beside it)");
+  if (io::pathExists(path)) {
+    // Never replace something that is not a data set (e.g. a run's log given by mistake).
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    char head[8] = {};
+    const size_t n = f != nullptr ? std::fread(head, 1, sizeof head, f) : 0;
+    if (f != nullptr) std::fclose(f);
+    if (n != sizeof head || std::memcmp(head, "\x89HDF\r\n\x1a\n", sizeof head) != 0)
+      throw InputError("data set " + path + ": the file exists and is not an HDF5 file; refusing to replace it");
+  }
+  // Can a file be created there at all (a read-only folder, a full or read-only file system)? Found now, before
+  // any run, not after all of them.
+  const std::string probe = io::temporaryName(path);
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
+  if (fd < 0 && errno != EEXIST)
+    throw InputError("data set " + path + ": cannot create a file in folder '" +
+                     (folder.empty() ? std::string(".") : folder.string()) + "': " + std::strerror(errno));
+  if (fd >= 0) {
+    ::close(fd);
+    ::unlink(probe.c_str());
+  }
 }
 
-DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& output_dir, const std::string& path) {
+void checkDatasetPath(const experiments::Sweep& sweep, const std::string& output_dir, const std::string& path) {
   checkDatasetPath(path);
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become exceptions, not HDF5's stack dumps on stderr
-  const std::string dir = experiments::batchOutputDir(sweep, output_dir);
-  const std::vector<experiments::BatchRecord> records = experiments::batchRecords(sweep, dir);
+  // Not inside a run's folder (a batch clears its run folders when it runs them again).
+  std::error_code ec;
+  const fs::path dir = fs::weakly_canonical(experiments::batchOutputDir(sweep, output_dir), ec);
+  const fs::path parent = fs::weakly_canonical(fs::absolute(path).parent_path(), ec);
+  if (parent.parent_path() == dir)
+    for (const experiments::BatchRun& run : sweep.runs)
+      if (parent.filename() == run.name)
+        throw InputError("data set " + path + ": is inside the folder of run '" + run.name +
+                         "'; write it elsewhere (e.g. beside the batch's manifest)");
+}
 
+namespace {
+
+// Writes the HDF5 file `tmp` (in the child process of writeDataset).
+DatasetSummary writeDatasetFile(const experiments::Sweep& sweep, const std::string& dir, const std::string& tmp_path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become exceptions, not HDF5's stack dumps on stderr
+  const std::vector<experiments::BatchRecord> records = experiments::batchRecords(sweep, dir);
   DatasetSummary summary;
-  summary.path = path;
-  TemporaryFile tmp{io::temporaryName(path)};
+  struct {
+    std::string path;
+  } tmp{tmp_path};
   {
     // The HDF5 1.10 file format: compact object headers and single-chunk indexes (several thousand small data sets per file).
     const Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create a file access list");
     check(H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_V110), "set the file format version");
-    const Handle file(H5Fcreate(tmp.path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl), H5Fclose, "create " + tmp.path);
+    Handle file(H5Fcreate(tmp.path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl), H5Fclose, "create " + tmp.path);
     attribute(file, "format", "jointsim-dataset");
     numberAttribute(file, "format_version", 1L);
     attribute(file, "sweep", sweep.name);
@@ -280,10 +360,106 @@ DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& 
     }
     writeLabels(file, labels);
     check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush " + tmp.path);
-  }  // closed here: the file is complete on disk
-  io::moveIntoPlace(tmp.path, path);
-  tmp.keep = true;
+    file.close("close " + tmp.path);  // the file is complete on disk
+  }
   return summary;
+}
+
+// Reads all of `fd` (the child's report), or stops early on a stop request; false when a stop was requested.
+bool readReport(int fd, std::string& out) {
+  char buf[4096];
+  for (;;) {
+    if (stopRequested()) return false;
+    struct pollfd p {
+      fd, POLLIN, 0
+    };
+    const int r = ::poll(&p, 1, 100);
+    if (r < 0 && errno != EINTR) return true;
+    if (r <= 0) continue;
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return true;
+    out.append(buf, static_cast<size_t>(n));
+  }
+}
+
+void writeAll(int fd, const std::string& s) {
+  size_t done = 0;
+  while (done < s.size()) {
+    const ssize_t n = ::write(fd, s.data() + done, s.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return;
+    done += static_cast<size_t>(n);
+  }
+}
+
+}  // namespace
+
+DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& output_dir, const std::string& path) {
+  checkDatasetPath(sweep, output_dir, path);
+  const std::string dir = experiments::batchOutputDir(sweep, output_dir);
+  TemporaryFile tmp{io::temporaryName(path)};
+  // HDF5 is used in a child process of its own: after a failed write (a full disk) HDF5 1.10 keeps the half-closed
+  // file in its tables and crashes when the process exits (H5F__close_cb at exit), which would take a host process
+  // (Python) with it. The child reports "ok RUNS WITH_DATA SAMPLES" or "input MESSAGE" / "error MESSAGE" on a pipe.
+  int fds[2];
+  if (::pipe(fds) != 0) throw Error("data set " + path + ": cannot create a pipe: " + std::strerror(errno));
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    const int err = errno;
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw Error("data set " + path + ": cannot start the writer: " + std::strerror(err));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    forgetStopPolls();
+    ::signal(SIGINT, SIG_DFL);  // the parent decides about stops and kills the writer
+    ::signal(SIGTERM, SIG_DFL);
+    std::string report;
+    int code = 0;
+    try {
+      const DatasetSummary s = writeDatasetFile(sweep, dir, tmp.path);
+      report =
+          "ok " + std::to_string(s.runs) + " " + std::to_string(s.runs_with_data) + " " + std::to_string(s.samples);
+    } catch (const InputError& e) {
+      report = std::string("input ") + e.what();
+      code = 2;
+    } catch (const std::exception& e) {
+      report = std::string("error ") + e.what();
+      code = 1;
+    }
+    writeAll(fds[1], report);
+    ::close(fds[1]);
+    _exit(code);  // no exit handlers: HDF5's would touch a failed file
+  }
+  ::close(fds[1]);
+  std::string report;
+  const bool finished = readReport(fds[0], report);
+  ::close(fds[0]);
+  if (!finished) ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!finished)
+    throw sim::Interrupted(SolverError("data set " + path + ": not written (interrupted); nothing was left behind", 0.0,
+                                       "INTERRUPTED", "dataset"),
+                           sim::SimulationResult{}, stopRequested());
+  if (report.rfind("ok ", 0) == 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+    DatasetSummary summary;
+    summary.path = path;
+    std::sscanf(report.c_str() + 3, "%d %d %ld", &summary.runs, &summary.runs_with_data, &summary.samples);
+    io::moveIntoPlace(tmp.path, path);
+    tmp.keep = true;
+    return summary;
+  }
+  if (report.rfind("input ", 0) == 0) throw InputError(report.substr(6));
+  if (report.rfind("error ", 0) == 0) throw Error("data set " + path + ": " + report.substr(6));
+  throw Error("data set " + path + ": the writer ended " +
+              (WIFSIGNALED(status) ? "by signal " + std::to_string(WTERMSIG(status))
+                                   : "with status " + std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1)) +
+              " (out of memory?); nothing was written");
 }
 
 }  // namespace jointsim::report

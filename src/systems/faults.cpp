@@ -244,6 +244,17 @@ std::vector<double> faultEvents(const Fault& f, double t_end) {
   };
   if (f.intermittent()) {
     const double length = f.type == FaultType::SensorSpike ? f.width : f.value;
+    // The number of episodes that start before t_end, counted before any is listed: a tiny period (1e-9 s) must be
+    // refused here, not fill memory with 10^10 edges.
+    if (f.period > 0.0 && t_end > f.onset) {
+      double episodes = std::ceil((t_end - f.onset) / f.period);
+      if (f.count > 0) episodes = std::min(episodes, static_cast<double>(f.count));
+      if (!(2.0 * episodes <= static_cast<double>(kMaxFaultEvents)))
+        throw InputError("fault " + describe(f) + ": " + formatNumber(episodes, 3) + " episodes in " +
+                         formatNumber(t_end) + " s (every " + formatNumber(f.period) + " s) give more than " +
+                         std::to_string(kMaxFaultEvents) +
+                         " time events, each a restart of the integrator; give a longer period or a count");
+    }
     for (long k = 0;; ++k) {
       if (f.count > 0 && k >= f.count) break;
       const double start = f.onset + static_cast<double>(k) * f.period;

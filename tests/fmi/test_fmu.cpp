@@ -320,3 +320,71 @@ TEST(FmuInstance, DriveParameterActsAsTheSameFault) {
   EXPECT_EQ(inst.setReal(&vr, 1, &bad), fmi::Status::Error);
   EXPECT_TRUE(log.mentions("coulomb_friction_scale")) << log.lines.back();
 }
+
+// An edited description under a matching GUID (issue 26: a signal index out of range crashed fmi2GetReal): the
+// instance compares every output and input with the plant it loaded and refuses to initialise, with the reason.
+TEST(FmuInstance, AnEditedDescriptionIsAnErrorNotACrash) {
+  struct Edit {
+    const char* what;
+    std::string config;
+    std::vector<std::string> inputs;
+    void (*apply)(fmi::FmuDescription&);
+    const char* expected;
+  };
+  const std::vector<Edit> edits = {
+      {"output signal out of range",
+       kRig,
+       {"command"},
+       [](fmi::FmuDescription& d) {
+         for (auto& v : d.variables)
+           if (v.causality == fmi::Causality::Output) v.signal = 1000000;
+       },
+       "out of range (the plant has"},
+      {"output renumbered",
+       kRig,
+       {"command"},
+       [](fmi::FmuDescription& d) {
+         for (auto& v : d.variables)
+           if (v.causality == fmi::Causality::Output) {
+             v.signal = v.signal == 0 ? 1 : 0;
+             break;
+           }
+       },
+       "the FMU's resources were edited"},
+      {"negative signal",
+       kRig,
+       {"command"},
+       [](fmi::FmuDescription& d) {
+         for (auto& v : d.variables)
+           if (v.causality == fmi::Causality::Output) v.signal = -7;
+       },
+       "signal -7 out of range"},
+      {"robot input joint out of range",
+       kUr5,
+       {"shoulder_pan_joint:voltage"},
+       [](fmi::FmuDescription& d) {
+         for (auto& v : d.variables)
+           if (v.causality == fmi::Causality::Input) v.joint = 99;
+       },
+       "joint 99 out of range"},
+  };
+  for (const Edit& e : edits) {
+    SCOPED_TRACE(e.what);
+    fmi::ExportOptions o;
+    o.inputs = e.inputs;
+    Resources r(e.config, o, "edited");
+    e.apply(r.d);
+    std::ofstream(r.dir / "jointsim_fmu.json") << r.d.toJson().dump(1);
+    Log log;
+    fmi::Instance inst("edited", r.dir.string(), r.d.guid, log.logger());
+    EXPECT_EQ(inst.enterInitializationMode(), fmi::Status::Error);
+    EXPECT_TRUE(log.mentions(e.expected)) << (log.lines.empty() ? "" : log.lines.back());
+    const std::vector<unsigned> all = [&] {
+      std::vector<unsigned> v(r.d.variables.size());
+      for (unsigned i = 0; i < v.size(); ++i) v[i] = i;
+      return v;
+    }();
+    std::vector<double> values(all.size());
+    EXPECT_EQ(inst.getReal(all.data(), all.size(), values.data()), fmi::Status::Error);  // no simulator, no read
+  }
+}

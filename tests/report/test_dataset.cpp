@@ -50,7 +50,7 @@ struct HandMadeSweep {
 TEST(Dataset, AFailedWriteLeavesTheTargetUntouchedAndNoTemporaryFile) {
   HandMadeSweep h;
   const fs::path target = h.dir / "set.h5";
-  write(target, "an older data set");
+  write(target, std::string("\x89HDF\r\n\x1a\n", 8) + "an older data set");
   write(h.dir / "out" / "b" / "ur5_excitation.csv", "time[s],q_elbow_joint[rad]\n0,0.5\n0.01,oops\n");
   try {
     report::writeDataset(h.sweep, (h.dir / "out").string(), target.string());
@@ -58,7 +58,7 @@ TEST(Dataset, AFailedWriteLeavesTheTargetUntouchedAndNoTemporaryFile) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("ur5_excitation.csv:3"), std::string::npos) << e.what();
   }
-  EXPECT_EQ(test::readText(target), "an older data set");
+  EXPECT_EQ(test::readText(target), std::string("\x89HDF\r\n\x1a\n", 8) + "an older data set");
   EXPECT_EQ(h.leftovers(), 0);
   // Repaired, the same call replaces the old file by a complete HDF5 file in one rename.
   write(h.dir / "out" / "b" / "ur5_excitation.csv", "time[s],q_elbow_joint[rad]\n0,0.5\n0.01,0.25\n");

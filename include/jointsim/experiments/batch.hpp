@@ -4,10 +4,12 @@
 /// experiment and a set of runs: an explicit list, a grid of `--set`-style overrides, and fault scenarios
 /// (systems/faults.hpp) applied to chosen joints. Each run executes in its own child process (a crash or a
 /// solver failure only fails that run) and writes into `<output_dir>/<run name>/`; `manifest.csv` lists
-/// every run with its overrides, status, wall time and output folder, and is rewritten atomically after
-/// each run, so an interrupted batch leaves a consistent manifest. Re-running skips runs whose folder
-/// already holds a summary.json with status "ok", the same settings (experiment, overrides, faults) and
-/// input files whose content hashes still match the summary's (resume). `shard_index/shard_count` selects every
+/// every run with its overrides, status, wall time and output folder (RFC 4180 CSV), and is rewritten atomically
+/// as runs finish (at the start, at the end, and in between as often as costs at most ~10 % of the batch's time), so
+/// an interrupted batch leaves a consistent manifest. Re-running skips runs whose folder already holds a
+/// summary.json with status "ok", the same settings (experiment, overrides, faults), input files whose content
+/// hashes still match the summary's and its output files as written (resume). A batch holds a lock on its output
+/// folder (a shard: on its own manifest): a second batch into the same folder is refused (InputError). `shard_index/shard_count` selects every
 /// shard_count-th run starting at shard_index, so a scheduler's job array can spread one sweep over many
 /// machines sharing a file system; each shard writes `manifest.shard-I-of-N.csv`, and `collect` rebuilds
 /// the full `manifest.csv` from the run folders. Format: docs/batch.md.
@@ -71,7 +73,8 @@ struct BatchResult {
   std::vector<BatchRecord> records;  ///< the runs of this shard, in sweep order
   int ok = 0, failed = 0, skipped = 0;
   double wall_time_s = 0.0;
-  int interrupted = 0;  ///< the signal that stopped the batch (SIGINT/SIGTERM, forwarded to its runs), 0 if none
+  int interrupted = 0;      ///< the signal that stopped the batch (SIGINT/SIGTERM, forwarded to its runs), 0 if none
+  int manifest_writes = 0;  ///< times the manifest was written (paced: rewriting costs at most ~10 % of the batch)
 };
 
 /// Indices of the runs of shard `index` of `count`: index, index + count, ...

@@ -145,6 +145,9 @@ std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::v
 /// (e.g. max_step of one log interval); the simulator keeps the experiment alive. The plant is reachable as
 /// simulator->plant() (for `tracking`, a systems::RobotSystem with its command ports).
 std::unique_ptr<sim::Simulator> makeSimulator(std::shared_ptr<Experiment> experiment);
+/// The checks of the run settings that running makes before it starts (the output grid against limits.log_rows,
+/// the budgets): InputError naming the experiment file. `jointsim validate`, `jointsim fmu` and the FMU make them too.
+void checkRunSettings(Experiment& experiment);
 /// Runs a loaded experiment in memory: nothing is written. SolverError on failure.
 ExperimentResult runInMemory(Experiment& experiment);
 /// Loads and runs an experiment file, writing the log, extra tables and summary.json (see the file comment).

@@ -39,12 +39,18 @@ struct DatasetSummary {
 };
 
 /// Writes the results of `sweep` found in `output_dir` (empty: the batch's default, out/<sweep name>/) to `path`.
-/// Throws InputError when the folder of `path` does not exist (before anything is written), Error when the file
-/// cannot be written; a run's unreadable log is an InputError naming the file and line.
+/// Throws InputError when checkDatasetPath refuses `path` (before anything is written), Error when the file cannot be
+/// written (with the system's reason, e.g. "No space left on device"; nothing is left behind); a run's unreadable log
+/// is an InputError naming the file and line; sim::Interrupted on a stop request (jointsim::requestStop). The HDF5
+/// library runs in a child process (fork): a failure inside it cannot affect the calling process.
 DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& output_dir, const std::string& path);
 
 /// Checks, before a batch runs, that `path` can be created: its folder exists and is a directory (InputError
-/// "--dataset PATH: folder 'F' does not exist" otherwise).
+/// "data set PATH: folder 'F' does not exist" otherwise), a file can be created in it (the reason otherwise, e.g.
+/// "Read-only file system"), its name leaves room for the temporary name beside it, and an existing file there is an
+/// HDF5 file (anything else is never replaced).
 void checkDatasetPath(const std::string& path);
+/// As above, and `path` is not inside the folder of one of the sweep's runs under `output_dir`.
+void checkDatasetPath(const experiments::Sweep& sweep, const std::string& output_dir, const std::string& path);
 
 }  // namespace jointsim::report

@@ -99,7 +99,10 @@ double faultValue(const Fault& fault, double t);
 /// The value applied at t: the parameter schedule's piecewise-constant value (see the file comment); for the
 /// intermittent types the severity.
 double scheduledFaultValue(const Fault& fault, double t);
-/// The instants in (0, t_end) at which the fault's effect jumps: onset, schedule steps, episode edges.
+/// The most time events one fault may give a run (episode edges of an intermittent fault).
+constexpr long kMaxFaultEvents = 1000000;
+/// The instants in (0, t_end) at which the fault's effect jumps: onset, schedule steps, episode edges. InputError when
+/// there would be more than kMaxFaultEvents (e.g. a 1e-9 s period), before any is listed.
 std::vector<double> faultEvents(const Fault& fault, double t_end);
 /// Intermittent faults: whether t lies in an episode [start, start + length), and its index.
 bool faultEpisode(const Fault& fault, double t, long* episode = nullptr);

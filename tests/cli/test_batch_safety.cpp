@@ -1,0 +1,302 @@
+// `jointsim batch`, `validate` and `--dataset` under hostile conditions (issue 26): a full disk, a data set aimed at
+// a run's log, two batches into one folder, deleted logs on resume, manifest fields that need CSV quoting, temporary
+// files left by a killed process, inputs that would take unbounded memory or time, and signals outside run loops.
+// Each case ends with a clear error (exit status, the cause in one line, nothing half-written) or correct results.
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "test_util.hpp"
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using jointsim::test::runCli;
+using jointsim::test::runCommand;
+using jointsim::test::shellQuote;
+using jointsim::test::TempDir;
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+const std::string kCli = JOINTSIM_CLI_PATH;
+
+// A sweep of two short runs of the MSL backlash experiment (each about 0.4 MB of log), `extra` appended.
+fs::path writeSweep(const fs::path& dir, const std::string& runs = "runs: [{name: a}, {name: b}]\n") {
+  const fs::path p = dir / "sweep.yaml";
+  std::ofstream(p) << "sweep:\n  name: s\n  experiment: "
+                   << jointsim::test::sourcePath("config/experiments/msl_backlash.yaml") << "\n"
+                   << runs;
+  return p;
+}
+
+// An RFC 4180 parser (independent of the writer): records of fields.
+std::vector<std::vector<std::string>> parseCsv(const std::string& text) {
+  std::vector<std::vector<std::string>> records;
+  std::vector<std::string> record;
+  std::string field;
+  bool quoted = false, any = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
+        field += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        field += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+      any = true;
+    } else if (c == ',') {
+      record.push_back(field);
+      field.clear();
+    } else if (c == '\n') {
+      record.push_back(field);
+      records.push_back(record);
+      record.clear();
+      field.clear();
+      any = false;
+    } else {
+      field += c;
+      any = true;
+    }
+  }
+  EXPECT_FALSE(quoted) << "an unterminated quoted field";
+  if (any || !record.empty()) ADD_FAILURE() << "the last record has no line end";
+  return records;
+}
+
+int countTemporaries(const fs::path& dir) {
+  int n = 0;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    n += e.path().filename().string().find(".tmp.") != std::string::npos;
+  return n;
+}
+
+}  // namespace
+
+// A full disk while the data set is written (simulated by a file-size limit, with SIGXFSZ ignored as a shell may
+// have it): the system's reason, exit 1, neither the data set nor its temporary file left. It used to end in
+// SIGSEGV (HDF5 closing the failed file at exit).
+TEST(BatchSafety, ADataSetOnAFullDiskFailsWithTheReasonAndLeavesNothing) {
+  const TempDir tmp("fulldisk");
+  const fs::path sweep = writeSweep(tmp.path()), out = tmp.path() / "out", set = tmp.path() / "set.h5";
+  ASSERT_EQ(runCli("batch " + sweep.string() + " -o " + out.string()).status, 0);
+  const auto r = runCommand("trap '' XFSZ; ulimit -f 40; exec " + kCli + " batch " + sweep.string() + " -o " +
+                            out.string() + " --collect --dataset " + set.string());
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("data set " + set.string()));
+  EXPECT_THAT(r.err, HasSubstr("File too large"));  // EFBIG: the limit's errno (a full disk gives ENOSPC)
+  EXPECT_FALSE(fs::exists(set));
+  EXPECT_EQ(countTemporaries(tmp.path()), 0);
+  // Without the limit, the same command writes it.
+  const auto ok = runCli("batch " + sweep.string() + " -o " + out.string() + " --collect --dataset " + set.string());
+  EXPECT_EQ(ok.status, 0) << ok.err;
+  EXPECT_EQ(slurp(set).substr(0, 4), "\x89HDF");
+}
+
+// The manifest and a run's summary on a full disk: the reason, not a silently cut file.
+TEST(BatchSafety, AManifestOnAFullDiskIsReportedWithTheReason) {
+  const TempDir tmp("fullmanifest");
+  std::string runs = "runs:\n";
+  for (int i = 0; i < 400; ++i)  // a manifest of about 60 KB
+    runs += "  - {name: r" + std::to_string(i) + ", set: {experiment.description: " + std::string(100, 'x') + "}}\n";
+  const fs::path sweep = writeSweep(tmp.path(), runs), out = tmp.path() / "out";
+  const auto r = runCommand("trap '' XFSZ; ulimit -f 20; exec " + kCli + " batch " + sweep.string() + " -o " +
+                            out.string() + " --collect");
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("manifest.csv: writing failed: File too large"));
+  EXPECT_FALSE(fs::exists(out / "manifest.csv"));
+  EXPECT_EQ(countTemporaries(out), 0);
+}
+
+// --dataset aimed at a run's own log, at a file that is not a data set, into a folder where nothing can be created,
+// or with a name that leaves no room for the temporary name: refused before any run, exit 2.
+TEST(BatchSafety, ADataSetPathThatCannotWorkIsRefusedBeforeAnyRun) {
+  const TempDir tmp("datasetpath");
+  const fs::path sweep = writeSweep(tmp.path()), out = tmp.path() / "out";
+  ASSERT_EQ(runCli("batch " + sweep.string() + " -o " + out.string()).status, 0);
+  const fs::path log = out / "a" / "msl_backlash.csv";
+  const std::string before = slurp(log);
+  ASSERT_FALSE(before.empty());
+  auto r = runCli("batch " + sweep.string() + " -o " + out.string() + " --dataset " + log.string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("is not an HDF5 file; refusing to replace it"));
+  EXPECT_EQ(slurp(log), before);
+  r = runCli("batch " + sweep.string() + " -o " + out.string() + " --dataset " + (out / "a" / "set.h5").string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("inside the folder of run 'a'"));
+  // 251 bytes: the name fits the 255-byte limit, NAME.tmp.PID does not; no run is started (fresh output folder).
+  const fs::path fresh = tmp.path() / "fresh";
+  r = runCli("batch " + sweep.string() + " -o " + fresh.string() + " --dataset " +
+             (tmp.path() / (std::string(248, 'd') + ".h5")).string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("a file name of 251 bytes is too long"));
+  EXPECT_FALSE(fs::exists(fresh));
+  // A folder that is a file's name.
+  r = runCli("batch " + sweep.string() + " -o " + fresh.string() + " --dataset " + (log / "set.h5").string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_FALSE(fs::exists(fresh));
+  // Nowhere to create a file: /proc is read-only for everyone (root included).
+  if (fs::is_directory("/proc/self")) {
+    r = runCli("batch " + sweep.string() + " -o " + fresh.string() + " --dataset /proc/self/set.h5");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_THAT(r.err, HasSubstr("cannot create a file in folder '/proc/self'"));
+    EXPECT_FALSE(fs::exists(fresh));
+  }
+}
+
+// Two batches into one folder: the second is refused at once (exit 2, the reason and what to do) while the first
+// finishes with all its runs ok and a manifest that agrees with its data set. They used to delete each other's files.
+TEST(BatchSafety, ASecondBatchIntoTheSameFolderIsRefusedAndTheFirstFinishes) {
+  const TempDir tmp("twobatches");
+  const fs::path dir = tmp.path(), out = dir / "out";
+  std::ofstream(dir / "slow.yaml") << "sweep:\n  name: slow\n  experiment: "
+                                   << jointsim::test::sourcePath("config/experiments/ur5_excitation.yaml")
+                                   << "\n  set: {duration: 1.0, log_rate: 50}\nruns: [{name: a}, {name: b}]\n";
+  const std::string first = kCli + " batch " + (dir / "slow.yaml").string() + " -o " + out.string() + " --dataset " +
+                            (dir / "set.h5").string() + " >" + shellQuote((dir / "first.out").string()) + " 2>&1";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", first.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // The first holds the lock once its manifest exists.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(out / "manifest.csv") && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const auto second = runCli("batch " + (dir / "slow.yaml").string() + " -o " + out.string());
+  const auto collect = runCli("batch " + (dir / "slow.yaml").string() + " -o " + out.string() + " --collect");
+  const auto shard = runCli("batch " + (dir / "slow.yaml").string() + " -o " + out.string() + " --shard 1/2");
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(dir / "first.out");
+  for (const auto* r : {&second, &collect, &shard}) {
+    EXPECT_EQ(r->status, 2) << r->out << r->err;
+    EXPECT_THAT(r->err, HasSubstr("another jointsim batch is writing into this folder"));
+  }
+  EXPECT_THAT(slurp(dir / "first.out"), HasSubstr("2 ok"));
+  const auto rows = parseCsv(slurp(out / "manifest.csv"));
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[1][1], "ok");
+  EXPECT_EQ(rows[2][1], "ok");
+  EXPECT_EQ(countTemporaries(dir), 0);
+  // Once it has ended, the folder is free again: everything is already done.
+  const auto again = runCli("batch " + (dir / "slow.yaml").string() + " -o " + out.string());
+  EXPECT_EQ(again.status, 0) << again.err;
+  EXPECT_THAT(again.out, HasSubstr("2 skipped"));
+}
+
+// Resume reuses a run only while its outputs are there as written: a deleted or emptied log runs it again (it used
+// to count as done, and the data set then held the run without data). Temporary files of a killed process are
+// removed.
+TEST(BatchSafety, ResumeRunsAgainARunWhoseLogWasDeletedOrEmptied) {
+  const TempDir tmp("resumelogs");
+  const fs::path sweep = writeSweep(tmp.path(), "runs: [{name: a}, {name: b}, {name: c}]\n"),
+                 out = tmp.path() / "out";
+  ASSERT_EQ(runCli("batch " + sweep.string() + " -o " + out.string()).status, 0);
+  const std::string log_c = slurp(out / "c" / "msl_backlash.csv");
+  fs::remove(out / "a" / "msl_backlash.csv");
+  std::ofstream(out / "b" / "msl_backlash.csv", std::ios::trunc);
+  std::ofstream(out / "manifest.csv.tmp.999999") << "left by a kill -9";
+  std::ofstream(out / "c" / "msl_backlash.csv.tmp.999999") << "left by a kill -9";
+  const auto r = runCli("batch " + sweep.string() + " -o " + out.string() + " --dataset " +
+                        (tmp.path() / "set.h5").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("2 ok"));
+  EXPECT_THAT(r.out, HasSubstr("1 skipped"));
+  EXPECT_THAT(r.out, HasSubstr("3 with logs"));
+  EXPECT_EQ(slurp(out / "a" / "msl_backlash.csv"), log_c);  // the same experiment: the same log
+  EXPECT_EQ(slurp(out / "b" / "msl_backlash.csv"), log_c);
+  EXPECT_EQ(countTemporaries(out), 0);
+}
+
+// Manifest fields are RFC 4180 CSV: a fault joint with a comma and a line break (a run in error) keeps every record
+// at 17 fields. It used to give records of 14 and 5 fields under the 17-field header.
+TEST(BatchSafety, ManifestFieldsAreQuotedAsCsv) {
+  const TempDir tmp("quoting");
+  const fs::path dir = tmp.path(), out = dir / "out";
+  std::ofstream(dir / "q.yaml") << "sweep:\n  name: q\n  experiment: "
+                                << jointsim::test::sourcePath("config/experiments/ur5_excitation.yaml")
+                                << "\n  set: {duration: 0.01}\nruns:\n  - {name: nominal}\n"
+                                   "  - name: odd\n    set: {experiment.description: \"a \\\"quoted\\\",\\nvalue\"}\n"
+                                   "    faults: [{type: sensor_bias, joint: \"a,b\\nc\", value: 0.1}]\n";
+  const auto r = runCli("batch " + (dir / "q.yaml").string() + " -o " + out.string());
+  EXPECT_EQ(r.status, 1) << r.err;  // the odd run is in error (no such joint)
+  const auto rows = parseCsv(slurp(out / "manifest.csv"));
+  ASSERT_EQ(rows.size(), 3u);
+  for (const auto& row : rows) EXPECT_EQ(row.size(), 17u);
+  EXPECT_EQ(rows[2][0], "odd");
+  EXPECT_EQ(rows[2][1], "error");
+  EXPECT_EQ(rows[2][12], "a,b\nc");  // fault_joint
+  EXPECT_THAT(rows[2][6], HasSubstr("experiment.description=a \"quoted\",\nvalue"));
+}
+
+// Inputs that would take unbounded memory: an intermittent fault with a 1e-9 s period over a 10 s run (10^10
+// episodes) is refused by validate and by batch's run, within a 1 GB address-space limit and in seconds.
+TEST(BatchSafety, AnIntermittentFaultWithATinyPeriodIsRefusedWithinBoundedMemory) {
+  const TempDir tmp("dropout");
+  const fs::path dir = tmp.path();
+  std::ofstream(dir / "d.yaml") << "sweep:\n  name: d\n  experiment: "
+                                << jointsim::test::sourcePath("config/experiments/ur5_excitation.yaml")
+                                << "\nruns:\n  - name: tiny\n    faults: [{type: sensor_dropout, joint: elbow_joint, "
+                                   "value: 1e-10, period: 1e-9}]\n";
+  const auto t0 = std::chrono::steady_clock::now();
+  auto r = runCommand("ulimit -v 1000000; exec " + kCli + " validate " + (dir / "d.yaml").string());
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("time events"));
+  EXPECT_THAT(r.err, HasSubstr("run 'tiny'"));
+  r = runCommand("ulimit -v 1000000; exec " + kCli + " batch " + (dir / "d.yaml").string() + " -o " +
+                 (dir / "out").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_THAT(slurp(dir / "out" / "tiny" / "run.log"), HasSubstr("time events"));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 60.0);
+}
+
+// validate makes the checks run makes: a log grid beyond limits.log_rows is refused by both (validate passed it).
+TEST(BatchSafety, ValidateRefusesWhatRunRefuses) {
+  const std::string exp = jointsim::test::sourcePath("config/experiments/ur5_fall.yaml");
+  const auto v = runCli("validate " + exp + " --set log_rate=1e7 --set duration=2");
+  EXPECT_EQ(v.status, 2) << v.out;
+  EXPECT_THAT(v.err, HasSubstr("limits.log_rows"));
+  const TempDir tmp("validaterun");
+  const auto r = runCli("run " + exp + " --set log_rate=1e7 --set duration=2 -o " + tmp.path().string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("limits.log_rows"));
+}
+
+// SIGINT during validate of a large sweep: it stops at once with exit 130 (it used to ignore SIGINT for minutes).
+TEST(BatchSafety, ValidateOfALargeSweepStopsOnSigint) {
+  const TempDir tmp("validatesigint");
+  const fs::path dir = tmp.path();
+  std::ofstream(dir / "big.yaml") << "sweep:\n  name: big\n  experiment: "
+                                  << jointsim::test::sourcePath("config/experiments/ur5_fall.yaml")
+                                  << "\nsample:\n  design: monte_carlo\n  runs: 100000\n  seed: 1\n  parameters:\n"
+                                     "    duration: {distribution: uniform, low: 0.1, high: 0.2}\n";
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = runCommand("exec timeout --preserve-status -s INT 2 " + kCli + " validate " + (dir / "big.yaml").string());
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(r.status, 130) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("validate interrupted"));
+  EXPECT_LT(wall, 20.0);
+}
