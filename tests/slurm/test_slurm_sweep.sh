@@ -8,10 +8,16 @@
 #   d. cancel one array task while its second run is running (its first run has finished), check that the collected
 #      manifest reports that run as not ok, resubmit, and check that only the missing run ran again (the other
 #      runs' files unchanged, the resubmitted tasks skipped them) and that the final manifest is all ok;
+#   f. (issue 26) a sweep whose overrides hold newlines, commas and quotes (multi-line quoted fields of the
+#      manifest), in an output folder named with %x, %j, %%, %5a, a trailing % and a space (Slurm's --output file
+#      name patterns): counted right, all ok (exit 0), the task logs in that folder's slurm-logs/;
+#   g. (issue 26) such a sweep with a run in error: exit 1 and exactly that run listed;
+#   h. (issue 26) -J ../../x and an output folder with a backslash: exit 2, nothing written, no job submitted;
 #   e. stop the cluster and check that its daemons are gone.
 # Usage: tests/slurm/test_slurm_sweep.sh JOINTSIM_EXECUTABLE [REPOSITORY_ROOT]
 # Needs root, munge and slurm-wlm (slurmctld, slurmd, client commands); prints SKIP and exits 77 without them.
-# Prints one PASS/FAIL line per check and exits 1 if any failed. About 15 s on 2 cores; every wait is bounded so
+# The same input checks without a cluster: tests/slurm/test_slurm_sweep_inputs.sh.
+# Prints one PASS/FAIL line per check and exits 1 if any failed. About 20 s on 2 cores; every wait is bounded so
 # that the whole test ends within TEST_TIMEOUT seconds (default 170) plus the cluster's shutdown.
 # KEEP_TMP=1 keeps the temporary folder.
 set -uo pipefail
@@ -197,6 +203,67 @@ skipped=$(cat "$out2"/slurm-logs/*-"${second:-none}"_*.out 2>/dev/null \
 check "d. the resubmitted array (job $second) skipped 5 runs" [ "$skipped" = 5 ]
 check "d. r4-slow complete after the resubmission (600 s simulated)" \
   grep -Eq '"sim_time_s": 600(\.0*)?,' "$out2/r4-slow/summary.json"
+
+# --- f. quoted manifest fields, % in the output folder ----------------------------------------------------------
+# (In this unquoted here-document \n and \" reach the YAML file, whose double-quoted strings read them as a newline
+# and a quote.) The manifest's overrides field of q0-multiline spans 3 lines; one of them reads like a record.
+cat >"$tmp/quoted.yaml" <<EOF
+sweep:
+  name: slurm_quoted
+  experiment: $experiment
+  set: {robot: ../robots/ur5_drives_elastic.yaml, duration: 0.2, log_rate: 100}
+runs:
+  - name: q0-multiline
+    set: {experiment.description: "line1\nline2, \"quoted\"\nline3,failed,0"}
+  - name: q1-plain
+  - name: q2-commas
+    set: {experiment.description: "a,b,,c"}
+EOF
+pct="$tmp/out 100%x%j%%5a%"
+sweep_slurm "$tmp/quoted.yaml" -o "$pct" 2>"$tmp/sweep_f.log"
+rc=$?
+[ $rc = 0 ] || cat "$tmp/sweep_f.log"
+check "f. 3 runs with multi-line, comma and quote overrides into '${pct#"$tmp/"}': all ok (exit $rc)" [ $rc = 0 ]
+check "f. ... counted as 3 runs (3 tasks, 'all 3 runs ok')" \
+  eval 'grep -q ": 3 runs in 3 tasks" "$tmp/sweep_f.log" && grep -q "all 3 runs ok" "$tmp/sweep_f.log"'
+job_f="$(grep -o 'submitted job array [0-9]*' "$tmp/sweep_f.log" | awk '{print $4}')"
+logs_f="$(cd "$pct/slurm-logs" 2>/dev/null && ls -- *.out 2>/dev/null | tr '\n' ' ')"
+want_f=""
+for i in 0 1 2; do want_f+="jointsim-slurm_quoted-${job_f}_$i.out "; done
+check "f. ... the 3 task logs in the folder's slurm-logs/ ($logs_f)" [ "$logs_f" = "$want_f" ]
+
+# --- g. a run in error among multi-line fields ------------------------------------------------------------------
+cat >"$tmp/quoted_bad.yaml" <<EOF
+sweep:
+  name: slurm_quoted_bad
+  experiment: $experiment
+  set: {robot: ../robots/ur5_drives_elastic.yaml, duration: 0.2, log_rate: 100}
+runs:
+  - name: g0-ok
+    set: {experiment.description: "one\ntwo,error\nthree"}
+  - name: g1-bad
+    set: {+no_such_key: "x\ny, \"z\""}
+EOF
+sweep_slurm "$tmp/quoted_bad.yaml" -o "$tmp/quoted_bad" 2>"$tmp/sweep_g.log"
+rc=$?
+listed="$(grep '^  ' "$tmp/sweep_g.log" | sed 's/ (.*//')"
+check "g. 2 runs, g1-bad in error (an override key that does not exist): exit 1 (exit $rc)" [ $rc = 1 ]
+check "g. ... '1 of 2 runs not ok' and exactly g1-bad listed (${listed//$'\n'/; })" \
+  eval 'grep -q "1 of 2 runs not ok" "$tmp/sweep_g.log" && [ "$listed" = "  g1-bad: error" ]'
+[ "$listed" = "  g1-bad: error" ] || cat "$tmp/sweep_g.log"
+
+# --- h. a job name or an output folder Slurm cannot take: refused before anything happens -----------------------
+last_job() { squeue -h -t all -o %F 2>/dev/null | sort -n | tail -n 1; }
+jobs_before="$(last_job)"
+sweep_slurm "$tmp/small.yaml" -o "$tmp/h/out" -J ../../x 2>"$tmp/sweep_h1.log"
+rc=$?
+check "h. -J ../../x: exit 2 with one line naming the option (exit $rc: $(head -n 1 "$tmp/sweep_h1.log"))" \
+  eval '[ $rc = 2 ] && [ "$(wc -l <"$tmp/sweep_h1.log")" = 1 ] && grep -q -- "-J" "$tmp/sweep_h1.log"'
+sweep_slurm "$tmp/small.yaml" -o "$tmp/h\\x/out" 2>"$tmp/sweep_h2.log"
+rc=$?
+check "h. output folder with a backslash: exit 2 (exit $rc: $(head -n 1 "$tmp/sweep_h2.log"))" [ $rc = 2 ]
+check "h. ... nothing written, no job submitted (last job ${jobs_before:-none} before and after)" \
+  eval '[ ! -e "$tmp/h" ] && [ ! -e "$tmp/x.sbatch" ] && [ ! -e "$tmp/h\\x" ] && [ "$(last_job)" = "$jobs_before" ]'
 
 # --- e. stop the cluster ---------------------------------------------------------------------------------------
 "$repo/scripts/slurm-cluster.sh" stop "$cluster" 2>/dev/null
