@@ -20,6 +20,7 @@
 #include <utility>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 
 static_assert(std::is_same<realtype, double>::value, "SUNDIALS must be built in double precision");
 
@@ -395,6 +396,38 @@ struct CvodeIntegrator::Impl {
     return t;
   }
 
+  /// "; limiting state: NAME (the largest weighted local error |e_i|·w_i of the last step)", or "" when CVODE cannot
+  /// say (no step taken yet).
+  std::string limitingState() const {
+    if (mem == nullptr || y == nullptr) return {};
+    N_Vector ele = N_VClone(y), ewt = N_VClone(y);
+    std::string out;
+    if (ele != nullptr && ewt != nullptr && CVodeGetEstLocalErrors(mem, ele) == CV_SUCCESS &&
+        CVodeGetErrWeights(mem, ewt) == CV_SUCCESS) {
+      const sunrealtype* e = N_VGetArrayPointer(ele);
+      const sunrealtype* w = N_VGetArrayPointer(ewt);
+      const sunindextype n = N_VGetLength(y);
+      sunindextype worst = -1;
+      double largest = 0.0;
+      for (sunindextype i = 0; i < n; ++i) {
+        const double v = std::abs(e[i] * w[i]);
+        if (std::isfinite(v) && v > largest) {
+          largest = v;
+          worst = i;
+        }
+      }
+      if (worst >= 0) {
+        std::string name = opts.state_name ? opts.state_name(static_cast<int>(worst)) : std::string();
+        if (name.empty()) name = "y[" + std::to_string(worst) + "]";
+        out = "; limiting state: " + name + " (largest weighted local error of the last step, " +
+              formatNumber(largest, 3) + ")";
+      }
+    }
+    if (ele != nullptr) N_VDestroy(ele);
+    if (ewt != nullptr) N_VDestroy(ewt);
+    return out;
+  }
+
   /// Throw a SolverError for a failed CVODE call `what` that returned `flag`.
   [[noreturn]] void fail(const char* what, int flag, double t) {
     const std::string name = flagName(flag);
@@ -437,6 +470,8 @@ struct CvodeIntegrator::Impl {
       msg << " = " << nonfinite_value << ") at t = " << formatTime(nonfinite_time) << " s, " << nonfinite_count
           << " time(s) in this call";
       if (nonfinite_count > opts.max_nonfinite_retries) msg << " (retry limit max_nonfinite_retries exceeded)";
+    } else {
+      msg << limitingState();
     }
     if (cvode_warnings > 0) {
       msg << "; CVODE warning";
@@ -724,6 +759,10 @@ CvodeIntegrator::CvodeIntegrator(int n, RhsFunction rhs, CvodeOptions options, J
   if (options.max_nonfinite_retries < 0) {
     bad("max_nonfinite_retries must be >= 0, got " + std::to_string(options.max_nonfinite_retries));
   }
+  if (!(options.collapse_mean_step >= 0.0) || !std::isfinite(options.collapse_mean_step))
+    bad("collapse_mean_step must be a time >= 0 s (0: no check), got " + formatNumber(options.collapse_mean_step));
+  if (options.collapse_window < 1)
+    bad("collapse_window must be >= 1 step, got " + std::to_string(options.collapse_window));
   if (options.max_num_steps <= 0) {
     bad("max_num_steps must be > 0, got " + std::to_string(options.max_num_steps));
   }
@@ -816,21 +855,43 @@ double CvodeIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out)
   }
 
   // The run's step budget: this call may take at most the steps left plus one (the one that exceeds it).
-  if (m.step_limit > 0) {
-    const long steps_before = m.stepsSoFar();
-    const long mxstep = std::min(m.opts.max_num_steps, std::max(1L, m.step_limit - steps_before + 1));
+  const long call_start_steps = m.stepsSoFar();
+  const long budget = m.step_limit > 0
+                          ? std::min(m.opts.max_num_steps, std::max(1L, m.step_limit - call_start_steps + 1))
+                          : m.opts.max_num_steps;
+  // CVODE is called in windows of collapse_window steps so that a collapsed step size is seen after one window
+  // (CvodeOptions::collapse_mean_step), not after the whole budget; together they take at most `budget` steps.
+  const bool watch = m.opts.collapse_mean_step > 0.0 && m.opts.collapse_window > 0;
+  double t_ret = m.t_last;
+  int flag = CV_SUCCESS;
+  for (;;) {
+    const long used = m.stepsSoFar() - call_start_steps;
+    const long mxstep = watch ? std::min(budget - used, m.opts.collapse_window) : budget;
     if (mxstep != m.mxstep_set) {
       m.check(CVodeSetMaxNumSteps(m.mem, mxstep), "CVodeSetMaxNumSteps");
       m.mxstep_set = mxstep;
     }
-  } else if (m.mxstep_set != m.opts.max_num_steps) {
-    m.check(CVodeSetMaxNumSteps(m.mem, m.opts.max_num_steps), "CVodeSetMaxNumSteps");
-    m.mxstep_set = m.opts.max_num_steps;
+    const double window_t0 = m.cvodeTime();
+    const long window_steps0 = m.stepsSoFar();
+    flag = CVode(m.mem, t_out, m.y, &t_ret, CV_NORMAL);
+    m.fresh = false;
+    if (flag != CV_TOO_MUCH_WORK || m.callback_exception || !watch) break;
+    const long taken = m.stepsSoFar() - window_steps0;
+    const double covered = std::abs(m.cvodeTime() - window_t0);
+    if (taken >= m.opts.collapse_window && !(covered >= static_cast<double>(taken) * m.opts.collapse_mean_step)) {
+      m.t_last = m.cvodeTime();
+      double h = 0.0;
+      CVodeGetLastStep(m.mem, &h);
+      throw SolverError(m.prefix() + ": the step size collapsed at t = " + formatTime(m.t_last) +
+                            " s: " + std::to_string(taken) + " steps covered " + formatNumber(covered, 3) +
+                            " s (less than " + formatNumber(m.opts.collapse_mean_step) + " s each; last step " +
+                            formatNumber(std::abs(h), 3) + " s)" + m.limitingState() +
+                            ". A parameter far beyond reason (a gain, a stiffness) or a discontinuity the solver "
+                            "keeps meeting; check the limiting state's component",
+                        m.t_last, "CV_TOO_MUCH_WORK", m.opts.component);
+    }
+    if (m.stepsSoFar() - call_start_steps >= budget) break;  // the call's budget is spent: as one CVode call
   }
-
-  double t_ret = m.t_last;
-  const int flag = CVode(m.mem, t_out, m.y, &t_ret, CV_NORMAL);
-  m.fresh = false;
   if (flag == CV_TOO_MUCH_WORK && m.step_limit > 0 && !m.callback_exception && m.stepsSoFar() > m.step_limit) {
     m.t_last = m.cvodeTime();
     throw SolverError(m.prefix() + ": more than " + std::to_string(m.step_limit) +

@@ -90,6 +90,7 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
   options.validate();
   CvodeOptions solver = options.solver;
   if (solver.component.empty()) solver.component = plant.name();
+  if (!solver.state_name) solver.state_name = [&plant](int i) { return plant.stateName(i); };
   const int n = plant.stateSize();
   const double t_end = options.t_end;
   const bool keep_history = solver.input_jump == CvodeOptions::InputJump::KeepHistory;

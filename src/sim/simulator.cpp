@@ -51,6 +51,10 @@ Simulator::Simulator(std::shared_ptr<Plant> plant, const CvodeOptions& solver) :
   if (!plant_) throw InputError("Simulator: no plant given");
   CvodeOptions options = solver;
   if (options.component.empty()) options.component = plant_->name();
+  if (!options.state_name) {
+    const Plant* p = plant_.get();  // owned by this simulator, which owns the integrator
+    options.state_name = [p](int i) { return p->stateName(i); };
+  }
   component_ = options.component;
   keep_history_ = options.input_jump == CvodeOptions::InputJump::KeepHistory;
   const int n = plant_->stateSize();

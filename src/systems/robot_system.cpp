@@ -70,6 +70,21 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
     controllers_.emplace_back(d.controller);
     const bool voltage_out = d.controller.type == control::ControllerType::Cascade002;
     if (voltage_out && !d.electrics) throw InputError(where + ": the cascade_002 controller needs the motor electrics");
+    if (voltage_out) {
+      // The continuous current loop L di/dt = V − R i, V = P_cur e + I_cur ∫e has the poles of
+      // L s² + (R + P_cur) s + I_cur = 0, of magnitude at most (R + P_cur)/L + √(I_cur/L). Real current loops are
+      // switched at ≤ ~100 kHz; poles beyond 1e8 rad/s (16 MHz) are a typo (P_cur = 1e12), and integrating them
+      // takes steps of nanoseconds (such a run crawled for minutes before failing). Refused when the file is read.
+      const control::JointControllerParams& c = d.controller;
+      const double fastest = (d.motor.R + c.P_cur) / d.motor.L + std::sqrt(c.I_cur / d.motor.L);
+      if (!(fastest <= kMaxCurrentLoopPole))
+        throw InputError(where + ".controller: P_cur = " + formatNumber(c.P_cur) +
+                         " V/A and I_cur = " + formatNumber(c.I_cur) + " V/(A·s) with R = " + formatNumber(d.motor.R) +
+                         " Ω and L = " + formatNumber(d.motor.L) + " H give a current loop with poles up to " +
+                         formatNumber(fastest, 3) + " rad/s, beyond " + formatNumber(kMaxCurrentLoopPole) +
+                         " rad/s (16 MHz; real current loops switch at ~100 kHz): expected gains with (R + P_cur)/L + "
+                         "√(I_cur/L) ≤ 1e8 rad/s");
+    }
     if (!voltage_out && d.controller.type != control::ControllerType::None && d.electrics)
       throw InputError(where + ": the motor_ppi_000 controller commands torque; set electrics: false");
     DriveLayout& L = layout_[static_cast<size_t>(k)];

@@ -212,16 +212,15 @@ TEST(BatchSafety, ASecondBatchIntoTheSameFolderIsRefusedAndTheFirstFinishes) {
 // removed.
 TEST(BatchSafety, ResumeRunsAgainARunWhoseLogWasDeletedOrEmptied) {
   const TempDir tmp("resumelogs");
-  const fs::path sweep = writeSweep(tmp.path(), "runs: [{name: a}, {name: b}, {name: c}]\n"),
-                 out = tmp.path() / "out";
+  const fs::path sweep = writeSweep(tmp.path(), "runs: [{name: a}, {name: b}, {name: c}]\n"), out = tmp.path() / "out";
   ASSERT_EQ(runCli("batch " + sweep.string() + " -o " + out.string()).status, 0);
   const std::string log_c = slurp(out / "c" / "msl_backlash.csv");
   fs::remove(out / "a" / "msl_backlash.csv");
   std::ofstream(out / "b" / "msl_backlash.csv", std::ios::trunc);
   std::ofstream(out / "manifest.csv.tmp.999999") << "left by a kill -9";
   std::ofstream(out / "c" / "msl_backlash.csv.tmp.999999") << "left by a kill -9";
-  const auto r = runCli("batch " + sweep.string() + " -o " + out.string() + " --dataset " +
-                        (tmp.path() / "set.h5").string());
+  const auto r =
+      runCli("batch " + sweep.string() + " -o " + out.string() + " --dataset " + (tmp.path() / "set.h5").string());
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("2 ok"));
   EXPECT_THAT(r.out, HasSubstr("1 skipped"));
@@ -294,9 +293,45 @@ TEST(BatchSafety, ValidateOfALargeSweepStopsOnSigint) {
                                   << "\nsample:\n  design: monte_carlo\n  runs: 100000\n  seed: 1\n  parameters:\n"
                                      "    duration: {distribution: uniform, low: 0.1, high: 0.2}\n";
   const auto t0 = std::chrono::steady_clock::now();
-  const auto r = runCommand("exec timeout --preserve-status -s INT 2 " + kCli + " validate " + (dir / "big.yaml").string());
+  const auto r =
+      runCommand("exec timeout --preserve-status -s INT 2 " + kCli + " validate " + (dir / "big.yaml").string());
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_EQ(r.status, 130) << r.err;
   EXPECT_THAT(r.err, HasSubstr("validate interrupted"));
   EXPECT_LT(wall, 20.0);
+}
+
+// Absurd but well-formed current-loop gains (P_cur = 1e12 V/A, I_cur = 1e20 V/(A·s)) are refused when the drives file
+// is read, naming the drive, the gains and the limit (a run used to crawl for 26–40 s before failing at t = 0.3 ms
+// without naming anything); gains just inside the limit run.
+TEST(BatchSafety, AbsurdCurrentLoopGainsAreRefusedWhenTheFileIsRead) {
+  const TempDir tmp("gains");
+  const std::string original = slurp(jointsim::test::sourcePath("config/robots/ur5_drives.yaml"));
+  const std::string nominal = "P_cur: 10, I_cur: 10000";
+  ASSERT_NE(original.find(nominal), std::string::npos);
+  ASSERT_NE(original.find("multibody: ur5.yaml"), std::string::npos);
+  auto withGains = [&](const std::string& gains) {
+    std::string text = original;
+    text.replace(text.find(nominal), nominal.size(), gains);
+    text.replace(text.find("multibody: ur5.yaml"), std::string("multibody: ur5.yaml").size(),
+                 "multibody: " + jointsim::test::sourcePath("config/robots/ur5.yaml"));
+    const fs::path p = tmp.path() / "drives.yaml";
+    std::ofstream(p) << text;
+    return p;
+  };
+  const std::string exp = jointsim::test::sourcePath("config/experiments/ur5_excitation.yaml");
+  for (const std::string gains : {"P_cur: 1e12, I_cur: 10000", "P_cur: 10, I_cur: 1e20"}) {
+    SCOPED_TRACE(gains);
+    const fs::path robot = withGains(gains);
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto r = runCli("validate " + exp + " --set robot=" + robot.string());
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_THAT(r.err, HasSubstr("drive of joint 'shoulder_pan_joint'.controller: P_cur = "));
+    EXPECT_THAT(r.err, HasSubstr("beyond 100000000 rad/s"));
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
+  }
+  const fs::path robot = withGains("P_cur: 10, I_cur: 5e12");  // poles 7.8e7 rad/s: inside the limit
+  const auto r = runCli("run " + exp + " --set robot=" + robot.string() + " --set duration=0.2 -o " +
+                        (tmp.path() / "out").string());
+  EXPECT_EQ(r.status, 0) << r.err;
 }

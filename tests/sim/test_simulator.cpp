@@ -5,6 +5,7 @@
 #include <csignal>
 #include <cstdio>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "jointsim/common/error.hpp"
@@ -483,6 +484,43 @@ TEST(SimulatorLimits, AnIntegrationThatNoLongerMovesEndsInsteadOfRunningForever)
   }
   EXPECT_GT(s.time(), 0.99);
   EXPECT_LT(s.time(), 10.0);
+}
+
+/// The relay with a named state, for messages.
+class NamedChatter : public Chatter {
+ public:
+  std::string stateName(int) const override { return "relay output y"; }
+};
+
+// The run loop (sim::simulate) with the library's default solver budget (500,000 steps per output interval): the
+// chattering relay ends after one window of CvodeOptions::collapse_window steps, as a collapsed step size naming the
+// time and the state that limited the step, not after the whole budget (issue 26: an absurd gain crawled for 40 s).
+TEST(SimulatorLimits, ACollapsedStepSizeEndsTheRunAfterOneWindowNamingTheState) {
+  NamedChatter p;
+  sim::SimulateOptions o = sim::SimulateOptions::atRate(3.0, 10.0, tight());
+  try {
+    sim::simulate(p, o, [](const Eigen::VectorXd&) {});
+    FAIL() << "the relay chatters at y = 0 with ever smaller steps";
+  } catch (const sim::SimulationFailure& e) {
+    std::printf("%s\n", e.what());
+    EXPECT_EQ(e.flag(), "CV_TOO_MUCH_WORK") << e.what();
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("the step size collapsed at t = "));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("limiting state: relay output y"));
+    EXPECT_EQ(e.component(), "chatter");
+    EXPECT_GT(e.time(), 0.99);
+    EXPECT_LT(e.time(), 1.01);
+    // At most the steps to reach the relay plus one window, not the 500,000 of the budget.
+    EXPECT_LE(e.partial().stats.steps, 2 * o.solver.collapse_window + 5000);
+  }
+  // The check switched off: the same run spends the whole budget of its output interval, and fails otherwise.
+  o.solver.collapse_mean_step = 0.0;
+  o.solver.max_num_steps = 3 * o.solver.collapse_window;
+  try {
+    sim::simulate(p, o, [](const Eigen::VectorXd&) {});
+    FAIL();
+  } catch (const sim::SimulationFailure& e) {
+    EXPECT_THAT(e.what(), ::testing::Not(::testing::HasSubstr("collapsed"))) << e.what();
+  }
 }
 
 /// The oscillator, its position marked as a state that may grow without bound (an angle that keeps turning).

@@ -34,6 +34,9 @@
 
 namespace jointsim::systems {
 
+/// The fastest pole of a continuous current loop a drive may have [rad/s] (RobotSystem refuses gains beyond it).
+constexpr double kMaxCurrentLoopPole = 1e8;
+
 /// Sensor imperfections. Quantisation and noise are used only with sampled (discrete-time) control; the
 /// joint-angle bias (a fault, systems/faults.hpp) applies in both modes.
 struct SensorSpec {
