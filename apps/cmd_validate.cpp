@@ -1,6 +1,8 @@
 // `jointsim validate FILE [--set key.path=value ...]`: checks an experiment or sweep file completely (every key,
 // every referenced file, every run of a sweep) without simulating; prints what it found. Exit status 0 when the
 // file is valid, 2 with the usual message (file, line, key path) otherwise.
+#include <unistd.h>
+
 #include <cstdio>
 #include <memory>
 
@@ -22,7 +24,7 @@ void addValidateCommand(CLI::App& app) {
   cmd->add_option("--set", opt->overrides,
                   "Override a scalar as in `run`: key.path=value, or +key.path=value to add a key (repeatable)");
   cmd->callback([opt] {
-    const experiments::ValidationReport r = experiments::validateFile(opt->file, opt->overrides);
+    const experiments::ValidationReport r = experiments::validateFile(opt->file, opt->overrides, ::isatty(2) != 0);
     if (r.kind == "sweep")
       std::printf("%s: valid sweep '%s': %d runs of a %s experiment (each loaded with its settings)\n",
                   opt->file.c_str(), r.name.c_str(), r.runs, r.type.c_str());

@@ -393,6 +393,23 @@ Sweep loadSweepDocument(const YamlValue& root, const std::string& path) {
   if (!io::pathExists(s.experiment)) head["experiment"].fail("no such file: " + s.experiment);
   const std::vector<std::string> common = readSet(head["set"]);
 
+  // Bounded work for any input: runs and override strings are counted before any is made (a 25 KB file once asked for
+  // 100,000 runs x 500 sampled parameters: 4.4 GB before its first error).
+  size_t total_runs = 0, total_overrides = 0;
+  auto reserve = [&](double runs, double overrides_per_run, const YamlValue& where) {
+    const double r = static_cast<double>(total_runs) + runs;
+    const double o =
+        static_cast<double>(total_overrides) + runs * (overrides_per_run + static_cast<double>(common.size()));
+    if (r > static_cast<double>(kMaxSweepRuns))
+      where.fail("the sweep would have " + formatNumber(r, 6) + " runs; at most " + std::to_string(kMaxSweepRuns) +
+                 " runs per sweep file (split it, or use shards of several files)");
+    if (o > static_cast<double>(kMaxSweepOverrides))
+      where.fail("the sweep would hold " + formatNumber(o, 6) +
+                 " overrides in all (runs x overrides per run, the common `set` included); at most " +
+                 std::to_string(kMaxSweepOverrides));
+    total_runs = static_cast<size_t>(r);
+    total_overrides = static_cast<size_t>(o);
+  };
   std::set<std::string> names;
   auto add = [&](BatchRun r, const YamlValue& where) {
     if (!names.insert(r.name).second) where.fail("duplicate run name '" + r.name + "'");
@@ -401,6 +418,7 @@ Sweep loadSweepDocument(const YamlValue& root, const std::string& path) {
   };
   if (const YamlValue runs = root["runs"]; runs.defined()) {
     runs.expectSequence("a list of runs {name, set, faults}");
+    reserve(static_cast<double>(runs.size()), 0.0, runs);
     for (size_t i = 0; i < runs.size(); ++i) {
       const YamlValue n = runs.at(i);
       n.expectMap("a run {name, set, faults}");
@@ -410,6 +428,7 @@ Sweep loadSweepDocument(const YamlValue& root, const std::string& path) {
       if (r.name.empty() || sanitize(r.name) != r.name)
         n["name"].failExpected("a name of letters, digits, '.', '-', '_'");
       r.overrides = readSet(n["set"]);
+      reserve(0.0, static_cast<double>(r.overrides.size()), n);
       if (const YamlValue f = n["faults"]; f.defined()) {
         f.expectSequence("a list of faults {type, joint, value}");
         for (size_t k = 0; k < f.size(); ++k) r.faults.push_back(readFault(f.at(k)));
@@ -428,6 +447,9 @@ Sweep loadSweepDocument(const YamlValue& root, const std::string& path) {
       for (size_t i = 0; i < v.size(); ++i) vals.push_back(scalarText(v.at(i), "a scalar value"));
       axes.emplace_back(k, vals);
     }
+    double grid_runs = 1.0;
+    for (const auto& axis : axes) grid_runs *= static_cast<double>(axis.second.size());
+    if (!axes.empty()) reserve(grid_runs, static_cast<double>(axes.size()), grid);
     std::vector<size_t> idx(axes.size(), 0);
     while (!axes.empty()) {
       // Named by the values (last key component and value), so that editing the grid never gives an
@@ -495,6 +517,7 @@ Sweep loadSweepDocument(const YamlValue& root, const std::string& path) {
       }
       dists.push_back(p);
     }
+    reserve(static_cast<double>(n), static_cast<double>(keys.size()), sample);
     const auto values = sampleDesign(design, static_cast<int>(n), dists, static_cast<std::uint64_t>(seed));
     const int width = static_cast<int>(std::to_string(n - 1).size());
     for (long i = 0; i < n; ++i) {
@@ -521,6 +544,7 @@ Sweep loadSweepDocument(const YamlValue& root, const std::string& path) {
       joints.expectSequence("a list of joint names");
       const auto values = n.required("values", "a list of severities").asDoubles(0, "a list of numbers");
       if (values.empty()) n["values"].failExpected("at least one value");
+      reserve(static_cast<double>(joints.size()) * static_cast<double>(values.size()), 0.0, n);
       // Run names: <type>-<joint>-<value>, with the onset and progression when given (so that scenarios differing
       // only in their time law get distinct names).
       std::string law;
@@ -772,7 +796,70 @@ BatchResult collectBatch(const Sweep& sweep, const BatchOptions& options) {
   return res;
 }
 
-ValidationReport validateFile(const std::string& path, const std::vector<std::string>& overrides) {
+namespace {
+
+// The order in which validate checks a sweep's runs: first those most likely to fail, so that an error is reported
+// in seconds even in a 100,000-run sweep (each run is loaded in full, a few ms each); then all the others, in sweep
+// order. First: run 0; for each override key and fault type, the runs with its smallest and largest numeric value;
+// for each override or fault with few distinct values (a grid axis, a list), the first run that has each value.
+std::vector<size_t> validationOrder(const Sweep& sweep) {
+  const size_t n = sweep.runs.size();
+  std::vector<size_t> order;
+  std::vector<char> queued(n, 0);
+  auto push = [&](size_t i) {
+    if (i < n && !queued[i]) {
+      queued[i] = 1;
+      order.push_back(i);
+    }
+  };
+  push(0);
+  struct Extremes {
+    double low = 0, high = 0;
+    size_t at_low = 0, at_high = 0;
+    bool any = false;
+  };
+  std::map<std::string, Extremes> extremes;
+  std::map<std::string, std::map<std::string, size_t>> first;  // key -> value -> first run (capped per key)
+  constexpr size_t kDistinct = 1000;
+  auto see = [&](const std::string& key, const std::string& value, size_t i) {
+    char* end = nullptr;
+    const double v = std::strtod(value.c_str(), &end);
+    if (end != value.c_str() && *end == '\0' && std::isfinite(v)) {
+      Extremes& x = extremes[key];
+      if (!x.any || v < x.low) x.low = v, x.at_low = i;
+      if (!x.any || v > x.high) x.high = v, x.at_high = i;
+      x.any = true;
+    }
+    auto& values = first[key];
+    if (values.size() < kDistinct) values.emplace(value, i);
+  };
+  for (size_t i = 0; i < n; ++i) {
+    const BatchRun& run = sweep.runs[i];
+    for (const std::string& o : run.overrides) {
+      const size_t eq = o.find('=');
+      see(o.substr(0, eq), eq == std::string::npos ? "" : o.substr(eq + 1), i);
+    }
+    for (const systems::Fault& f : run.faults) {
+      const std::string type = systems::toString(f.type);
+      see("fault " + type + " joint", f.joint, i);
+      see("fault " + type + " value", formatShortest(f.value), i);
+      see("fault " + type, systems::describe(f), i);
+    }
+  }
+  for (const auto& [key, x] : extremes) {
+    push(x.at_low);
+    push(x.at_high);
+  }
+  for (const auto& [key, values] : first)
+    if (values.size() < kDistinct)
+      for (const auto& [value, i] : values) push(i);
+  for (size_t i = 0; i < n; ++i) push(i);
+  return order;
+}
+
+}  // namespace
+
+ValidationReport validateFile(const std::string& path, const std::vector<std::string>& overrides, bool progress) {
   ValidationReport r;
   std::set<std::string> seen;
   auto note = [&](const Experiment& e) {
@@ -792,13 +879,30 @@ ValidationReport validateFile(const std::string& path, const std::vector<std::st
     r.name = sweep.name;
     if (seen.insert(std::filesystem::absolute(path).lexically_normal().string()).second)
       r.files.push_back(std::filesystem::absolute(path).lexically_normal().string());
-    for (const BatchRun& run : sweep.runs) {
+    const std::vector<size_t> order = validationOrder(sweep);
+    const auto start = std::chrono::steady_clock::now();
+    auto last_shown = start;
+    bool shown = false;
+    for (size_t k = 0; k < order.size(); ++k) {
+      const BatchRun& run = sweep.runs[order[k]];
       if (const int sig = stopRequested())
         throw sim::Interrupted(SolverError("validate interrupted (signal " + std::to_string(sig) + ") after " +
                                                std::to_string(r.runs) + " of " + std::to_string(sweep.runs.size()) +
                                                " runs",
                                            0.0, "INTERRUPTED", "validate"),
                                sim::SimulationResult{}, sig);
+      if (progress) {  // a terminal: from 1 s on, at most 4 updates a second
+        const auto now = std::chrono::steady_clock::now();
+        if (std::chrono::duration<double>(now - start).count() > 1.0 &&
+            std::chrono::duration<double>(now - last_shown).count() > 0.25) {
+          const double per_run = std::chrono::duration<double>(now - start).count() / static_cast<double>(k);
+          std::fprintf(stderr, "\r  validated %zu of %zu runs, about %s left   ", k, order.size(),
+                       formatDuration(per_run * static_cast<double>(order.size() - k)).c_str());
+          std::fflush(stderr);
+          last_shown = now;
+          shown = true;
+        }
+      }
       std::vector<std::string> o = run.overrides;
       o.insert(o.end(), overrides.begin(), overrides.end());
       std::unique_ptr<Experiment> e;
@@ -806,12 +910,14 @@ ValidationReport validateFile(const std::string& path, const std::vector<std::st
         e = loadExperiment(sweep.experiment, o, run.faults);
         checkRunSettings(*e);
       } catch (const InputError& err) {
+        if (shown) std::fputc('\n', stderr);
         throw InputError(sweep.file + ": run '" + run.name + "': " + err.what());
       }
       if (r.runs == 0) describeBase(*e);
       note(*e);
       ++r.runs;
     }
+    if (shown) std::fputc('\n', stderr);
     return r;
   }
   std::unique_ptr<Experiment> e = loadExperiment(path, overrides);

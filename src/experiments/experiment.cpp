@@ -1,6 +1,7 @@
 // Loading experiment files through the registry, running them in memory or into files (experiment.hpp).
 #include "jointsim/experiments/experiment.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -36,11 +37,60 @@ void Experiment::setConfig(const nlohmann::ordered_json& config) {
   config_ = std::make_shared<nlohmann::ordered_json>(config);
 }
 
+namespace {
+
+// "a.b[2].c" or "a.b.2.c" -> {"a", "b", "2", "c"}.
+std::vector<std::string> keyParts(const std::string& path) {
+  std::vector<std::string> parts;
+  std::string cur;
+  for (const char ch : path) {
+    if (ch == '.' || ch == '[' || ch == ']') {
+      if (!cur.empty()) parts.push_back(cur);
+      cur.clear();
+    } else {
+      cur += ch;
+    }
+  }
+  if (!cur.empty()) parts.push_back(cur);
+  return parts;
+}
+
+// An error about a value an override set (or a key it added) names the override, not a line of the file that no
+// longer holds that value ("ur5_fall.yaml:13: duration: expected a time in s, got 'abc'" came from --set).
+void blameOverride(const InputError& e, const std::string& file, const std::vector<std::string>& overrides) {
+  if (e.file() != file || e.keyPath().empty()) return;
+  const std::vector<std::string> at = keyParts(e.keyPath());
+  for (const std::string& o : overrides) {
+    const std::string spec = !o.empty() && o[0] == '+' ? o.substr(1) : o;
+    const std::vector<std::string> set = keyParts(spec.substr(0, spec.find('=')));
+    const size_t common = std::min(at.size(), set.size());
+    if (common == 0 || !std::equal(at.begin(), at.begin() + static_cast<std::ptrdiff_t>(common), set.begin())) continue;
+    throw InputError(e.file(), 0, e.keyPath(), e.message() + " (from the override --set " + o + ")");
+  }
+}
+
+std::unique_ptr<Experiment> buildExperiment(const YamlValue& root, const std::string& path,
+                                            const std::vector<systems::Fault>& faults, io::InputRecord& inputs);
+
+}  // namespace
+
 std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::vector<std::string>& overrides,
                                            const std::vector<systems::Fault>& faults) {
-  io::InputRecord inputs;
+  io::InputRecord inputs;  // every file read from here on, the experiment file first
   const YamlValue root = YamlValue::loadFile(path);
   detail::applyOverrides(root, overrides);
+  try {
+    return buildExperiment(root, path, faults, inputs);
+  } catch (const InputError& e) {
+    blameOverride(e, root.file(), overrides);
+    throw;
+  }
+}
+
+namespace {
+
+std::unique_ptr<Experiment> buildExperiment(const YamlValue& root, const std::string& path,
+                                            const std::vector<systems::Fault>& faults, io::InputRecord& inputs) {
   root.expectMap("an experiment description mapping");
   const YamlValue exp = root.required("experiment", "mapping {name, type}");
   exp.expectMap("a mapping {name, type}");
@@ -83,8 +133,6 @@ std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::v
   e->setLimits(limits);
   return e;
 }
-
-namespace {
 
 /// The run settings of an experiment with its budgets, checked; InputError naming the experiment file (an
 /// output grid beyond limits.log_rows, a bad budget).

@@ -335,3 +335,78 @@ TEST(BatchSafety, AbsurdCurrentLoopGainsAreRefusedWhenTheFileIsRead) {
                         (tmp.path() / "out").string());
   EXPECT_EQ(r.status, 0) << r.err;
 }
+
+// A sweep file of a few hundred bytes cannot ask for unbounded work: runs and override strings are counted before any
+// is made (100,000 runs x 500 sampled parameters took 4.4 GB and 21 s before its first error), within 1 GB.
+TEST(BatchSafety, HugeSweepsAreRefusedBeforeTheyAreBuilt) {
+  const TempDir tmp("hugesweeps");
+  const std::string head =
+      "sweep:\n  name: h\n  experiment: " + jointsim::test::sourcePath("config/experiments/ur5_fall.yaml") + "\n";
+  std::string params;
+  for (int i = 0; i < 500; ++i) params += "    p" + std::to_string(i) + ": {distribution: uniform, low: 0, high: 1}\n";
+  std::string axes;
+  for (int i = 0; i < 8; ++i) axes += "  a" + std::to_string(i) + ": [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]\n";
+  std::string common = "  set: {";
+  for (int i = 0; i < 100; ++i) common += std::string(i ? ", " : "") + "k" + std::to_string(i) + ": 1";
+  common += "}\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {head + "sample:\n  design: monte_carlo\n  runs: 100000\n  seed: 1\n  parameters:\n" + params,
+       "overrides in all"},
+      {head + "grid:\n" + axes, "the sweep would have 1e+08 runs"},
+      {head + common + "sample:\n  design: latin_hypercube\n  runs: 50000\n  seed: 1\n  parameters:\n" +
+           "    duration: {distribution: uniform, low: 0.1, high: 0.2}\n",
+       "overrides in all (runs x overrides per run, the common `set` included)"},
+      {head + "faults:\n  - {type: sensor_bias, joints: [" +
+           [] {
+             std::string j;
+             for (int i = 0; i < 400; ++i) j += std::string(i ? ", " : "") + "j" + std::to_string(i);
+             return j;
+           }() +
+           "], values: [" +
+           [] {
+             std::string v;
+             for (int i = 0; i < 400; ++i) v += std::string(i ? ", " : "") + std::to_string(i + 1) + "e-3";
+             return v;
+           }() +
+           "]}\n",
+       "the sweep would have 160000 runs"},
+  };
+  for (const auto& [text, expected] : cases) {
+    SCOPED_TRACE(expected);
+    std::ofstream(tmp.path() / "huge.yaml") << text;
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto r = runCommand("ulimit -v 1000000; exec " + kCli + " validate " + (tmp.path() / "huge.yaml").string());
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_THAT(r.err, HasSubstr(expected));
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
+  }
+}
+
+// validate checks the runs most likely to fail first (the extremes of each sampled value): in a 100,000-run sweep
+// whose few bad runs lie anywhere, the error comes in seconds, not after minutes of loading good runs.
+TEST(BatchSafety, ValidateFindsTheBadRunOfALargeSweepFirst) {
+  const TempDir tmp("validateorder");
+  std::ofstream(tmp.path() / "big.yaml") << "sweep:\n  name: big\n  experiment: "
+                                         << jointsim::test::sourcePath("config/experiments/ur5_fall.yaml")
+                                         << "\nsample:\n  design: monte_carlo\n  runs: 100000\n  seed: 7\n"
+                                            "  parameters:\n    duration: {distribution: normal, mean: 1, std: 0.25}\n";
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = runCli("validate " + (tmp.path() / "big.yaml").string());
+  EXPECT_EQ(r.status, 2) << r.err;  // about 3 in 100,000 durations fall below 0
+  EXPECT_THAT(r.err, HasSubstr("duration"));
+  EXPECT_THAT(r.err, HasSubstr("(from the override --set duration=-"));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 20.0);
+}
+
+// An error in a value an override set names the override, not a line of the file that no longer holds it.
+TEST(BatchSafety, AnOverrideErrorNamesTheOverride) {
+  const std::string exp = jointsim::test::sourcePath("config/experiments/ur5_fall.yaml");
+  for (const auto& [set, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"+a.b=1", "ur5_fall.yaml: a: unknown key 'a'"},
+           {"duration=abc", "ur5_fall.yaml: duration: expected a time in s, got 'abc'"}}) {
+    const auto r = runCli("validate " + exp + " --set " + set);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_THAT(r.err, HasSubstr(expected));
+    EXPECT_THAT(r.err, HasSubstr("(from the override --set " + set + ")"));
+  }
+}

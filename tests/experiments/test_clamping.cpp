@@ -367,7 +367,10 @@ TEST(ClampingExperiment, BadInputNamesTheKey) {
     }
     EXPECT_FALSE(std::filesystem::exists(dir + "/irb140_clamping.csv"));
   };
-  fails("axes[1].c=-3", "irb140_clamping.yaml:40: axes[1].c: expected a finite value > 0 N·m/rad, got -3");
+  // A value an override set: the override is named, not the line of the file that held the old value.
+  fails("axes[1].c=-3",
+        "irb140_clamping.yaml: axes[1].c: expected a finite value > 0 N·m/rad, got -3 (from the override --set "
+        "axes[1].c=-3)");
   fails("axes[0].friction.peak=0.5", ": axes[0].friction.peak: expected a finite value >= 1 (-), got 0.5");
   fails("clamp.frame=nowhere", "no frame named 'nowhere'");
   fails("axes[2].joint=joint1", "already has an axis");

@@ -22,6 +22,11 @@
 
 namespace jointsim::experiments {
 
+/// The most runs one sweep file may define (explicit, grid, sampled and fault runs together).
+constexpr size_t kMaxSweepRuns = 100000;
+/// The most override strings a sweep may hold in all (each run's, the common `set` counted once per run).
+constexpr size_t kMaxSweepOverrides = 2000000;
+
 struct BatchRun {
   std::string name;                    ///< unique; also the run's folder name
   std::vector<std::string> overrides;  ///< "key.path=value", the sweep's common overrides first
@@ -38,8 +43,8 @@ struct Sweep {
   std::vector<BatchRun> runs;
 };
 
-/// Reads a sweep file. Throws InputError (file:line: key.path: ...) on bad input, duplicate run names
-/// or an empty sweep.
+/// Reads a sweep file. Throws InputError (file:line: key.path: ...) on bad input, duplicate run names,
+/// an empty sweep, or more than kMaxSweepRuns runs / kMaxSweepOverrides overrides (counted before any run is made).
 Sweep loadSweep(const std::string& path);
 /// A sweep from YAML (or JSON) text; `name` stands for its file in messages, and relative paths in it (the base
 /// experiment) are relative to name's folder (e.g. "/work/my_sweep (dict)" for a sweep built in memory in /work).
@@ -108,7 +113,11 @@ struct ValidationReport {
 /// Checks `path` fully: an experiment file is loaded as `jointsim run` would load it (every key, every referenced
 /// file; `overrides` as --set); a sweep file (top-level `sweep:`) is read and every one of its runs is loaded with
 /// its overrides (then `overrides`) and faults. Nothing is simulated or written. InputError (naming the run of a
-/// sweep, the file, the line and the key path) for the first problem found.
-ValidationReport validateFile(const std::string& path, const std::vector<std::string>& overrides = {});
+/// sweep, the file, the line and the key path) for the first problem found. A sweep's runs are checked in an order that
+/// finds the likely errors first (the smallest and largest value of each override, each value of a grid axis), then
+/// all of them. `progress`: "validated N of M runs, about T left" on stderr (for a terminal). A stop request
+/// (SIGINT/SIGTERM) ends it with sim::Interrupted.
+ValidationReport validateFile(const std::string& path, const std::vector<std::string>& overrides = {},
+                              bool progress = false);
 
 }  // namespace jointsim::experiments
