@@ -9,7 +9,7 @@ PY=${PYTHON:-python3}
 if [ ! -x build/pyenv/bin/python ]; then
   "$PY" -m venv build/pyenv
 fi
-build/pyenv/bin/pip install -q --disable-pip-version-check "scikit-build-core>=0.10" "pybind11>=2.10" "numpy>=1.21" "pytest>=7" "fmpy==0.3.32" "h5py>=3.8" "pandas>=2.0"
+build/pyenv/bin/pip install -q --disable-pip-version-check "scikit-build-core>=0.10" "pybind11>=2.10" "numpy>=1.21" "pytest>=7" "fmpy==0.3.32" "h5py>=3.8" "pandas>=2.0" "hypothesis>=6.100"
 # No build isolation: the build tools above are used, and build/wheel/ is reused between runs.
 # JOINTSIM_WERROR=ON (set by .ci/run): compiler warnings of the extension are errors too.
 CMAKE_BUILD_PARALLEL_LEVEL=$(nproc) build/pyenv/bin/pip install -q --disable-pip-version-check --no-build-isolation \

@@ -1,6 +1,8 @@
 // FMU description: the variables of an experiment, their JSON form (resources/jointsim_fmu.json) and
 // modelDescription.xml (FMI 2.0 Co-Simulation).
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -305,6 +307,21 @@ nlohmann::ordered_json FmuDescription::toJson() const {
   return j;
 }
 
+namespace {
+// An index of the description: a JSON integer within int's range (a float or a huge number is malformed, not cast).
+int indexField(const nlohmann::ordered_json& x, const char* key, const std::string& where) {
+  const auto& v = x.at(key);
+  if (v.is_number_integer()) {
+    const auto n = v.is_number_unsigned()
+                       ? static_cast<long long>(std::min<unsigned long long>(v.get<unsigned long long>(), 1ULL << 40))
+                       : v.get<long long>();
+    if (n >= -1 && n <= std::numeric_limits<int>::max()) return static_cast<int>(n);
+  }
+  throw InputError(where + ": malformed FMU description: " + key + " = " + v.dump() +
+                   " (expected an integer index >= -1)");
+}
+}  // namespace
+
 FmuDescription FmuDescription::fromJson(const nlohmann::ordered_json& j, const std::string& where) {
   FmuDescription d;
   try {
@@ -325,9 +342,9 @@ FmuDescription FmuDescription::fromJson(const nlohmann::ordered_json& j, const s
       v.unit = x.at("unit").get<std::string>();
       v.description = x.at("description").get<std::string>();
       v.start = x.at("start").get<double>();
-      v.joint = x.at("joint").get<int>();
+      v.joint = indexField(x, "joint", where);
       v.port = x.at("port").get<std::string>();
-      v.signal = x.at("signal").get<int>();
+      v.signal = indexField(x, "signal", where);
       v.key = x.at("key").get<std::string>();
       v.fault = x.at("fault").get<std::string>();
       d.variables.push_back(std::move(v));

@@ -1,6 +1,7 @@
 // One FMI 2.0 Co-Simulation instance: the state machine of the standard over experiments::loadExperiment and
 // sim::Simulator. Nothing throws out of the public methods: errors become Status::Error and a log message.
 #include <cmath>
+#include <limits>
 
 #include <nlohmann/json.hpp>
 
@@ -328,6 +329,12 @@ Status Instance::doStep(double t, double h) {
     return m.error("fmi2DoStep: communication step size " + instanceNumber(h) + " at " + instanceNumber(t) +
                    " s (expected a finite step > 0)");
   const double now = m.sim->time();
+  // A step that hardly moves the clock (1e-300 s) is refused like a negative one, not handed to CVODE (which fails
+  // the instance with CV_ILL_INPUT for an output time within rounding of its own).
+  const double resolution = 64.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(now));
+  if (h < resolution)
+    return m.error("fmi2DoStep: communication step size " + instanceNumber(h) + " s is below the time resolution " +
+                   instanceNumber(resolution) + " s at " + instanceNumber(now) + " s");
   if (std::abs(t - now) > 1e-9 * std::max(1.0, std::abs(now)))
     return m.error("fmi2DoStep: communication point " + instanceNumber(t) + " s, but the FMU is at " +
                    instanceNumber(now) + " s");
