@@ -3,6 +3,7 @@ checked against the batch's manifest and the runs' CSV logs (an independent read
 import csv
 import math
 import subprocess
+import sys
 
 import h5py
 import numpy as np
@@ -95,3 +96,31 @@ def test_dataset_bad_paths_write_nothing(cli, root, tmp_path):
     with pytest.raises(ValueError, match="does not exist"):
         jointsim.write_dataset(sweep, target, tmp_path / "runs")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_write_dataset_on_a_full_disk_raises_and_the_interpreter_exits_cleanly(tmp_path):
+    """A full disk while the data set is written (a file-size limit, SIGXFSZ ignored): write_dataset raises with the
+    system's reason and the interpreter goes on and exits normally. It used to raise and then die of SIGSEGV at exit
+    (HDF5 closing the failed file); HDF5 now runs in a child process of its own."""
+    sweep = {"sweep": {"name": "disk", "experiment": str(jointsim.data_path("experiments/msl_backlash.yaml"))},
+             "runs": [{"name": "a"}, {"name": "b"}]}
+    script = f"""
+import resource, signal, sys
+import jointsim
+sweep = {sweep!r}
+jointsim.run_batch(sweep, output_dir={str(tmp_path / 'runs')!r})
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, (40 * 1024, resource.RLIM_INFINITY))
+try:
+    jointsim.write_dataset(sweep, {str(tmp_path / 'set.h5')!r}, {str(tmp_path / 'runs')!r})
+except Exception as e:
+    print('raised:', type(e).__name__, e)
+    sys.exit(0)
+print('no error')
+sys.exit(3)
+"""
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, (p.returncode, p.stdout, p.stderr)
+    assert "raised:" in p.stdout and "File too large" in p.stdout, p.stdout
+    assert not (tmp_path / "set.h5").exists()
+    assert [f.name for f in tmp_path.iterdir() if ".tmp." in f.name] == []
