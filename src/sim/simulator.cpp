@@ -166,6 +166,13 @@ double Simulator::integrate(double stop) {
         stopped();
       }
       if (e.flag() != "CV_TOO_MUCH_WORK") throw;
+      if (std::string(e.what()).find("the step size collapsed") != std::string::npos) {
+        // The integrator's collapse check (CvodeOptions::collapse_mean_step): stuck, with the time and the limiting
+        // state in its message.
+        stop_flag_ = "CV_TOO_MUCH_WORK";
+        stop_message_ = e.what();
+        stopped();
+      }
       // CVODE's cap of steps per CVode call (CvodeOptions::max_num_steps), not a failure: one advance() may be as
       // long as wanted (its own limits end it). CVODE goes on from its last step; the simulator's state follows.
       // Unless those steps hardly moved: then the integration is stuck, and going on would never end.
