@@ -16,9 +16,7 @@
 
 #include <csignal>
 
-#include <fcntl.h>
 #include <signal.h>
-#include <sys/file.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -206,7 +204,15 @@ bool inputsUnchanged(const SummaryInfo& s, std::map<std::string, std::string>& h
 }  // namespace
 
 std::string runSettings(const Sweep& sweep, const BatchRun& run) {
-  return "experiment: " + sweep.experiment + "\nrun: " + run.describe() + "\n";
+  // Each part a JSON string, one per list entry: unambiguous whatever the values hold (joined by "; ", an override
+  // value "x; log_rate=50" read like a second override log_rate=50, and a stale result was reused).
+  nlohmann::json overrides = nlohmann::json::array(), faults = nlohmann::json::array();
+  for (const std::string& o : run.overrides) overrides.push_back(o);
+  for (const systems::Fault& f : run.faults) faults.push_back(systems::describe(f));
+  constexpr auto kReplace = nlohmann::json::error_handler_t::replace;
+  return "experiment: " + nlohmann::json(sweep.experiment).dump(-1, ' ', false, kReplace) +
+         "\noverrides: " + overrides.dump(-1, ' ', false, kReplace) +
+         "\nfaults: " + faults.dump(-1, ' ', false, kReplace) + "\n";
 }
 
 namespace {
@@ -244,31 +250,17 @@ void writeManifest(const std::string& path, const std::vector<BatchRecord>& reco
 // (also on kill -9); flock works across the nodes of an NFS (v4) file system.
 class FolderLock {
  public:
-  FolderLock(const std::string& dir, const std::string& manifest, bool shard) {
-    take((std::filesystem::path(dir) / ".jointsim-batch.lock").string(), shard ? LOCK_SH : LOCK_EX, dir);
-    take(manifest + ".lock", LOCK_EX, dir);
-  }
-  ~FolderLock() {
-    for (int fd : fds_) ::close(fd);
-  }
-  FolderLock(const FolderLock&) = delete;
-  FolderLock& operator=(const FolderLock&) = delete;
+  FolderLock(const std::string& dir, const std::string& manifest, bool shard)
+      : folder_((std::filesystem::path(dir) / ".jointsim-batch.lock").string(), !shard,
+                busy(dir, ".jointsim-batch.lock")),
+        manifest_(manifest + ".lock", true, busy(dir, std::filesystem::path(manifest).filename().string() + ".lock")) {}
 
  private:
-  void take(const std::string& path, int how, const std::string& dir) {
-    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd < 0) throw InputError(dir + ": cannot create the batch's lock file " + path + ": " + std::strerror(errno));
-    if (::flock(fd, how | LOCK_NB) != 0) {
-      const int err = errno;
-      ::close(fd);
-      if (err == EWOULDBLOCK)
-        throw InputError(dir + ": another jointsim batch is writing into this folder (it holds " + path +
-                         "); wait for it to end, or give this one another output folder (-o)");
-      throw InputError(dir + ": cannot lock " + path + ": " + std::strerror(err));
-    }
-    fds_.push_back(fd);
+  static std::string busy(const std::string& dir, const std::string& file) {
+    return dir + ": another jointsim batch is writing into this folder (it holds " + file +
+           "); wait for it to end, or give this one another output folder (-o)";
   }
-  std::vector<int> fds_;
+  io::FileLock folder_, manifest_;
 };
 
 // Removes temporary files ("NAME.tmp.PID") left in `folder` by a process that was killed (kill -9, a node lost)

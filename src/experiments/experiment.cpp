@@ -303,6 +303,10 @@ RunReport runAndRecord(Experiment& experiment, const RunOptions& options) {
   report.experiment = name;
   const std::string dir = options.output_dir.empty() ? "out/" + name : options.output_dir;
   io::createDirectories(dir);
+  // One run at a time into a folder: a second one would remove the first one's outputs under its feet.
+  const io::FileLock lock = io::FileLock::onFolder(
+      dir, dir + ": another jointsim run is writing into this folder; wait for it to end, or give this one another "
+                 "output folder (-o)");
   removeStaleOutputs(dir, name);
   const std::string csv_path = (fs::path(dir) / (name + ".csv")).string();
   report.summary_path = (fs::path(dir) / "summary.json").string();

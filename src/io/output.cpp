@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <system_error>
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include "jointsim/common/error.hpp"
@@ -90,6 +92,36 @@ void createDirectories(const std::string& path) {
   std::error_code ec;
   std::filesystem::create_directories(path, ec);
   if (ec) throw InputError(path + ": cannot create output directory: " + ec.message());
+}
+
+FileLock::FileLock(const std::string& lock_file, bool exclusive, const std::string& busy_message) {
+  fd_ = ::open(lock_file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw InputError(lock_file + ": cannot create the lock file: " + std::strerror(errno));
+  if (::flock(fd_, (exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB) != 0) {
+    const int err = errno;
+    ::close(fd_);
+    fd_ = -1;
+    if (err == EWOULDBLOCK) throw InputError(busy_message);
+    throw InputError(lock_file + ": cannot lock: " + std::strerror(err));
+  }
+}
+
+FileLock FileLock::onFolder(const std::string& folder, const std::string& busy_message) {
+  FileLock lock;
+  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return lock;  // the caller finds out about the folder itself when it writes
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    ::close(fd);
+    if (err == EWOULDBLOCK) throw InputError(busy_message);
+    return lock;  // folders cannot be locked here: go on unlocked
+  }
+  lock.fd_ = fd;
+  return lock;
+}
+
+FileLock::~FileLock() {
+  if (fd_ >= 0) ::close(fd_);
 }
 
 }  // namespace jointsim::io

@@ -410,3 +410,65 @@ TEST(BatchSafety, AnOverrideErrorNamesTheOverride) {
     EXPECT_THAT(r.err, HasSubstr("(from the override --set " + set + ")"));
   }
 }
+
+// The resume stamp is unambiguous: an override whose value reads "x; log_rate=50" is not the same settings as a
+// real log_rate: 50 (joined by "; ", the two stamps were equal and the stale result was reused).
+TEST(BatchSafety, TheResumeStampCannotBeForgedByAValue) {
+  const TempDir tmp("stamp");
+  const fs::path dir = tmp.path(), out = dir / "out";
+  auto sweep = [&](const std::string& set) {
+    std::ofstream(dir / "s.yaml") << "sweep:\n  name: s\n  experiment: "
+                                  << jointsim::test::sourcePath("config/experiments/ur5_fall.yaml")
+                                  << "\n  set: {duration: 0.1}\nruns:\n  - {name: a, set: " << set << "}\n";
+    return runCli("batch " + (dir / "s.yaml").string() + " -o " + out.string());
+  };
+  auto r = sweep("{experiment.description: \"x; log_rate=50\"}");
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = sweep("{experiment.description: x, log_rate: 50}");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("1 ok, 0 failed or in error, 0 skipped"));
+  EXPECT_THAT(slurp(out / "a" / "summary.json"), HasSubstr("\"log_rate\": 50"));
+}
+
+// Two `jointsim run` into one folder at once: the second is refused (exit 2) instead of removing the first one's
+// outputs, and the first completes.
+TEST(BatchSafety, ASecondRunIntoTheSameFolderIsRefused) {
+  const TempDir tmp("tworuns");
+  const fs::path out = tmp.path() / "out";
+  const std::string exp = jointsim::test::sourcePath("config/experiments/ur5_excitation.yaml");
+  const std::string first = kCli + " run " + exp + " --set duration=10 -o " + out.string() + " >" +
+                            shellQuote((tmp.path() / "first.out").string()) + " 2>&1";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", first.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!fs::exists(out) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // created, then locked at once
+  const auto second = runCli("run " + exp + " --set duration=0.1 -o " + out.string());
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(tmp.path() / "first.out");
+  EXPECT_EQ(second.status, 2) << second.out << second.err;
+  EXPECT_THAT(second.err, HasSubstr("another jointsim run is writing into this folder"));
+  EXPECT_THAT(slurp(out / "summary.json"), HasSubstr("\"sim_time_s\": 10"));
+}
+
+// SIGTERM while --collect writes the data set: exit 143 and no data set, no temporary file (it used to exit 0).
+TEST(BatchSafety, SigtermDuringTheDataSetWriteLeavesNothing) {
+  const TempDir tmp("collectterm");
+  std::string runs = "runs:\n";
+  for (int i = 0; i < 60; ++i) runs += "  - {name: r" + std::to_string(i) + "}\n";
+  const fs::path sweep = writeSweep(tmp.path(), runs), out = tmp.path() / "out", set = tmp.path() / "set.h5";
+  ASSERT_EQ(runCli("batch " + sweep.string() + " -j 2 -o " + out.string()).status, 0);
+  // The write of 60 logs of 2000 rows takes about a second; the signal comes after 0.3 s.
+  const auto r = runCommand("exec timeout --preserve-status -s TERM 0.3 " + kCli + " batch " + sweep.string() + " -o " +
+                            out.string() + " --collect --dataset " + set.string());
+  if (r.status == 0) GTEST_SKIP() << "the data set was written before the signal came (a fast machine)";
+  EXPECT_EQ(r.status, 143) << r.out << r.err;
+  EXPECT_FALSE(fs::exists(set));
+  EXPECT_EQ(countTemporaries(tmp.path()), 0);
+}

@@ -97,7 +97,7 @@ std::string batchOutputDir(const Sweep& sweep, const std::string& output_dir);
 /// The record of every run of the sweep from its folder under `output_dir` (as collectBatch, writing nothing).
 std::vector<BatchRecord> batchRecords(const Sweep& sweep, const std::string& output_dir);
 /// What a run's results depend on besides its input files (stored in <run>/run.settings; resume compares it):
-/// "experiment: PATH\nrun: OVERRIDES; FAULTS\n".
+/// "experiment: \"PATH\"\noverrides: [\"key=value\", ...]\nfaults: [\"description\", ...]\n" (JSON strings: unambiguous).
 std::string runSettings(const Sweep& sweep, const BatchRun& run);
 
 /// What `jointsim validate FILE` found: an experiment or sweep file checked completely without running it.

@@ -51,4 +51,24 @@ void writeFileAtomically(const std::string& path, const std::string& content);
 /// long, a file in the way, no permission: the folder the user asked for is not usable).
 void createDirectories(const std::string& path);
 
+/// An advisory lock (flock) on `lock_file` (created if missing), held while the object lives; the kernel releases it
+/// when its process ends, also on kill -9. Exclusive, or shared with other shared holders. Another process (or
+/// another FileLock of this one) holding it in a conflicting way: InputError(`busy_message`) at once, no waiting.
+/// flock works across the nodes of an NFS v4 file system.
+class FileLock {
+ public:
+  FileLock(const std::string& lock_file, bool exclusive, const std::string& busy_message);
+  /// An exclusive lock on the folder itself (no lock file left in it). Where the file system cannot lock folders
+  /// (some NFS mounts), no lock is taken.
+  static FileLock onFolder(const std::string& folder, const std::string& busy_message);
+  FileLock(FileLock&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+  ~FileLock();
+  FileLock(const FileLock&) = delete;
+  FileLock& operator=(const FileLock&) = delete;
+
+ private:
+  FileLock() = default;
+  int fd_ = -1;
+};
+
 }  // namespace jointsim::io
