@@ -64,6 +64,8 @@ TEST(CliFmu, BadInputExitTwoAndNothingWritten) {
       {ur5 + " -o " + (dir / "m.fmu").string() + " --step-size 0", "step size"},
       {ur5 + " -o " + (dir / "m.fmu").string() + " --step-size 1e400", "step"},
       {ur5 + " -o " + (dir / "missing" / "m.fmu").string(), "does not exist"},  // bad input: exit 2 (was 1)
+      // The checks of jointsim run (before: a log rate of 1e300 was exported and failed in the first doStep).
+      {ur5 + " -o " + (dir / "m.fmu").string() + " --set log_rate=1e300", "limits.log_rows"},
   };
   for (const Case& c : cases) {
     const Result r = run("fmu " + c.args);

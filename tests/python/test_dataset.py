@@ -1,6 +1,7 @@
 """HDF5 data sets of sweeps (`jointsim batch --dataset`, jointsim.write_dataset), read back with h5py and pandas and
 checked against the batch's manifest and the runs' CSV logs (an independent reader of the same results)."""
 import csv
+import json
 import math
 import subprocess
 import sys
@@ -64,7 +65,10 @@ def test_dataset_labels_shapes_and_units_match_the_manifest_and_logs(fault_datas
             g = f["runs"][man["run"]]
             assert g.attrs["status"] == "ok" and g.attrs["inputs"] == man["inputs"]
             assert g.attrs["overrides"] == man["overrides"]
-            assert man["overrides"] in g.attrs["settings"]
+            # The resume stamp: each override and fault a JSON string (unambiguous), the manifest's joined by "; ".
+            stamp = dict(line.split(": ", 1) for line in g.attrs["settings"].splitlines())
+            parts = json.loads(stamp["overrides"]) + ["fault " + f for f in json.loads(stamp["faults"])]
+            assert "; ".join(parts) == man["overrides"]
             log = runs_dir / man["output_dir"] / "ur5_excitation.csv"
             with open(log, newline="") as fh:
                 header = next(csv.reader(fh))
