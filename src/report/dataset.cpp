@@ -442,10 +442,15 @@ DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& 
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
-  if (!finished)
+  // A stop request, or the writer ended by the signal of one (Ctrl-C and `timeout` signal the whole process group:
+  // the writer may die of it before this process has seen its own).
+  const int stop_signal = WIFSIGNALED(status) && (WTERMSIG(status) == SIGINT || WTERMSIG(status) == SIGTERM)
+                              ? WTERMSIG(status)
+                              : 0;
+  if (!finished || stopRequested() || stop_signal != 0)
     throw sim::Interrupted(SolverError("data set " + path + ": not written (interrupted); nothing was left behind", 0.0,
                                        "INTERRUPTED", "dataset"),
-                           sim::SimulationResult{}, stopRequested());
+                           sim::SimulationResult{}, stopRequested() != 0 ? stopRequested() : stop_signal);
   if (report.rfind("ok ", 0) == 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0) {
     DatasetSummary summary;
     summary.path = path;
