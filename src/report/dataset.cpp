@@ -444,9 +444,8 @@ DatasetSummary writeDataset(const experiments::Sweep& sweep, const std::string& 
   }
   // A stop request, or the writer ended by the signal of one (Ctrl-C and `timeout` signal the whole process group:
   // the writer may die of it before this process has seen its own).
-  const int stop_signal = WIFSIGNALED(status) && (WTERMSIG(status) == SIGINT || WTERMSIG(status) == SIGTERM)
-                              ? WTERMSIG(status)
-                              : 0;
+  const int stop_signal =
+      WIFSIGNALED(status) && (WTERMSIG(status) == SIGINT || WTERMSIG(status) == SIGTERM) ? WTERMSIG(status) : 0;
   if (!finished || stopRequested() || stop_signal != 0)
     throw sim::Interrupted(SolverError("data set " + path + ": not written (interrupted); nothing was left behind", 0.0,
                                        "INTERRUPTED", "dataset"),
