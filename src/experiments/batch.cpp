@@ -43,8 +43,6 @@ namespace fs = std::filesystem;
 std::string scalarText(const YamlValue& v, const std::string& what) { return v.scalarText(what); }
 
 // Run and sweep names name folders: safe names only (common/text.hpp).
-const char* const kNameRule =
-    "a name of 1 to 128 letters, digits, '.', '-', '_', not starting with '.' or '-' (it names a folder)";
 std::string sanitize(const std::string& s) { return safeFileName(s); }
 
 std::string number(double v) {

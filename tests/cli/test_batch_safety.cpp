@@ -38,6 +38,20 @@ std::string slurp(const fs::path& p) {
 
 const std::string kCli = JOINTSIM_CLI_PATH;
 
+// "ulimit -v 1000000; " (1 GB of address space for the command), except under AddressSanitizer, whose shadow memory
+// reserves terabytes of address space (the CLI could not start); there the bound is the test's time limit.
+#if defined(__SANITIZE_ADDRESS__)
+const std::string kMemoryLimit;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+const std::string kMemoryLimit;
+#else
+const std::string kMemoryLimit = "ulimit -v 1000000; ";
+#endif
+#else
+const std::string kMemoryLimit = "ulimit -v 1000000; ";
+#endif
+
 // A sweep of two short runs of the MSL backlash experiment (each about 0.4 MB of log), `extra` appended.
 fs::path writeSweep(const fs::path& dir, const std::string& runs = "runs: [{name: a}, {name: b}]\n") {
   const fs::path p = dir / "sweep.yaml";
@@ -262,11 +276,11 @@ TEST(BatchSafety, AnIntermittentFaultWithATinyPeriodIsRefusedWithinBoundedMemory
                                 << "\nruns:\n  - name: tiny\n    faults: [{type: sensor_dropout, joint: elbow_joint, "
                                    "value: 1e-10, period: 1e-9}]\n";
   const auto t0 = std::chrono::steady_clock::now();
-  auto r = runCommand("ulimit -v 1000000; exec " + kCli + " validate " + (dir / "d.yaml").string());
+  auto r = runCommand(kMemoryLimit + "exec " + kCli + " validate " + (dir / "d.yaml").string());
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_THAT(r.err, HasSubstr("time events"));
   EXPECT_THAT(r.err, HasSubstr("run 'tiny'"));
-  r = runCommand("ulimit -v 1000000; exec " + kCli + " batch " + (dir / "d.yaml").string() + " -o " +
+  r = runCommand(kMemoryLimit + "exec " + kCli + " batch " + (dir / "d.yaml").string() + " -o " +
                  (dir / "out").string());
   EXPECT_EQ(r.status, 1);
   EXPECT_THAT(slurp(dir / "out" / "tiny" / "run.log"), HasSubstr("time events"));
@@ -376,7 +390,7 @@ TEST(BatchSafety, HugeSweepsAreRefusedBeforeTheyAreBuilt) {
     SCOPED_TRACE(expected);
     std::ofstream(tmp.path() / "huge.yaml") << text;
     const auto t0 = std::chrono::steady_clock::now();
-    const auto r = runCommand("ulimit -v 1000000; exec " + kCli + " validate " + (tmp.path() / "huge.yaml").string());
+    const auto r = runCommand(kMemoryLimit + "exec " + kCli + " validate " + (tmp.path() / "huge.yaml").string());
     EXPECT_EQ(r.status, 2) << r.err;
     EXPECT_THAT(r.err, HasSubstr(expected));
     EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
