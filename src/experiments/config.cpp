@@ -184,6 +184,21 @@ void solverStatsJson(nlohmann::ordered_json& out, const sim::SolverStats& s) {
 
 namespace detail {
 
+std::vector<std::string> keyParts(const std::string& path) {
+  std::vector<std::string> parts;
+  std::string cur;
+  for (const char ch : path) {
+    if (ch == '.' || ch == '[' || ch == ']') {
+      if (!cur.empty()) parts.push_back(cur);
+      cur.clear();
+    } else {
+      cur += ch;
+    }
+  }
+  if (!cur.empty()) parts.push_back(cur);
+  return parts;
+}
+
 void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& overrides) {
   const std::string& file = root.file();
   for (const std::string& o : overrides) {
@@ -195,18 +210,7 @@ void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& o
     if (eq == std::string::npos || eq == 0)
       throw InputError("override " + o + ": expected key.path=value or +key.path=value");
     const std::string path = spec.substr(0, eq), value = spec.substr(eq + 1);
-    // Split "a.b[2].c" into a, b, 2, c.
-    std::vector<std::string> parts;
-    std::string cur;
-    for (const char ch : path) {
-      if (ch == '.' || ch == '[' || ch == ']') {
-        if (!cur.empty()) parts.push_back(cur);
-        cur.clear();
-      } else {
-        cur += ch;
-      }
-    }
-    if (!cur.empty()) parts.push_back(cur);
+    const std::vector<std::string> parts = keyParts(path);
     if (parts.empty()) throw InputError("override " + o + ": expected key.path=value or +key.path=value");
     YAML::Node node = io::yamlNode(root);
     std::string walked;

@@ -11,6 +11,8 @@ namespace jointsim::experiments::detail {
 
 /// Applies `key.path=value` overrides to the document; throws InputError if a key does not exist.
 void applyOverrides(const io::YamlValue& root, const std::vector<std::string>& overrides);
+/// An override's key path split into its components: "a.b[2].c" or "a.b.2.c" -> {"a", "b", "2", "c"}.
+std::vector<std::string> keyParts(const std::string& path);
 /// Removes `key` from the mapping `map` (the document is shared: every value of it sees the change).
 void removeKey(const io::YamlValue& map, const std::string& key);
 /// A YAML value as JSON (scalars that parse as finite numbers or as booleans become numbers/booleans).

@@ -39,30 +39,14 @@ void Experiment::setConfig(const nlohmann::ordered_json& config) {
 
 namespace {
 
-// "a.b[2].c" or "a.b.2.c" -> {"a", "b", "2", "c"}.
-std::vector<std::string> keyParts(const std::string& path) {
-  std::vector<std::string> parts;
-  std::string cur;
-  for (const char ch : path) {
-    if (ch == '.' || ch == '[' || ch == ']') {
-      if (!cur.empty()) parts.push_back(cur);
-      cur.clear();
-    } else {
-      cur += ch;
-    }
-  }
-  if (!cur.empty()) parts.push_back(cur);
-  return parts;
-}
-
 // An error about a value an override set (or a key it added) names the override, not a line of the file that no
 // longer holds that value ("ur5_fall.yaml:13: duration: expected a time in s, got 'abc'" came from --set).
 void blameOverride(const InputError& e, const std::string& file, const std::vector<std::string>& overrides) {
   if (e.file() != file || e.keyPath().empty()) return;
-  const std::vector<std::string> at = keyParts(e.keyPath());
+  const std::vector<std::string> at = detail::keyParts(e.keyPath());
   for (const std::string& o : overrides) {
     const std::string spec = !o.empty() && o[0] == '+' ? o.substr(1) : o;
-    const std::vector<std::string> set = keyParts(spec.substr(0, spec.find('=')));
+    const std::vector<std::string> set = detail::keyParts(spec.substr(0, spec.find('=')));
     const size_t common = std::min(at.size(), set.size());
     if (common == 0 || !std::equal(at.begin(), at.begin() + static_cast<std::ptrdiff_t>(common), set.begin())) continue;
     throw InputError(e.file(), 0, e.keyPath(), e.message() + " (from the override --set " + o + ")");
