@@ -25,9 +25,11 @@ Eigen::VectorXd state(const systems::RobotSystem& sys) {
 static void UR5_Twin_RHS(benchmark::State& st) {
   auto& sys = twin();
   const Eigen::VectorXd y = state(sys);
+  const std::unique_ptr<sim::PlantState> run = sys.makeState();
+  sys.start(*run, 0.0, y);
   Eigen::VectorXd yd(y.size());
   for (auto _ : st) {
-    sys.derivatives(0.5, y, yd);
+    sys.derivatives(*run, 0.5, y, yd);
     benchmark::DoNotOptimize(yd.data());
   }
   st.counters["states"] = static_cast<double>(y.size());
@@ -40,19 +42,21 @@ static void UR5_Twin_Jacobian(benchmark::State& st) {
   auto& sys = twin();
   const Eigen::VectorXd y = state(sys);
   const Eigen::Index n = y.size();
+  const std::unique_ptr<sim::PlantState> run = sys.makeState();
+  sys.start(*run, 0.0, y);
   Eigen::VectorXd f(n);
-  sys.derivatives(0.5, y, f);
+  sys.derivatives(*run, 0.5, y, f);
   const Eigen::VectorXd inc = 1e-7 * y.cwiseAbs().cwiseMax(1e-2);
   Eigen::MatrixXd J(n, n);
   Eigen::VectorXd yp = y, fp(n);
   for (auto _ : st) {
     J.setZero();
     if (st.range(0) == 1) {
-      sys.jacobian(0.5, y, f, inc, J);
+      sys.jacobian(*run, 0.5, y, f, inc, J);
     } else {
       for (Eigen::Index j = 0; j < n; ++j) {
         yp[j] += inc[j];
-        sys.derivatives(0.5, yp, fp);
+        sys.derivatives(*run, 0.5, yp, fp);
         J.col(j) = (fp - f) / inc[j];
         yp[j] = y[j];
       }

@@ -40,7 +40,7 @@ int main() try {
       const double w = 5e-3 * std::pow(0.6 / 5e-3, static_cast<double>(k) / (n - 1));  // rad/s
       // Long enough for the bristles (σ0) and the PI loop to settle at this speed.
       const double plateau = std::max(3.0, 10.0 * 9.4 / (truth.sigma0 * w));
-      rig.setCommand(dir * w);
+      rig.setCommand(sim.plantState(), dir * w);
       const double t0 = sim.time();
       double sum_v = 0, sum_tau = 0;
       int count = 0;

@@ -36,7 +36,8 @@ int main(int argc, char** argv) try {
   sim::CvodeOptions solver = sim::stiffDriveSolver(rtol, 1e-9);
   solver.max_gamma_change = 0.5;  // fewer Newton matrix factorisations at the samples' stops and restarts
   sim::Simulator sim(robot, solver);
-  for (int k = 0; k < n; ++k) robot.setCommandPort(k, systems::CommandPort::Voltage);
+  // The robot is only read; the run's inputs live in the simulator's state.
+  for (int k = 0; k < n; ++k) robot.setCommandPort(sim.plantState(), k, systems::CommandPort::Voltage);
 
   // PD gains on the joint angle [V/rad] and on the motor speed reduced to the joint [V·s/rad]; gravity
   // feed-forward through the steady current i = g / (N k_t), i.e. the voltage R i (the back-EMF and the friction
@@ -56,7 +57,7 @@ int main(int argc, char** argv) try {
       V[k] =
           d.motor.R * g[k] / (N * d.motor.kt) + Kp * (q_ref[k] - q[k]) - Kd * robot.motorVelocity(sim.state(), k) / N;
     }
-    robot.setCommands(V);
+    robot.setCommands(sim.plantState(), V);
     sim.advance(dt);
     if (sim.time() >= 1.7 - 1e-9)
       worst_after_settling = std::max(worst_after_settling, (q_ref - sim.state().head(n)).cwiseAbs().maxCoeff());

@@ -1,5 +1,6 @@
 #pragma once
 /// \file Umbrella header of the jointsim library: every public header of every layer (a test keeps it complete).
+#include "jointsim/common/bytes.hpp"
 #include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interpolate.hpp"

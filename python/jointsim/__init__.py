@@ -41,7 +41,7 @@ from .errors import (ConcurrentUseError, InputError, InputFileNotFoundError, Inp
 __version__ = _core.__version__
 
 __all__ = [
-    "PORTS", "Model", "Experiment", "RunResult", "Simulator", "Dataset",
+    "PORTS", "Model", "Experiment", "RunResult", "Simulator", "Snapshot", "Dataset",
     "InputError", "InputFileNotFoundError", "InputTypeError", "SolverError", "UnidentifiableError",
     "ConcurrentUseError",
     "data_path", "load_robot", "rnea", "aba", "crba", "gravity_torques", "rnea_derivatives", "aba_derivatives",
@@ -537,6 +537,31 @@ def fit_friction_map(velocity: Any, torque: Any) -> Dict[str, Any]:
 
 
 # ------------------------------------------------------------------------------------------------ simulator
+class Snapshot:
+    """The complete state of a Simulator at one time (Simulator.snapshot()). Restore it with Simulator.restore();
+    it pickles (as the bytes of Simulator.save_state()), so a state can go to another process that made a simulator
+    from the same model."""
+
+    def __init__(self, core: "_core.Snapshot"):
+        self._p = core
+
+    time = property(lambda self: self._p.time, doc="Simulated time of the snapshot [s].")
+
+    def to_bytes(self) -> bytes:
+        """The snapshot serialised (as Simulator.save_state())."""
+        return self._p.to_bytes()
+
+    @staticmethod
+    def _from_bytes(data: bytes, time: float) -> "Snapshot":
+        return Snapshot(_core.Snapshot.from_bytes(data, time))
+
+    def __reduce__(self):
+        return (Snapshot._from_bytes, (self._p.to_bytes(), self._p.time))
+
+    def __repr__(self) -> str:
+        return f"<jointsim.Snapshot at t = {self.time} s>"
+
+
 class Simulator:
     """Steps a simulated model: advance(dt) / advance_to(t) with events and samples handled inside; inputs
     (command ports) may change between steps, and the integrator restarts only where an input actually jumps.
@@ -610,9 +635,47 @@ class Simulator:
         """Integrates to time t [s] >= time; returns the time reached [s]. Errors as advance()."""
         return self._s.advance_to(_float(t, "t"))
 
-    def reset(self) -> None:
-        """Back to the initial state at t = 0."""
-        self._s.reset()
+    def reset(self, q0: Optional[Sequence[float]] = None, qd0: Optional[Sequence[float]] = None) -> None:
+        """Back to t = 0 with a fresh run state: command ports, commands, held setpoints and external wrenches
+        cleared, controllers, sensors and noise generator as at the start. Without arguments the model's initial
+        state; for a robot with drives q0 [rad] and qd0 [rad/s], shapes (dof,), start it elsewhere (at q0 with the
+        drives holding it, joints moving at qd0)."""
+        conv = lambda a, what: None if a is None else _array(a, what)
+        self._s.reset(conv(q0, "q0"), conv(qd0, "qd0"))
+
+    def snapshot(self) -> "Snapshot":
+        """The complete state now (time, continuous state, inputs, controllers, sensor memory, noise generator,
+        modes, faults). restore() it here or into a copy() to continue bit for bit as this simulator continues; it
+        pickles (as bytes) for another process with the same model."""
+        return Snapshot(self._s.snapshot())
+
+    def restore(self, snapshot: "Snapshot") -> None:
+        """Back to a snapshot of this model (InputError for one of another model; the simulator is then
+        unchanged)."""
+        if not isinstance(snapshot, Snapshot):
+            raise TypeError("restore: expected a jointsim.Snapshot (from snapshot()), got " + type(snapshot).__name__)
+        self._s.restore(snapshot._p)
+
+    def save_state(self) -> bytes:
+        """The complete state as bytes (snapshot() serialised)."""
+        return self._s.save_state()
+
+    def load_state(self, data: bytes) -> None:
+        """Back to a state from save_state() (InputError for bytes of another model or truncated ones)."""
+        if not isinstance(data, (bytes, bytearray)):
+            raise TypeError("load_state: expected bytes, got " + type(data).__name__)
+        self._s.load_state(bytes(data))
+
+    def copy(self) -> "Simulator":
+        """An independent simulator on the same model in the same complete state (inputs included); both continue
+        alike, bit for bit, and neither sees the other's inputs."""
+        c = Simulator(self._s.copy())
+        return c
+
+    @property
+    def state_names(self) -> List[str]:
+        """What each continuous state is, with its unit (as state_name(i))."""
+        return list(self._s.state_names)
 
     def set_state(self, y: Sequence[float]) -> None:
         """Replaces the continuous state (shape like state); the integrator restarts."""
@@ -714,10 +777,14 @@ class Simulator:
         self._s.set_external_wrench(frame, _array(wrench, "wrench"))
 
     def __copy__(self):
-        raise TypeError("a jointsim.Simulator cannot be copied (it would share its plant); make a new one")
+        return self.copy()
 
     def __deepcopy__(self, memo):
-        raise TypeError("a jointsim.Simulator cannot be copied (it would share its plant); make a new one")
+        return self.copy()
+
+    def __reduce__(self):
+        raise TypeError("a jointsim.Simulator does not pickle (its model is not kept as data): pickle "
+                        "sim.snapshot() and restore() it into a simulator made from the same model")
 
     def __repr__(self) -> str:
         return f"<jointsim.Simulator of {self.name} at t = {self.time} s>"

@@ -227,18 +227,21 @@ struct PyExperiment {
 };
 
 /// A stepping simulator and its plant.
+/// A stepping simulator and its plant. The plant is only read (several simulators may share it, in any threads);
+/// the run's state is the simulator's own.
 struct PySimulator {
-  std::shared_ptr<sim::Plant> plant;
+  std::shared_ptr<const sim::Plant> plant;
   std::unique_ptr<sim::Simulator> sim;
   Gate gate = std::make_shared<std::mutex>();
 
-  systems::RobotSystem& robot() {
-    auto* r = dynamic_cast<systems::RobotSystem*>(plant.get());
+  const systems::RobotSystem& robot() {
+    const auto* r = dynamic_cast<const systems::RobotSystem*>(plant.get());
     if (!r) throw InputError(plant->name() + " has no per-joint command ports (only a robot with drives has them)");
     return *r;
   }
+  sim::PlantState& state() { return sim->plantState(); }
   int joint(const py::object& j) {
-    auto& r = robot();
+    const auto& r = robot();
     if (py::isinstance<py::str>(j)) return r.model().jointIndex(j.cast<std::string>());
     if (!py::isinstance<py::int_>(j) || py::isinstance<py::bool_>(j))
       throw py::type_error("joint: expected an index (int) or a joint name (str), got " +
@@ -248,6 +251,17 @@ struct PySimulator {
       throw InputError(r.name() + ": joint index " + std::to_string(k) + " out of range 0.." +
                        std::to_string(r.dof() - 1));
     return static_cast<int>(k);
+  }
+};
+
+/// A snapshot of a simulator: in memory (restored without a copy to bytes), or the bytes of a pickled one.
+struct PySnapshot {
+  std::shared_ptr<const sim::Snapshot> snapshot;  // null for one made from bytes
+  std::string bytes;                              // the pickled form (empty until asked for)
+  double time = 0.0;
+  const std::string& toBytes() {
+    if (bytes.empty() && snapshot) bytes = snapshot->toBytes();
+    return bytes;
   }
 };
 
@@ -584,15 +598,26 @@ PYBIND11_MODULE(_core, m) {
       py::arg("binary_dir"), py::arg("step_size"));
 
   // ------------------------------------------------------------------------------------------ simulator
+  py::class_<PySnapshot>(m, "Snapshot")
+      .def_property_readonly("time", [](const PySnapshot& p) { return p.time; })
+      .def("to_bytes", [](PySnapshot& p) { return py::bytes(p.toBytes()); })
+      .def_static(
+          "from_bytes",
+          [](const py::bytes& b, double time) {
+            PySnapshot p;
+            p.bytes = std::string(b);
+            p.time = time;
+            return p;
+          },
+          py::arg("data"), py::arg("time"));
   py::class_<PySimulator>(m, "Simulator")
       .def_static(
           "from_experiment",
           [](PyExperiment& x) {
             const Use use(x.gate, "Experiment");
             PySimulator s;
-            s.plant = std::shared_ptr<sim::Plant>(x.e, &x.e->plant());
             s.sim = experiments::makeSimulator(x.e);
-            s.gate = x.gate;  // the same plant: one lock
+            s.plant = s.sim->sharedPlant();  // keeps the experiment alive; only read: the simulator has its own lock
             return s;
           },
           py::arg("experiment"))
@@ -639,10 +664,66 @@ PYBIND11_MODULE(_core, m) {
             return s.plant->stateName(i);
           },
           py::arg("i"))
-      .def("reset",
+      .def(
+          "reset",
+          [](PySimulator& s, const py::object& q0, const py::object& qd0) {
+            const Use use(s.gate, "Simulator");
+            if (q0.is_none() && qd0.is_none()) {
+              s.sim->reset();
+              return;
+            }
+            const auto& robot = s.robot();  // joint positions and rates: a robot with drives
+            const int n = robot.dof();
+            Eigen::VectorXd y = robot.initialState(q0.is_none() ? Eigen::VectorXd(s.plant->initialState().head(n))
+                                                                : vec(q0.cast<Array>(), n, "q0"));
+            if (!qd0.is_none()) y.segment(n, n) = vec(qd0.cast<Array>(), n, "qd0");
+            s.sim->reset(0.0, y);
+          },
+          py::arg("q0") = py::none(), py::arg("qd0") = py::none())
+      .def_property_readonly("state_names",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               std::vector<std::string> names;
+                               for (int i = 0; i < s.plant->stateSize(); ++i) names.push_back(s.plant->stateName(i));
+                               return names;
+                             })
+      .def("snapshot",
            [](PySimulator& s) {
              const Use use(s.gate, "Simulator");
-             s.sim->reset();
+             PySnapshot p;
+             p.snapshot = std::make_shared<const sim::Snapshot>(s.sim->snapshot());
+             p.time = p.snapshot->time();
+             return p;
+           })
+      .def(
+          "restore",
+          [](PySimulator& s, PySnapshot& p) {
+            const Use use(s.gate, "Simulator");
+            if (p.snapshot && &p.snapshot->plantState().owner() == s.plant.get())
+              s.sim->restore(*p.snapshot);
+            else
+              s.sim->loadState(p.toBytes());  // another plant object of the same configuration, or unpickled
+          },
+          py::arg("snapshot"))
+      .def("save_state",
+           [](PySimulator& s) {
+             const Use use(s.gate, "Simulator");
+             return py::bytes(s.sim->saveState());
+           })
+      .def(
+          "load_state",
+          [](PySimulator& s, const py::bytes& b) {
+            const Use use(s.gate, "Simulator");
+            s.sim->loadState(std::string(b));
+          },
+          py::arg("data"))
+      .def("copy",
+           [](PySimulator& s) {
+             const Use use(s.gate, "Simulator");
+             PySimulator c;
+             c.plant = s.plant;
+             c.sim = std::make_unique<sim::Simulator>(*s.sim);
+             return c;
            })
       .def(
           "advance",
@@ -755,39 +836,39 @@ PYBIND11_MODULE(_core, m) {
           "set_port",
           [](PySimulator& s, const py::object& j, const std::string& port) {
             const Use use(s.gate, "Simulator");
-            s.robot().setCommandPort(s.joint(j), systems::parsePort(port));
+            s.robot().setCommandPort(s.state(), s.joint(j), systems::parsePort(port));
           },
           py::arg("joint"), py::arg("port"))
       .def(
           "port",
           [](PySimulator& s, const py::object& j) {
             const Use use(s.gate, "Simulator");
-            return std::string(systems::portName(s.robot().commandPort(s.joint(j))));
+            return std::string(systems::portName(s.robot().commandPort(s.state(), s.joint(j))));
           },
           py::arg("joint"))
       .def(
           "set_command",
           [](PySimulator& s, const py::object& j, double value) {
             const Use use(s.gate, "Simulator");
-            if (auto* rig = dynamic_cast<systems::JointRig*>(s.plant.get())) {
-              rig->setCommand(value);
+            if (const auto* rig = dynamic_cast<const systems::JointRig*>(s.plant.get())) {
+              rig->setCommand(s.state(), value);
               return;
             }
-            s.robot().setCommand(s.joint(j), value);
+            s.robot().setCommand(s.state(), s.joint(j), value);
           },
           py::arg("joint"), py::arg("value"))
       .def(
           "set_commands",
           [](PySimulator& s, const Array& v) {
             const Use use(s.gate, "Simulator");
-            s.robot().setCommands(vec(v, s.robot().dof(), "commands"));
+            s.robot().setCommands(s.state(), vec(v, s.robot().dof(), "commands"));
           },
           py::arg("values"))
       .def(
           "set_setpoint",
           [](PySimulator& s, const py::object& j, double q, double qd, double qdd) {
             const Use use(s.gate, "Simulator");
-            s.robot().setSetpoint(s.joint(j), q, qd, qdd);
+            s.robot().setSetpoint(s.state(), s.joint(j), q, qd, qdd);
           },
           py::arg("joint"), py::arg("q"), py::arg("qd"), py::arg("qdd"))
       .def(
@@ -800,19 +881,19 @@ PYBIND11_MODULE(_core, m) {
                 qd.is_none() ? Eigen::VectorXd() : Eigen::VectorXd(vec(qd.cast<Array>(), n, "qd"));
             const Eigen::VectorXd qddv =
                 qdd.is_none() ? Eigen::VectorXd() : Eigen::VectorXd(vec(qdd.cast<Array>(), n, "qdd"));
-            s.robot().holdSetpoints(qv, qdv, qddv);
+            s.robot().holdSetpoints(s.state(), qv, qdv, qddv);
           },
           py::arg("q"), py::arg("qd"), py::arg("qdd"))
       .def("release_setpoints",
            [](PySimulator& s) {
              const Use use(s.gate, "Simulator");
-             s.robot().releaseSetpoints();
+             s.robot().releaseSetpoints(s.state());
            })
       .def(
           "set_external_wrench",
           [](PySimulator& s, const std::string& frame, const Array& w) {
             const Use use(s.gate, "Simulator");
-            s.robot().setExternalWrench(frame, Eigen::Matrix<double, 6, 1>(vec(w, 6, "wrench")));
+            s.robot().setExternalWrench(s.state(), frame, Eigen::Matrix<double, 6, 1>(vec(w, 6, "wrench")));
           },
           py::arg("frame"), py::arg("wrench"));
 

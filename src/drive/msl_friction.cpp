@@ -1,5 +1,8 @@
 #include "jointsim/drive/msl_friction.hpp"
 
+#include <cstdint>
+#include <string>
+
 #include "jointsim/common/interpolate.hpp"
 
 namespace jointsim::drive {
@@ -95,6 +98,22 @@ void frictionRoots(FrictionMode m, double S, double w, double a, double t0, doub
     case FrictionMode::Forward:
     case FrictionMode::Backward: g0 = w; break;
     case FrictionMode::Free: break;
+  }
+}
+
+void saveModes(ByteWriter& out, const std::vector<FrictionMode>& modes) {
+  out.u64(modes.size());
+  for (FrictionMode m : modes) out.u64(static_cast<std::uint64_t>(m));
+}
+
+void loadModes(ByteReader& in, std::vector<FrictionMode>& modes) {
+  const std::uint64_t n = in.u64("friction mode count");
+  if (n != modes.size())
+    in.fail("friction mode count: expected " + std::to_string(modes.size()) + ", got " + std::to_string(n));
+  for (FrictionMode& m : modes) {
+    const std::uint64_t v = in.u64("friction mode");
+    if (v > static_cast<std::uint64_t>(FrictionMode::Free)) in.fail("friction mode: bad value " + std::to_string(v));
+    m = static_cast<FrictionMode>(v);
   }
 }
 

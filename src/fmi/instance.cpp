@@ -90,13 +90,14 @@ struct Instance::Impl {
     sim::AdvanceLimits limits;
     limits.max_steps = sim->integratorOptions().max_num_steps;
     sim->setLimits(limits);
-    if (auto* robot = dynamic_cast<systems::RobotSystem*>(&sim->plant())) {
+    // A reset makes a fresh plant state (inputs at their defaults): first the start time, then the ports.
+    if (start_time != 0.0) sim->reset(start_time, sim->plant().initialState());
+    if (const auto* robot = dynamic_cast<const systems::RobotSystem*>(&sim->plant())) {
       for (const Variable& v : d.variables)
         if (v.causality == Causality::Input && v.port != "q" && v.port != "qd")
-          robot->setCommandPort(v.joint, systems::parsePort(v.port));
+          robot->setCommandPort(sim->plantState(), v.joint, systems::parsePort(v.port));
     }
     applyInputs();
-    if (start_time != 0.0) sim->reset(start_time, sim->plant().initialState());
     params_changed = false;
   }
 
@@ -131,22 +132,23 @@ struct Instance::Impl {
   }
 
   void applyInputs() {
-    sim::Plant& plant = sim->plant();
-    auto* robot = dynamic_cast<systems::RobotSystem*>(&plant);
-    auto* rig = dynamic_cast<systems::JointRig*>(&plant);
+    const sim::Plant& plant = sim->plant();
+    sim::PlantState& state = sim->plantState();
+    const auto* robot = dynamic_cast<const systems::RobotSystem*>(&plant);
+    const auto* rig = dynamic_cast<const systems::JointRig*>(&plant);
     for (size_t i = 0; i < d.variables.size(); ++i) {
       const Variable& v = d.variables[i];
       if (v.causality != Causality::Input) continue;
       if (rig != nullptr) {
-        rig->setCommand(values[i]);
+        rig->setCommand(state, values[i]);
       } else if (robot != nullptr) {
         if (v.port == "q") {
           const double qd = qd_of[i] >= 0 ? values[static_cast<size_t>(qd_of[i])] : 0.0;
-          if (robot->commandPort(v.joint) != systems::CommandPort::Setpoint)
-            robot->setCommandPort(v.joint, systems::CommandPort::Setpoint);
-          robot->setSetpoint(v.joint, values[i], qd);
+          if (robot->commandPort(state, v.joint) != systems::CommandPort::Setpoint)
+            robot->setCommandPort(state, v.joint, systems::CommandPort::Setpoint);
+          robot->setSetpoint(state, v.joint, values[i], qd);
         } else if (v.port != "qd") {
-          robot->setCommand(v.joint, values[i]);
+          robot->setCommand(state, v.joint, values[i]);
         }
       }
     }

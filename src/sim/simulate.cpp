@@ -52,6 +52,11 @@ SimulateOptions SimulateOptions::everyInterval(double t_end, double interval, co
   return o;
 }
 
+void Plant::foreignState(const PlantState& state) const {
+  throw InputError(name() + ": given a state made by another plant (" + state.owner().name() +
+                   "); make it with this plant's makeState()");
+}
+
 int signalIndex(const Plant& plant, const std::string& name) {
   const auto& names = plant.signalNames();
   for (size_t i = 0; i < names.size(); ++i)
@@ -74,20 +79,28 @@ struct StopRun {};
 
 }  // namespace
 
-void installPlantJacobian(const Plant& plant, CvodeIntegrator& integ) {
+void installPlantJacobian(const Plant& plant, const PlantState& state, CvodeIntegrator& integ) {
   const CvodeOptions& o = integ.options();
   if (!plant.providesJacobian() || !o.plant_jacobian || o.method != Method::BDF) return;
-  integ.setDifferenceJacobian([&plant](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                                       const Eigen::Ref<const Eigen::VectorXd>& f,
-                                       const Eigen::Ref<const Eigen::VectorXd>& inc,
-                                       Eigen::Ref<Eigen::MatrixXd> J) { plant.jacobian(t, y, f, inc, J); });
+  integ.setDifferenceJacobian(
+      [&plant, &state](double t, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f,
+                       const Eigen::Ref<const Eigen::VectorXd>& inc,
+                       Eigen::Ref<Eigen::MatrixXd> J) { plant.jacobian(state, t, y, f, inc, J); });
   JacobianStructure structure = plant.jacobianStructure();
   if (!structure.empty() && o.dense_solver == CvodeOptions::DenseSolver::Eigen)
     integ.setJacobianStructure(std::move(structure));
 }
 
-SimulationResult simulate(Plant& plant, const SimulateOptions& options, const OutputSink& sink) {
+SimulationResult simulate(const Plant& plant, const SimulateOptions& options, const OutputSink& sink) {
+  const std::unique_ptr<PlantState> state = plant.makeState();
+  return simulate(plant, *state, options, sink);
+}
+
+SimulationResult simulate(const Plant& plant, PlantState& state, const SimulateOptions& options,
+                          const OutputSink& sink) {
   options.validate();
+  if (&state.owner() != &plant)
+    throw InputError(plant.name() + ": simulate: given a state made by another plant (" + state.owner().name() + ")");
   CvodeOptions solver = options.solver;
   if (solver.component.empty()) solver.component = plant.name();
   if (!solver.state_name) solver.state_name = [&plant](int i) { return plant.stateName(i); };
@@ -123,14 +136,15 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
       [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
         if ((stopRequested() || (options.max_wall_time > 0.0 && (++rhs_calls & 255) == 0)) && stopNow())
           throw StopRun{};
-        plant.derivatives(t, y, yd);
+        plant.derivatives(state, t, y, yd);
       },
       solver);
-  installPlantJacobian(plant, integ);
+  installPlantJacobian(plant, state, integ);
   integ.setStepLimit(options.max_steps);  // enforced inside advance(): one output interval cannot overspend
   if (plant.rootCount() > 0)
-    integ.setRootFunction(plant.rootCount(), [&plant](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                                                      Eigen::Ref<Eigen::VectorXd> g) { plant.roots(t, y, g); });
+    integ.setRootFunction(plant.rootCount(),
+                          [&plant, &state](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                           Eigen::Ref<Eigen::VectorXd> g) { plant.roots(state, t, y, g); });
 
   // Time events inside (0, t_end), then the end itself.
   std::vector<double> breaks;
@@ -164,7 +178,7 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
                      std::to_string(n));
   auto emit = [&](double t) {
     row[0] = t;
-    plant.signals(t, y, row.tail(row.size() - 1));
+    plant.signals(state, t, y, row.tail(row.size() - 1));
     sink(row);
     ++result.outputs;
   };
@@ -177,14 +191,14 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
   // step's error test (CvodeIntegrator::jumpError ≤ 1); otherwise restart. f_old: before the sample's update.
   Eigen::VectorXd f_old(n), f_new(n);
   auto sampleAt = [&](double t_now) {
-    if (keep_history) plant.derivatives(t_now, y, f_old);
-    plant.sample(t_now, y);
+    if (keep_history) plant.derivatives(state, t_now, y, f_old);
+    plant.sample(state, t_now, y);
     ++result.samples;
     t_sample = sampleTime(++sample_k);
   };
   auto keepHistory = [&](double t_now) {
     if (!keep_history) return false;
-    plant.derivatives(t_now, y, f_new);
+    plant.derivatives(state, t_now, y, f_new);
     return integ.jumpError(f_old, f_new, std::min(t_sample, breaks[next_break]) - t_now) <= kKeepHistoryLimit;
   };
   // After an event (`restart`: the right-hand side may jump anywhere) or a sample: restart, or go on with the
@@ -205,7 +219,7 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
 
   double t = 0.0;
   try {
-    plant.start(0.0, y);
+    plant.start(state, 0.0, y);
     if (Ts > 0.0) ++result.samples;  // the plant's start includes the sample at t = 0
     integ.initialize(0.0, y);
     setStop();
@@ -223,7 +237,7 @@ SimulationResult simulate(Plant& plant, const SimulateOptions& options, const Ou
         const bool at_sample = t >= t_sample && t < target && t_sample < t_end;
         if (root || at_break) {
           if (at_break) ++next_break;
-          plant.updateModes(t, y, root ? integ.rootDirections() : std::vector<int>{});
+          plant.updateModes(state, t, y, root ? integ.rootDirections() : std::vector<int>{});
           ++result.events;
           if (++events_here > options.max_events_per_output)
             throw SolverError(solver.component + ": more than " + std::to_string(options.max_events_per_output) +
@@ -286,7 +300,7 @@ int SignalTable::column(const std::string& name) const {
   throw InputError("no column '" + name + "'; the columns are: " + join(columns, ", "));
 }
 
-SignalTable simulateTable(Plant& plant, const SimulateOptions& options, SimulationResult* result) {
+SignalTable simulateTable(const Plant& plant, const SimulateOptions& options, SimulationResult* result) {
   TableSink sink(tableColumns(plant));
   const SimulationResult r = simulate(plant, options, [&sink](const Eigen::VectorXd& row) { sink(row); });
   if (result) *result = r;

@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "common/constants.hpp"
+#include "jointsim/common/bytes.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/text.hpp"
@@ -44,11 +46,43 @@ void AdvanceLimits::validate() const {
                      formatNumber(max_state));
 }
 
-Simulator::Simulator(Plant& plant, const CvodeOptions& solver)
-    : Simulator(std::shared_ptr<Plant>(&plant, [](Plant*) {}), solver) {}
+namespace {
+/// First field of a saved state, and its format version.
+constexpr const char* kStateMagic = "jointsim simulator state";
+constexpr std::uint64_t kStateVersion = 1;
+}  // namespace
 
-Simulator::Simulator(std::shared_ptr<Plant> plant, const CvodeOptions& solver) : plant_(std::move(plant)) {
+Snapshot::Snapshot(const Snapshot& other)
+    : t_(other.t_),
+      t0_(other.t0_),
+      y_(other.y_),
+      plant_state_(other.plant_state_ ? other.plant_state_->clone() : nullptr),
+      sample_k_(other.sample_k_),
+      t_sample_(other.t_sample_),
+      seen_revision_(other.seen_revision_) {}
+
+Snapshot& Snapshot::operator=(const Snapshot& other) {
+  if (this != &other) *this = Snapshot(other);
+  return *this;
+}
+
+Snapshot::~Snapshot() = default;
+
+Simulator::Simulator(const Plant& plant, const CvodeOptions& solver)
+    : Simulator(std::shared_ptr<const Plant>(&plant, [](const Plant*) {}), solver) {}
+
+Simulator::Simulator(std::shared_ptr<const Plant> plant, const CvodeOptions& solver) : plant_(std::move(plant)) {
   if (!plant_) throw InputError("Simulator: no plant given");
+  build(solver);
+  reset();
+}
+
+Simulator::Simulator(const Simulator& other) : plant_(other.plant_), limits_(other.limits_) {
+  build(other.integ_->options());
+  restore(const_cast<Simulator&>(other).snapshot());
+}
+
+void Simulator::build(const CvodeOptions& solver) {
   CvodeOptions options = solver;
   if (options.component.empty()) options.component = plant_->name();
   if (!options.state_name) {
@@ -58,26 +92,36 @@ Simulator::Simulator(std::shared_ptr<Plant> plant, const CvodeOptions& solver) :
   component_ = options.component;
   keep_history_ = options.input_jump == CvodeOptions::InputJump::KeepHistory;
   const int n = plant_->stateSize();
-  Plant* p = plant_.get();
+  state_ = plant_->makeState();
+  const Plant* p = plant_.get();
+  // The callbacks read the state through this simulator: restore() may replace it.
   integ_ = std::make_unique<CvodeIntegrator>(
       n,
       [this, p](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
         guard(t, y);
-        p->derivatives(t, y, yd);
+        p->derivatives(*state_, t, y, yd);
       },
       options);
-  installPlantJacobian(*plant_, *integ_);
-  if (plant_->rootCount() > 0)
-    integ_->setRootFunction(plant_->rootCount(), [p](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                                                     Eigen::Ref<Eigen::VectorXd> g) { p->roots(t, y, g); });
+  const CvodeOptions& o = integ_->options();
+  if (p->providesJacobian() && o.plant_jacobian && o.method == Method::BDF) {
+    integ_->setDifferenceJacobian([this, p](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                            const Eigen::Ref<const Eigen::VectorXd>& f,
+                                            const Eigen::Ref<const Eigen::VectorXd>& inc,
+                                            Eigen::Ref<Eigen::MatrixXd> J) { p->jacobian(*state_, t, y, f, inc, J); });
+    JacobianStructure structure = p->jacobianStructure();
+    if (!structure.empty() && o.dense_solver == CvodeOptions::DenseSolver::Eigen)
+      integ_->setJacobianStructure(std::move(structure));
+  }
+  if (p->rootCount() > 0)
+    integ_->setRootFunction(p->rootCount(), [this, p](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                                      Eigen::Ref<Eigen::VectorXd> g) { p->roots(*state_, t, y, g); });
   bounded_.resize(static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) bounded_[static_cast<size_t>(i)] = !plant_->unboundedState(i);
-  Ts_ = plant_->samplePeriod();
-  if (!(Ts_ >= 0.0) || !std::isfinite(Ts_)) throw InputError(plant_->name() + ": sample period must be >= 0 s");
-  signals_.setZero(static_cast<Eigen::Index>(plant_->signalNames().size()));
+  for (int i = 0; i < n; ++i) bounded_[static_cast<size_t>(i)] = !p->unboundedState(i);
+  Ts_ = p->samplePeriod();
+  if (!(Ts_ >= 0.0) || !std::isfinite(Ts_)) throw InputError(p->name() + ": sample period must be >= 0 s");
+  signals_.setZero(static_cast<Eigen::Index>(p->signalNames().size()));
   f_work_.setZero(n);
   f_old_.setZero(n);
-  reset();
 }
 
 Simulator::~Simulator() = default;
@@ -95,18 +139,21 @@ void Simulator::reset(double t0, const Eigen::VectorXd& y0) {
     throw InputError(plant_->name() + ": reset: the state has " + std::to_string(y0.size()) + " entries, expected " +
                      std::to_string(n));
   if (!y0.allFinite()) throw InputError(plant_->name() + ": reset: the state must be finite");
+  std::unique_ptr<PlantState> fresh = plant_->makeState();
+  plant_->start(*fresh, t0, y0);
+  state_ = std::move(fresh);
   t_ = t0_ = t0;
   y_ = y0;
   y_work_ = y0;
-  plant_->start(t0, y_);
   samples_ += Ts_ > 0.0 ? 1 : 0;
   sample_k_ = 1;
   t_sample_ = Ts_ > 0.0 ? t0 + Ts_ : kInf;
   events_list_.clear();
   horizon_ = t0;
   next_event_ = 0;
-  seen_revision_ = plant_->inputRevision();
+  seen_revision_ = state_->inputRevision();
   restart_ = fresh_jacobian_ = true;
+  jump_ = false;
   invalidate();
 }
 
@@ -119,6 +166,99 @@ void Simulator::setState(const Eigen::VectorXd& y) {
   restart_ = fresh_jacobian_ = true;
   invalidate();
 }
+
+Snapshot Simulator::snapshot() {
+  Snapshot s;
+  s.t_ = t_;
+  s.t0_ = t0_;
+  s.y_ = y_;
+  s.plant_state_ = state_->clone();
+  s.sample_k_ = sample_k_;
+  s.t_sample_ = t_sample_;
+  s.seen_revision_ = seen_revision_;
+  // Continue from here as a restored copy would: with a fresh start of the integrator.
+  restart_ = fresh_jacobian_ = true;
+  return s;
+}
+
+void Simulator::checkSnapshot(const Snapshot& snapshot, const char* what) const {
+  if (snapshot.empty()) throw InputError(plant_->name() + ": " + what + ": the snapshot is empty");
+  if (&snapshot.plant_state_->owner() != plant_.get())
+    throw InputError(plant_->name() + ": " + what + ": the snapshot is of another plant (" +
+                     snapshot.plant_state_->owner().name() + ")");
+  if (snapshot.y_.size() != plant_->stateSize() || !snapshot.y_.allFinite() || !std::isfinite(snapshot.t_) ||
+      !std::isfinite(snapshot.t0_) || snapshot.sample_k_ < 1 || !(snapshot.t_sample_ >= snapshot.t_ - 1e-9) ||
+      (Ts_ > 0.0 && !std::isfinite(snapshot.t_sample_)))
+    throw InputError(plant_->name() + ": " + what + ": an inconsistent snapshot (time " + formatNumber(snapshot.t_) +
+                     " s, " + std::to_string(snapshot.y_.size()) + " states, next sample at " +
+                     formatNumber(snapshot.t_sample_) + " s)");
+}
+
+void Simulator::restore(const Snapshot& snapshot) {
+  checkSnapshot(snapshot, "restore");
+  state_ = snapshot.plant_state_->clone();
+  t_ = snapshot.t_;
+  t0_ = snapshot.t0_;
+  y_ = snapshot.y_;
+  y_work_ = y_;
+  sample_k_ = snapshot.sample_k_;
+  t_sample_ = snapshot.t_sample_;
+  seen_revision_ = snapshot.seen_revision_;
+  events_list_.clear();
+  horizon_ = t_;
+  next_event_ = 0;
+  restart_ = fresh_jacobian_ = true;
+  jump_ = false;
+  invalidate();
+}
+
+std::string Snapshot::toBytes() const {
+  if (empty()) throw InputError("Snapshot::toBytes: the snapshot is empty");
+  const Plant& plant = plant_state_->owner();
+  ByteWriter out;
+  out.tag(kStateMagic);
+  out.u64(kStateVersion);
+  out.text(plant.name());
+  out.f64(t_);
+  out.f64(t0_);
+  out.vector(y_);
+  out.i64(sample_k_);
+  out.f64(t_sample_);
+  out.i64(seen_revision_ - plant_state_->inputRevision());  // an input change not yet applied: != 0
+  out.tag("plant state");
+  plant_state_->save(out);
+  out.tag("end");
+  return out.release();
+}
+
+Snapshot Snapshot::fromBytes(const Plant& plant, const std::string& bytes) {
+  ByteReader in(bytes, plant.name() + ": a saved simulator state");
+  in.tag(kStateMagic);
+  const std::uint64_t version = in.u64("version");
+  if (version != kStateVersion)
+    in.fail("a state of format version " + std::to_string(version) + ", this build reads version " +
+            std::to_string(kStateVersion));
+  const std::string name = in.text("plant");
+  if (name != plant.name()) in.fail("a state of '" + name.substr(0, 200) + "', not of this plant");
+  Snapshot s;
+  s.t_ = in.f64("time");
+  s.t0_ = in.f64("start time");
+  s.y_ = in.vector("continuous state", plant.stateSize());
+  s.sample_k_ = in.i64("sample index");
+  s.t_sample_ = in.f64("next sample time");
+  const std::int64_t pending = in.i64("input revision");
+  in.tag("plant state");
+  s.plant_state_ = plant.makeState();
+  s.plant_state_->load(in);
+  in.tag("end");
+  in.finish();
+  s.seen_revision_ = s.plant_state_->inputRevision() + pending;
+  return s;
+}
+
+std::string Simulator::saveState() { return snapshot().toBytes(); }
+
+void Simulator::loadState(const std::string& bytes) { restore(Snapshot::fromBytes(*plant_, bytes)); }
 
 void Simulator::setLimits(const AdvanceLimits& limits) {
   limits.validate();
@@ -235,8 +375,8 @@ void Simulator::refreshEvents(double t_target) {
 }
 
 void Simulator::takeSample() {
-  if (keep_history_ && !jump_) plant_->derivatives(t_, y_, f_old_);  // before the held inputs jump
-  plant_->sample(t_, y_);
+  if (keep_history_ && !jump_) plant_->derivatives(*state_, t_, y_, f_old_);  // before the held inputs jump
+  plant_->sample(*state_, t_, y_);
   ++samples_;
   t_sample_ = t0_ + static_cast<double>(++sample_k_) * Ts_;
   inputJumped();
@@ -253,7 +393,7 @@ void Simulator::inputJumped() {
 void Simulator::restartIfNeeded(double h_max) {
   if (jump_ && !restart_) {
     // Keep the history only where the jump leaves the next step within the error test (CvodeOptions::input_jump).
-    plant_->derivatives(t_, y_, f_work_);
+    plant_->derivatives(*state_, t_, y_, f_work_);
     if (integ_->jumpError(f_old_, f_work_, h_max) <= kKeepHistoryLimit)
       ++input_jumps_;  // CVODE stopped exactly here (a stop time) and goes on with the new right-hand side
     else
@@ -267,11 +407,11 @@ void Simulator::restartIfNeeded(double h_max) {
 }
 
 void Simulator::prepare(double t_target) {
-  const long revision = plant_->inputRevision();
+  const long revision = state_->inputRevision();
   if (revision != seen_revision_) {
     seen_revision_ = revision;
     y_work_ = y_;
-    plant_->applyInputs(t_, y_);
+    plant_->applyInputs(*state_, t_, y_);
     if (y_ != y_work_)
       restart_ = fresh_jacobian_ =
           true;  // the plant moved states (bumpless transfer): CVODE's history no longer matches
@@ -323,7 +463,7 @@ double Simulator::advanceTo(double t_target) {
           while (next_event_ < events_list_.size() &&
                  (events_list_[next_event_] <= t_ || near(t_, events_list_[next_event_])))
             ++next_event_;
-        plant_->updateModes(t_, y_, root ? integ_->rootDirections() : std::vector<int>{});
+        plant_->updateModes(*state_, t_, y_, root ? integ_->rootDirections() : std::vector<int>{});
         ++events_;
         restart_ = fresh_jacobian_ = true;
       }
@@ -336,16 +476,16 @@ double Simulator::advanceTo(double t_target) {
     throw;
   }
   // The derivative with the inputs in force now: the reference for an input change before the next advance.
-  if (keep_history_) plant_->derivatives(t_, y_, f_old_);
+  if (keep_history_) plant_->derivatives(*state_, t_, y_, f_old_);
   return t_;
 }
 
 const Eigen::VectorXd& Simulator::signals() const {
   // The signals depend on the inputs too (e.g. a voltage command): recomputed after either changed.
-  if (!signals_valid_ || signals_revision_ != plant_->inputRevision()) {
-    plant_->signals(t_, y_, signals_);
+  if (!signals_valid_ || signals_revision_ != state_->inputRevision()) {
+    plant_->signals(*state_, t_, y_, signals_);
     signals_valid_ = true;
-    signals_revision_ = plant_->inputRevision();
+    signals_revision_ = state_->inputRevision();
   }
   return signals_;
 }

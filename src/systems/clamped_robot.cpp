@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <set>
 
 #include <Eigen/Geometry>
@@ -81,13 +82,12 @@ void ClampingSetup::validate() const {
     if (!m->allFinite()) throw InputError("clamping: clamp matrices must be finite");
 }
 
-ClampedRobot::ClampedRobot(ClampingSetup setup) : s_((setup.validate(), std::move(setup))), data_(s_.arm) {
+ClampedRobot::ClampedRobot(ClampingSetup setup) : s_((setup.validate(), std::move(setup))) {
   n_ = s_.arm.nq;
   std::vector<std::string> orth_joints;
   for (const auto& a : s_.axes)
     if (a.c_orth > 0.0) orth_joints.push_back(a.joint);
   model_ = multibody::withOrthogonalCompliance(s_.arm, orth_joints);
-  data_ = multibody::Data(model_);
   n_states_ = 2 * model_.nq + 3 * n_;
   for (const auto& a : s_.axes) {
     joint_.push_back(model_.jointIndex(a.joint));
@@ -127,20 +127,15 @@ ClampedRobot::ClampedRobot(ClampingSetup setup) : s_((setup.validate(), std::mov
   Eigen::VectorXd q = Eigen::VectorXd::Zero(model_.nq);
   if (s_.q0.size())
     for (int i = 0; i < n_; ++i) q[model_.jointIndex(s_.arm.joint_names[static_cast<size_t>(i)])] = s_.q0[i];
-  multibody::forwardKinematics(model_, data_, q);
-  p0_ = data_.oMf[static_cast<size_t>(clamp_frame_)].p;
-  R0_ = data_.oMf[static_cast<size_t>(clamp_frame_)].R;
+  multibody::Data data(model_);
+  multibody::forwardKinematics(model_, data, q);
+  p0_ = data.oMf[static_cast<size_t>(clamp_frame_)].p;
+  R0_ = data.oMf[static_cast<size_t>(clamp_frame_)].R;
   Eigen::VectorXd qa(n_);
   for (int k = 0; k < n_; ++k) qa[k] = q[joint_[static_cast<size_t>(k)]];
   const Eigen::VectorXd phi_out = GfullInv_ * qa;
   phi_m0_.resize(n_);
   for (int k = 0; k < n_; ++k) phi_m0_[k] = s_.axes[static_cast<size_t>(k)].ratio * phi_out[k];
-  modes_.assign(static_cast<size_t>(n_), FrictionMode::Stuck);
-  fext_ = multibody::Matrix6Xd::Zero(6, model_.nq);
-  for (Eigen::VectorXd* v :
-       {&tau_out_, &qa_, &qda_, &phi_out_, &phid_out_, &tau_s_, &tau_m_, &tau_f_, &stuck_, &wdot_, &u_, &ref_})
-    v->setZero(n_);
-  tau_.setZero(model_.nq);
   for (const auto& a : s_.axes)
     for (const char* c :
          {".motor_angle[rad]", ".motor_speed[rad/s]", ".motor_torque[N·m]", ".spring_torque[N·m]", ".deflection[rad]",
@@ -149,6 +144,26 @@ ClampedRobot::ClampedRobot(ClampingSetup setup) : s_((setup.validate(), std::mov
   for (const char* c : {"clamp.dx[m]", "clamp.dy[m]", "clamp.dz[m]", "clamp.rx[rad]", "clamp.ry[rad]", "clamp.rz[rad]",
                         "clamp.displacement[m]", "clamp.rotation[rad]", "clamp.force[N]", "clamp.moment[N·m]"})
     signals_.emplace_back(c);
+}
+
+ClampedRobot::State::State(const ClampedRobot& robot) : PlantStateOf(robot), data(robot.model_) {
+  modes.assign(static_cast<size_t>(robot.n_), FrictionMode::Stuck);
+  fext = multibody::Matrix6Xd::Zero(6, robot.model_.nq);
+  for (Eigen::VectorXd* v : {&tau_out, &qa, &qda, &phi_out, &phid_out, &tau_s, &tau_m, &tau_f, &stuck, &wdot, &u, &ref})
+    v->setZero(robot.n_);
+  tau.setZero(robot.model_.nq);
+  dp.setZero();
+  theta.setZero();
+  f_w.setZero();
+  m_w.setZero();
+}
+
+void ClampedRobot::State::save(ByteWriter& out) const { drive::saveModes(out, modes); }
+
+void ClampedRobot::State::load(ByteReader& in) { drive::loadModes(in, modes); }
+
+const std::vector<FrictionMode>& ClampedRobot::modes(const sim::PlantState& state) const {
+  return own<State>(state).modes;
 }
 
 Eigen::VectorXd ClampedRobot::initialState() const {
@@ -168,122 +183,135 @@ Eigen::VectorXd ClampedRobot::initialState() const {
   return y;
 }
 
-void ClampedRobot::clampDeflection(const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Vector3d& dp,
-                                   Eigen::Vector3d& theta) const {
-  multibody::forwardKinematics(model_, data_, q);
-  const auto& X = data_.oMf[static_cast<size_t>(clamp_frame_)];
+void ClampedRobot::clampDeflection(const sim::PlantState& state, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                   Eigen::Vector3d& dp, Eigen::Vector3d& theta) const {
+  multibody::Data& data = own<State>(state).data;
+  multibody::forwardKinematics(model_, data, q);
+  const auto& X = data.oMf[static_cast<size_t>(clamp_frame_)];
   dp = X.p - p0_;
   theta = rotationVector(R0_.transpose() * X.R);
 }
 
-void ClampedRobot::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+void ClampedRobot::solve(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   const int nq = model_.nq;
   const auto q = y.head(nq);
   const auto qd = y.segment(nq, nq);
   // Clamp wrench on the clamp frame, applied to the body carrying it.
-  multibody::frameJacobian(model_, data_, q, clamp_frame_);
-  const auto& X = data_.oMf[static_cast<size_t>(clamp_frame_)];
-  const Eigen::Matrix<double, 6, 1> vel = data_.J * qd;  // [v; ω] world
-  dp_ = X.p - p0_;
-  theta_ = rotationVector(R0_.transpose() * X.R);
+  multibody::frameJacobian(model_, st.data, q, clamp_frame_);
+  const auto& X = st.data.oMf[static_cast<size_t>(clamp_frame_)];
+  const Eigen::Matrix<double, 6, 1> vel = st.data.J * qd;  // [v; ω] world
+  st.dp = X.p - p0_;
+  st.theta = rotationVector(R0_.transpose() * X.R);
   const Eigen::Vector3d w_frame = X.R.transpose() * vel.tail<3>();
-  f_w_ = -(s_.clamp.c_lin * dp_ + s_.clamp.d_lin * vel.head<3>());
-  m_w_ = X.R * (-(s_.clamp.c_rot * theta_ + s_.clamp.d_rot * w_frame));
-  fext_.setZero();
+  st.f_w = -(s_.clamp.c_lin * st.dp + s_.clamp.d_lin * vel.head<3>());
+  st.m_w = X.R * (-(s_.clamp.c_rot * st.theta + s_.clamp.d_rot * w_frame));
+  st.fext.setZero();
   {
     const auto& fr = model_.frames[static_cast<size_t>(clamp_frame_)];
-    const auto& B = data_.oMi[static_cast<size_t>(fr.joint)];
-    const Eigen::Vector3d f_b = B.R.transpose() * f_w_;
-    const Eigen::Vector3d m_b = B.R.transpose() * m_w_ + fr.placement.p.cross(f_b);
-    fext_.col(fr.joint).head<3>() = m_b;
-    fext_.col(fr.joint).tail<3>() = f_b;
+    const auto& B = st.data.oMi[static_cast<size_t>(fr.joint)];
+    const Eigen::Vector3d f_b = B.R.transpose() * st.f_w;
+    const Eigen::Vector3d m_b = B.R.transpose() * st.m_w + fr.placement.p.cross(f_b);
+    st.fext.col(fr.joint).head<3>() = m_b;
+    st.fext.col(fr.joint).tail<3>() = f_b;
   }
   // Axes: gear output angles, transmission torques, controller, friction.
   for (int k = 0; k < n_; ++k) {
-    qa_[k] = q[joint_[static_cast<size_t>(k)]];
-    qda_[k] = qd[joint_[static_cast<size_t>(k)]];
+    st.qa[k] = q[joint_[static_cast<size_t>(k)]];
+    st.qda[k] = qd[joint_[static_cast<size_t>(k)]];
   }
   if (coupled_) {
-    phi_out_.noalias() = GfullInv_ * qa_;
-    phid_out_.noalias() = GfullInv_ * qda_;
+    st.phi_out.noalias() = GfullInv_ * st.qa;
+    st.phid_out.noalias() = GfullInv_ * st.qda;
   } else {
-    phi_out_ = qa_;
-    phid_out_ = qda_;
+    st.phi_out = st.qa;
+    st.phid_out = st.qda;
   }
-  tau_.setZero();
+  st.tau.setZero();
   for (int k = 0; k < n_; ++k) {
     const auto& a = s_.axes[static_cast<size_t>(k)];
     const int m = motorState(k);
     const double phi_m = y[m], w_m = y[m + 1], x = y[m + 2];
-    const double delta = phi_m - a.ratio * phi_out_[k], delta_d = w_m - a.ratio * phid_out_[k];
-    tau_s_[k] = eb_[static_cast<size_t>(k)].contactTorque(delta, delta_d);
+    const double delta = phi_m - a.ratio * st.phi_out[k], delta_d = w_m - a.ratio * st.phid_out[k];
+    st.tau_s[k] = eb_[static_cast<size_t>(k)].contactTorque(delta, delta_d);
     double qr, qdr, qddr;
     paths_[static_cast<size_t>(k)].evaluate(t, qr, qdr, qddr);
-    ref_[k] = qr;
-    u_[k] = a.controller_ratio * qdr + a.kp * (phi_m0_[k] + a.controller_ratio * qr - phi_m) - w_m;
-    tau_m_[k] = a.ks * (u_[k] + x);
-    stuck_[k] = tau_m_[k] - tau_s_[k];
-    tau_f_[k] = drive::frictionTorque(modes_[static_cast<size_t>(k)],
-                                      drive::frictionTableValue(a.tau_pos, std::abs(w_m)), stuck_[k]);
-    wdot_[k] =
-        modes_[static_cast<size_t>(k)] == FrictionMode::Stuck ? 0.0 : (tau_m_[k] - tau_f_[k] - tau_s_[k]) / a.inertia;
+    st.ref[k] = qr;
+    st.u[k] = a.controller_ratio * qdr + a.kp * (phi_m0_[k] + a.controller_ratio * qr - phi_m) - w_m;
+    st.tau_m[k] = a.ks * (st.u[k] + x);
+    st.stuck[k] = st.tau_m[k] - st.tau_s[k];
+    st.tau_f[k] = drive::frictionTorque(st.modes[static_cast<size_t>(k)],
+                                        drive::frictionTableValue(a.tau_pos, std::abs(w_m)), st.stuck[k]);
+    st.wdot[k] = st.modes[static_cast<size_t>(k)] == FrictionMode::Stuck
+                     ? 0.0
+                     : (st.tau_m[k] - st.tau_f[k] - st.tau_s[k]) / a.inertia;
   }
   // Joint torques: τ_out = r τ_s on the gear outputs, τ_joint = G⁻ᵀ τ_out.
-  auto& tau_out = tau_out_;
-  for (int k = 0; k < n_; ++k) tau_out[k] = s_.axes[static_cast<size_t>(k)].ratio * tau_s_[k];
+  auto& tau_out = st.tau_out;
+  for (int k = 0; k < n_; ++k) tau_out[k] = s_.axes[static_cast<size_t>(k)].ratio * st.tau_s[k];
   for (int k = 0; k < n_; ++k) {
     double tj = tau_out[k];
     if (coupled_) tj = GfullInv_.col(k).dot(tau_out);
-    tau_[joint_[static_cast<size_t>(k)]] += tj;
+    st.tau[joint_[static_cast<size_t>(k)]] += tj;
     const auto& o = orth_[static_cast<size_t>(k)];
     if (o[0] >= 0) {
       const auto& a = s_.axes[static_cast<size_t>(k)];
-      for (int j : o) tau_[j] = -a.c_orth * q[j] - a.d_orth * qd[j];
+      for (int j : o) st.tau[j] = -a.c_orth * q[j] - a.d_orth * qd[j];
     }
   }
-  multibody::aba(model_, data_, q, qd, tau_, &fext_);
+  multibody::aba(model_, st.data, q, qd, st.tau, &st.fext);
 }
 
-void ClampedRobot::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void ClampedRobot::derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                                Eigen::Ref<Eigen::VectorXd> ydot) const {
-  solve(t, y);
+  const State& st = own<State>(state);
+  solve(st, t, y);
   const int nq = model_.nq;
   ydot.head(nq) = y.segment(nq, nq);
-  ydot.segment(nq, nq) = data_.ddq;
+  ydot.segment(nq, nq) = st.data.ddq;
   for (int k = 0; k < n_; ++k) {
     const int m = motorState(k);
     ydot[m] = y[m + 1];
-    ydot[m + 1] = wdot_[k];
-    ydot[m + 2] = u_[k] / s_.axes[static_cast<size_t>(k)].Ts;
+    ydot[m + 1] = st.wdot[k];
+    ydot[m + 2] = st.u[k] / s_.axes[static_cast<size_t>(k)].Ts;
   }
 }
 
-void ClampedRobot::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
-  solve(t, y);
+void ClampedRobot::roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                         Eigen::Ref<Eigen::VectorXd> g) const {
+  const State& st = own<State>(state);
+  solve(st, t, y);
   for (int k = 0; k < n_; ++k) {
     const auto& a = s_.axes[static_cast<size_t>(k)];
     const double t0 = drive::frictionTableValue(a.tau_pos, 0.0);
     double g0 = 1, g1 = 1;
-    drive::frictionRoots(modes_[static_cast<size_t>(k)], stuck_[k], y[motorState(k) + 1], wdot_[k], t0, a.peak * t0, g0,
-                         g1);
+    drive::frictionRoots(st.modes[static_cast<size_t>(k)], st.stuck[k], y[motorState(k) + 1], st.wdot[k], t0,
+                         a.peak * t0, g0, g1);
     g[2 * k] = g0;
     g[2 * k + 1] = g1;
   }
 }
 
-void ClampedRobot::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+void ClampedRobot::start(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  State& st = own<State>(state);
+  std::fill(st.modes.begin(), st.modes.end(), FrictionMode::Stuck);
+  updateModes(st, t, y, {});
+}
+
+void ClampedRobot::updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                               const std::vector<int>& fired) const {
+  State& st = own<State>(state);
   for (int iter = 0; iter < 30; ++iter) {
-    solve(t, y);
+    solve(st, t, y);
     bool changed = false;
     for (int k = 0; k < n_; ++k) {
       const auto& a = s_.axes[static_cast<size_t>(k)];
       const auto i = static_cast<size_t>(k);
       const drive::FrictionEventFlags f = iter == 0 ? drive::frictionEventFlags(fired, i) : drive::FrictionEventFlags{};
       const double t0 = drive::frictionTableValue(a.tau_pos, 0.0);
-      const FrictionMode m =
-          drive::nextFrictionMode(modes_[i], false, stuck_[k], y[motorState(k) + 1], wdot_[k], t0, a.peak * t0, f);
-      if (m != modes_[i]) {
-        modes_[i] = m;
+      const FrictionMode m = drive::nextFrictionMode(st.modes[i], false, st.stuck[k], y[motorState(k) + 1], st.wdot[k],
+                                                     t0, a.peak * t0, f);
+      if (m != st.modes[i]) {
+        st.modes[i] = m;
         changed = true;
       }
     }
@@ -306,9 +334,10 @@ std::vector<double> ClampedRobot::timeEvents(double) const {
   return t;
 }
 
-void ClampedRobot::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void ClampedRobot::signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                            Eigen::Ref<Eigen::VectorXd> out) const {
-  solve(t, y);
+  const State& st = own<State>(state);
+  solve(st, t, y);
   Eigen::Index c = 0;
   for (int k = 0; k < n_; ++k) {
     const auto& a = s_.axes[static_cast<size_t>(k)];
@@ -316,21 +345,21 @@ void ClampedRobot::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
     const auto& o = orth_[static_cast<size_t>(k)];
     out[c++] = y[m];
     out[c++] = y[m + 1];
-    out[c++] = tau_m_[k];
-    out[c++] = tau_s_[k];
-    out[c++] = y[m] - a.ratio * phi_out_[k];
-    out[c++] = qa_[k];
-    out[c++] = ref_[k];
-    out[c++] = tau_f_[k];
-    out[c++] = drive::frictionModeNumber(modes_[static_cast<size_t>(k)]);
+    out[c++] = st.tau_m[k];
+    out[c++] = st.tau_s[k];
+    out[c++] = y[m] - a.ratio * st.phi_out[k];
+    out[c++] = st.qa[k];
+    out[c++] = st.ref[k];
+    out[c++] = st.tau_f[k];
+    out[c++] = drive::frictionModeNumber(st.modes[static_cast<size_t>(k)]);
     out[c++] = o[0] >= 0 ? std::hypot(y[o[0]], y[o[1]]) : 0.0;
   }
-  for (int i = 0; i < 3; ++i) out[c++] = dp_[i];
-  for (int i = 0; i < 3; ++i) out[c++] = theta_[i];
-  out[c++] = dp_.norm();
-  out[c++] = theta_.norm();
-  out[c++] = f_w_.norm();
-  out[c++] = m_w_.norm();
+  for (int i = 0; i < 3; ++i) out[c++] = st.dp[i];
+  for (int i = 0; i < 3; ++i) out[c++] = st.theta[i];
+  out[c++] = st.dp.norm();
+  out[c++] = st.theta.norm();
+  out[c++] = st.f_w.norm();
+  out[c++] = st.m_w.norm();
 }
 
 }  // namespace jointsim::systems

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <string>
 
 #include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
@@ -60,17 +62,28 @@ void DriveChainSetup::validate() const {
   check::positive(c, "log_rate", log_rate, "Hz");
 }
 
+DriveChain::State::State(const DriveChain& chain) : PlantStateOf(chain) {
+  const auto n = static_cast<Eigen::Index>(chain.s_.inertias.size());
+  const auto ne = static_cast<Eigen::Index>(chain.s_.elements.size());
+  modes.assign(chain.s_.elements.size(), FrictionMode::Stuck);
+  acc.setZero(n);
+  known.setZero(n);
+  tau_el.setZero(ne);
+  A.setZero(ne, ne);
+  rhs.setZero(ne);
+  stuck.assign(chain.s_.elements.size(), -1);  // sized once: a copy keeps the size (not a reserved capacity)
+}
+
+void DriveChain::State::save(ByteWriter& out) const { drive::saveModes(out, modes); }
+
+void DriveChain::State::load(ByteReader& in) { drive::loadModes(in, modes); }
+
+const std::vector<FrictionMode>& DriveChain::modes(const sim::PlantState& state) const {
+  return own<State>(state).modes;
+}
+
 DriveChain::DriveChain(DriveChainSetup setup) : s_(std::move(setup)) {
   s_.validate();
-  const auto n = static_cast<Eigen::Index>(s_.inertias.size());
-  const auto ne = static_cast<Eigen::Index>(s_.elements.size());
-  modes_.assign(s_.elements.size(), FrictionMode::Stuck);
-  acc_.setZero(n);
-  known_.setZero(n);
-  tau_el_.setZero(ne);
-  A_.setZero(ne, ne);
-  rhs_.setZero(ne);
-  stuck_.reserve(s_.elements.size());
   for (const auto& in : s_.inertias) {
     signals_.push_back(in.name + ".phi[rad]");
     signals_.push_back(in.name + ".w[rad/s]");
@@ -106,9 +119,9 @@ double DriveChain::relSpeed(int e, const Eigen::Ref<const Eigen::VectorXd>& y) c
   return wb - wa;
 }
 
-double DriveChain::relAccel(int e) const {
+double DriveChain::relAccel(const State& st, int e) const {
   const auto& el = s_.elements[static_cast<size_t>(e)];
-  return (el.b >= 0 ? acc_[el.b] : 0.0) - (el.a >= 0 ? acc_[el.a] : 0.0);
+  return (el.b >= 0 ? st.acc[el.b] : 0.0) - (el.a >= 0 ? st.acc[el.a] : 0.0);
 }
 
 double DriveChain::tau0(int e, double t) const {
@@ -125,20 +138,24 @@ double DriveChain::slidingTorque(int e, double t, double w) const {
   return mag;
 }
 
-void DriveChain::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
-  known_.setZero();
-  stuck_.clear();
+void DriveChain::solve(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  Eigen::VectorXd &known = st.known, &tau_el = st.tau_el, &acc = st.acc, &rhs = st.rhs;
+  Eigen::MatrixXd& A = st.A;
+  std::vector<int>& stuck = st.stuck;
+  int& n_stuck = st.n_stuck;
+  known.setZero();
+  n_stuck = 0;
   for (size_t k = 0; k < s_.elements.size(); ++k) {
     const auto& el = s_.elements[k];
     const int e = static_cast<int>(k);
     double tau = 0.0;
     if (el.type == ChainElementType::TorqueSource) {
-      tau_el_[e] = el.torque.value(t);
-      known_[el.b] += tau_el_[e];
+      tau_el[e] = el.torque.value(t);
+      known[el.b] += tau_el[e];
       continue;
     }
     if (el.type == ChainElementType::Gear) {
-      stuck_.push_back(e);  // always-active constraint
+      stuck[static_cast<size_t>(n_stuck++)] = e;  // always-active constraint
       continue;
     }
     const double phi_rel = (el.b >= 0 ? y[2 * el.b] : 0.0) - (el.a >= 0 ? y[2 * el.a] : 0.0);
@@ -151,22 +168,22 @@ void DriveChain::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) con
         break;
       }
       default: {  // friction
-        switch (modes_[k]) {
+        switch (st.modes[k]) {
           case FrictionMode::Free: tau = 0.0; break;
           case FrictionMode::Forward:
           case FrictionMode::StartForward: tau = slidingTorque(e, t, w_rel); break;
           case FrictionMode::Backward:
           case FrictionMode::StartBackward: tau = -slidingTorque(e, t, w_rel); break;
-          case FrictionMode::Stuck: stuck_.push_back(e); continue;
+          case FrictionMode::Stuck: stuck[static_cast<size_t>(n_stuck++)] = e; continue;
         }
       }
     }
-    tau_el_[e] = tau;
-    if (el.a >= 0) known_[el.a] += tau;
-    if (el.b >= 0) known_[el.b] -= tau;
+    tau_el[e] = tau;
+    if (el.a >= 0) known[el.a] += tau;
+    if (el.b >= 0) known[el.b] -= tau;
   }
   // Stuck elements: find their torques S with B^T J⁻¹ (known + B S) = 0 (zero relative acceleration).
-  const auto m = static_cast<Eigen::Index>(stuck_.size());
+  const auto m = static_cast<Eigen::Index>(n_stuck);
   auto Jinv = [&](int i) { return 1.0 / s_.inertias[static_cast<size_t>(i)].J; };
   // Constraint row of element e: +1 at its input, −1 (friction) or −ratio (gear) at its output; the
   // constraint torque acts along the same row (+τ on the input, −1 or −ratio × τ on the output).
@@ -177,59 +194,62 @@ void DriveChain::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) con
   };
   const int n = static_cast<int>(s_.inertias.size());
   for (Eigen::Index r = 0; r < m; ++r) {
-    const int er = stuck_[static_cast<size_t>(r)];
-    double rhs = 0.0;
-    for (int i = 0; i < n; ++i) rhs -= bcol(er, i) * Jinv(i) * known_[i];
-    rhs_[r] = rhs;
+    const int er = stuck[static_cast<size_t>(r)];
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i) sum -= bcol(er, i) * Jinv(i) * known[i];
+    rhs[r] = sum;
     for (Eigen::Index c = 0; c < m; ++c) {
-      const int ec = stuck_[static_cast<size_t>(c)];
+      const int ec = stuck[static_cast<size_t>(c)];
       double a = 0.0;
       for (int i = 0; i < n; ++i) a += bcol(er, i) * Jinv(i) * bcol(ec, i);
-      A_(r, c) = a;
+      A(r, c) = a;
     }
   }
   // Gaussian elimination with partial pivoting on the m×m block (allocation-free).
   for (Eigen::Index c = 0; c < m; ++c) {
     Eigen::Index piv = c;
     for (Eigen::Index r = c + 1; r < m; ++r)
-      if (std::abs(A_(r, c)) > std::abs(A_(piv, c))) piv = r;
+      if (std::abs(A(r, c)) > std::abs(A(piv, c))) piv = r;
     if (piv != c) {
-      A_.row(c).head(m).swap(A_.row(piv).head(m));
-      std::swap(rhs_[c], rhs_[piv]);
+      A.row(c).head(m).swap(A.row(piv).head(m));
+      std::swap(rhs[c], rhs[piv]);
     }
-    if (A_(c, c) == 0.0) continue;  // redundant constraint (e.g. a loop of stuck elements)
+    if (A(c, c) == 0.0) continue;  // redundant constraint (e.g. a loop of stuck elements)
     for (Eigen::Index r = c + 1; r < m; ++r) {
-      const double f = A_(r, c) / A_(c, c);
-      A_.row(r).head(m) -= f * A_.row(c).head(m);
-      rhs_[r] -= f * rhs_[c];
+      const double f = A(r, c) / A(c, c);
+      A.row(r).head(m) -= f * A.row(c).head(m);
+      rhs[r] -= f * rhs[c];
     }
   }
   for (Eigen::Index c = m; c-- > 0;) {
-    double v = rhs_[c];
-    for (Eigen::Index k = c + 1; k < m; ++k) v -= A_(c, k) * rhs_[k];
-    rhs_[c] = A_(c, c) != 0.0 ? v / A_(c, c) : 0.0;
+    double v = rhs[c];
+    for (Eigen::Index k = c + 1; k < m; ++k) v -= A(c, k) * rhs[k];
+    rhs[c] = A(c, c) != 0.0 ? v / A(c, c) : 0.0;
   }
   for (Eigen::Index r = 0; r < m; ++r) {
-    const int e = stuck_[static_cast<size_t>(r)];
+    const int e = stuck[static_cast<size_t>(r)];
     const auto& el = s_.elements[static_cast<size_t>(e)];
-    tau_el_[e] = rhs_[r];
-    if (el.a >= 0) known_[el.a] += rhs_[r];
-    if (el.b >= 0) known_[el.b] -= (el.type == ChainElementType::Gear ? el.ratio : 1.0) * rhs_[r];
+    tau_el[e] = rhs[r];
+    if (el.a >= 0) known[el.a] += rhs[r];
+    if (el.b >= 0) known[el.b] -= (el.type == ChainElementType::Gear ? el.ratio : 1.0) * rhs[r];
   }
-  for (int i = 0; i < n; ++i) acc_[i] = known_[i] * Jinv(i);
+  for (int i = 0; i < n; ++i) acc[i] = known[i] * Jinv(i);
 }
 
-void DriveChain::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void DriveChain::derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                              Eigen::Ref<Eigen::VectorXd> ydot) const {
-  solve(t, y);
+  const State& st = own<State>(state);
+  solve(st, t, y);
   for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(s_.inertias.size()); ++i) {
     ydot[2 * i] = y[2 * i + 1];
-    ydot[2 * i + 1] = acc_[i];
+    ydot[2 * i + 1] = st.acc[i];
   }
 }
 
-void DriveChain::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
-  solve(t, y);
+void DriveChain::roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                       Eigen::Ref<Eigen::VectorXd> g) const {
+  const State& st = own<State>(state);
+  solve(st, t, y);
   for (size_t k = 0; k < s_.elements.size(); ++k) {
     const auto& el = s_.elements[k];
     const int e = static_cast<int>(k);
@@ -239,8 +259,8 @@ void DriveChain::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eig
       g0 = phi_rel - 0.5 * el.backlash;  // contact edges: restart the integrator at the kink
       g1 = phi_rel + 0.5 * el.backlash;
     } else if (el.isFriction()) {
-      const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(e);
-      drive::frictionRoots(modes_[k], tau_el_[e], w, a, t0, t0max, g0, g1);
+      const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(st, e);
+      drive::frictionRoots(st.modes[k], st.tau_el[e], w, a, t0, t0max, g0, g1);
     }
     g[2 * e] = g0;
     g[2 * e + 1] = g1;
@@ -263,22 +283,25 @@ std::vector<double> DriveChain::timeEvents(double t_end) const {
   return events;
 }
 
-void DriveChain::start(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
+void DriveChain::start(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  State& st = own<State>(state);
   for (size_t k = 0; k < s_.elements.size(); ++k) {
     const auto& el = s_.elements[k];
     if (!el.isFriction()) continue;
     const double w = relSpeed(static_cast<int>(k), y);
     if (el.type != ChainElementType::BearingFriction && el.fn_max * el.normalized.value(t) <= 0.0)
-      modes_[k] = FrictionMode::Free;
+      st.modes[k] = FrictionMode::Free;
     else
-      modes_[k] = w > 0 ? FrictionMode::Forward : (w < 0 ? FrictionMode::Backward : FrictionMode::Stuck);
+      st.modes[k] = w > 0 ? FrictionMode::Forward : (w < 0 ? FrictionMode::Backward : FrictionMode::Stuck);
   }
-  updateModes(t, y, {});
+  updateModes(st, t, y, {});
 }
 
-void DriveChain::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+void DriveChain::updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                             const std::vector<int>& fired) const {
+  State& st = own<State>(state);
   for (int iter = 0; iter < 20; ++iter) {
-    solve(t, y);
+    solve(st, t, y);
     bool changed = false;
     for (size_t k = 0; k < s_.elements.size(); ++k) {
       const auto& el = s_.elements[k];
@@ -289,11 +312,11 @@ void DriveChain::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& 
       // (a root function that restarts at exactly zero is not reported again).
       const drive::FrictionEventFlags flags =
           iter == 0 ? drive::frictionEventFlags(fired, k) : drive::FrictionEventFlags{};
-      const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(e), S = tau_el_[e];
+      const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(st, e), S = st.tau_el[e];
       const bool free = el.type != ChainElementType::BearingFriction && el.fn_max * el.normalized.value(t) <= 0.0;
-      const FrictionMode m = drive::nextFrictionMode(modes_[k], free, S, w, a, t0, t0max, flags);
-      if (m != modes_[k]) {
-        modes_[k] = m;
+      const FrictionMode m = drive::nextFrictionMode(st.modes[k], free, S, w, a, t0, t0max, flags);
+      if (m != st.modes[k]) {
+        st.modes[k] = m;
         changed = true;
       }
     }
@@ -301,13 +324,17 @@ void DriveChain::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& 
   }
 }
 
-double DriveChain::elementTorque(int e, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
-  solve(t, y);
-  return tau_el_[e];
+double DriveChain::elementTorque(const sim::PlantState& state, int e, double t,
+                                 const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const State& st = own<State>(state);
+  solve(st, t, y);
+  return st.tau_el[e];
 }
 
-void DriveChain::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
-  solve(t, y);
+void DriveChain::signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                         Eigen::Ref<Eigen::VectorXd> row) const {
+  const State& st = own<State>(state);
+  solve(st, t, y);
   Eigen::Index c = 0;
   for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(s_.inertias.size()); ++i) {
     row[c++] = y[2 * i];
@@ -317,16 +344,16 @@ void DriveChain::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, E
     const auto& el = s_.elements[k];
     const int e = static_cast<int>(k);
     if (el.type == ChainElementType::TorqueSource) {
-      row[c++] = tau_el_[e];
+      row[c++] = st.tau_el[e];
       continue;
     }
     row[c++] = (el.b >= 0 ? y[2 * el.b] : 0.0) - (el.a >= 0 ? y[2 * el.a] : 0.0);
     row[c++] = relSpeed(e, y);
-    row[c++] = tau_el_[e];
+    row[c++] = st.tau_el[e];
     if (el.isFriction()) {
-      row[c++] = frictionModeNumber(modes_[k]);
-      row[c++] = modes_[k] == FrictionMode::StartForward ? 1.0 : 0.0;
-      row[c++] = modes_[k] == FrictionMode::StartBackward ? 1.0 : 0.0;
+      row[c++] = frictionModeNumber(st.modes[k]);
+      row[c++] = st.modes[k] == FrictionMode::StartForward ? 1.0 : 0.0;
+      row[c++] = st.modes[k] == FrictionMode::StartBackward ? 1.0 : 0.0;
     }
   }
 }

@@ -89,30 +89,45 @@ JointRig::JointRig(JointRigSetup setup) : s_(std::move(setup)) {
   if (e_idx_ >= 0) signals_.emplace_back("pi_integral[rad]");
 }
 
-void JointRig::setCommand(double value) {
+void JointRig::State::save(ByteWriter& out) const {
+  out.boolean(held);
+  out.f64(command);
+  out.f64(load_torque);
+}
+
+void JointRig::State::load(ByteReader& in) {
+  held = in.boolean("held");
+  command = in.f64("command");
+  load_torque = in.f64("load torque");
+}
+
+void JointRig::setCommand(sim::PlantState& state, double value) const {
+  State& s = own<State>(state);
   if (!std::isfinite(value))
     throw InputError(name() + ": command: expected a finite number, got " + formatNumber(value));
-  if (!held_ || command_ != value) {
-    held_ = true;
-    command_ = value;
-    ++revision_;
+  if (!s.held || s.command != value) {
+    s.held = true;
+    s.command = value;
+    s.inputsChanged();
   }
 }
 
-void JointRig::releaseCommand() {
-  if (held_) {
-    held_ = false;
-    ++revision_;
+void JointRig::releaseCommand(sim::PlantState& state) const {
+  State& s = own<State>(state);
+  if (s.held) {
+    s.held = false;
+    s.inputsChanged();
   }
 }
 
-void JointRig::setLoadTorque(double tau) {
+void JointRig::setLoadTorque(sim::PlantState& state, double tau) const {
+  State& s = own<State>(state);
   if (!std::isfinite(tau))
     throw InputError(name() + ": load torque: expected a finite number, got " + formatNumber(tau));
   if (s_.clamped && tau != 0.0) throw InputError(name() + ": load torque: the output is clamped");
-  if (load_torque_ != tau) {
-    load_torque_ = tau;
-    ++revision_;
+  if (s.load_torque != tau) {
+    s.load_torque = tau;
+    s.inputsChanged();
   }
 }
 
@@ -138,8 +153,8 @@ Eigen::VectorXd JointRig::initialState() const {
   return y;
 }
 
-JointRig::Eval JointRig::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* xdot_tr,
-                                  double* zdot) const {
+JointRig::Eval JointRig::evaluate(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                  double* xdot_tr, double* zdot) const {
   Eval e;
   const double q_m = y[0], qd_m = y[1];
   const double N = s_.transmission->ratio();
@@ -152,7 +167,7 @@ JointRig::Eval JointRig::evaluate(double t, const Eigen::Ref<const Eigen::Vector
     e.qd_l = y[l_idx_ + 1];
   }
   // Input: torque, voltage, or the velocity PI output.
-  e.command = held_ ? command_ : s_.profile.value(t);
+  e.command = st.held ? st.command : s_.profile.value(t);
   double u = e.command;
   if (s_.input == RigInput::VelocityPI) {
     const double err = e.command - (s_.pi.measure == Side::Motor ? qd_m : e.qd_l);
@@ -186,7 +201,7 @@ JointRig::Eval JointRig::evaluate(double t, const Eigen::Ref<const Eigen::Vector
       }
     }
     e.qdd_m = (e.tau_motor - b_l * e.qd_l / N - tau_f_motor_side) / J_eff;
-    if (load_torque_ != 0.0) e.qdd_m += load_torque_ / (N * J_eff);
+    if (st.load_torque != 0.0) e.qdd_m += st.load_torque / (N * J_eff);
     e.qdd_l = e.qdd_m / N;
     const double tau_f_on_motor = (s_.friction && s_.friction_side == Side::Motor) ? e.tau_f : 0.0;
     e.tau_in = e.tau_motor - tau_f_on_motor - J_m_ * e.qdd_m;
@@ -199,7 +214,7 @@ JointRig::Eval JointRig::evaluate(double t, const Eigen::Ref<const Eigen::Vector
   e.tau_out = pt.tau_out;
   const double drive_m = e.tau_motor - e.tau_in;
   double drive_l = e.tau_out - b_l * e.qd_l;
-  if (load_torque_ != 0.0 && !s_.clamped) drive_l += load_torque_;
+  if (st.load_torque != 0.0 && !s_.clamped) drive_l += st.load_torque;
   double tau_f_m = 0.0, tau_f_l = 0.0;
   if (s_.friction) {
     if (s_.friction_side == Side::Motor) {
@@ -213,9 +228,10 @@ JointRig::Eval JointRig::evaluate(double t, const Eigen::Ref<const Eigen::Vector
   return e;
 }
 
-void JointRig::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void JointRig::derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                            Eigen::Ref<Eigen::VectorXd> ydot) const {
-  const Eval e = evaluate(t, y, nx_ > 0 ? ydot.data() + x_idx_ : nullptr, nz_ > 0 ? ydot.data() + z_idx_ : nullptr);
+  const Eval e = evaluate(own<State>(state), t, y, nx_ > 0 ? ydot.data() + x_idx_ : nullptr,
+                          nz_ > 0 ? ydot.data() + z_idx_ : nullptr);
   ydot[0] = y[1];
   ydot[1] = e.qdd_m;
   if (i_idx_ >= 0) ydot[i_idx_] = e.di;
@@ -226,10 +242,11 @@ void JointRig::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
   if (e_idx_ >= 0) ydot[e_idx_] = e.de;
 }
 
-void JointRig::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
+void JointRig::signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                       Eigen::Ref<Eigen::VectorXd> row) const {
   // Scratch for derivatives we do not need here (state sizes are small; a fixed buffer avoids allocation).
   double xdot[64], zdot[64];
-  const Eval e = evaluate(t, y, nx_ > 0 ? xdot : nullptr, nz_ > 0 ? zdot : nullptr);
+  const Eval e = evaluate(own<State>(state), t, y, nx_ > 0 ? xdot : nullptr, nz_ > 0 ? zdot : nullptr);
   Eigen::Index k = 0;
   row[k++] = y[0];
   row[k++] = y[1];

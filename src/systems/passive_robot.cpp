@@ -36,13 +36,10 @@ void PassiveRobotParams::validate(const Model& model) const {
   joint_limits.validate();
 }
 
-PassiveRobot::PassiveRobot(Model model, PassiveRobotParams params)
-    : model_(std::move(model)), p_(std::move(params)), data_(model_), log_data_(model_) {
+PassiveRobot::PassiveRobot(Model model, PassiveRobotParams params) : model_(std::move(model)), p_(std::move(params)) {
   p_.validate(model_);
   const Eigen::Index n = model_.nq;
   damping_ = p_.damping.size() ? p_.damping : Eigen::VectorXd::Zero(n);
-  tau_.setZero(n);
-  tau_stop_.setZero(n);
   stops_ = EndStops(model_, p_.joint_limits);
   tip_ = model_.frameIndex(model_.tip_frame);
   auto unit = [&](size_t i, const char* rev, const char* pri) {
@@ -62,6 +59,12 @@ PassiveRobot::PassiveRobot(Model model, PassiveRobotParams params)
   }
 }
 
+PassiveRobot::State::State(const PassiveRobot& robot)
+    : PlantStateOf(robot), data(robot.model_), log_data(robot.model_) {
+  tau.setZero(robot.model_.nq);
+  tau_stop.setZero(robot.model_.nq);
+}
+
 std::string PassiveRobot::name() const { return "multibody (" + model_.name + ")"; }
 
 sim::SimulateOptions PassiveRobot::simulateOptions() const {
@@ -79,37 +82,41 @@ Eigen::VectorXd PassiveRobot::initialState() const {
   return y;
 }
 
-void PassiveRobot::derivatives(double, const Eigen::Ref<const Eigen::VectorXd>& y,
+void PassiveRobot::derivatives(const sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>& y,
                                Eigen::Ref<Eigen::VectorXd> ydot) const {
+  const State& st = own<State>(state);
   const Eigen::Index n = model_.nq;
-  tau_.noalias() = -damping_.cwiseProduct(y.tail(n));
+  st.tau.noalias() = -damping_.cwiseProduct(y.tail(n));
   if (stops_.active()) {
-    stops_.torques(y.head(n), y.tail(n), tau_stop_);
-    tau_ += tau_stop_;
+    stops_.torques(y.head(n), y.tail(n), st.tau_stop);
+    st.tau += st.tau_stop;
   }
   ydot.head(n) = y.tail(n);
-  ydot.tail(n) = multibody::aba(model_, data_, y.head(n), y.tail(n), tau_);
+  ydot.tail(n) = multibody::aba(model_, st.data, y.head(n), y.tail(n), st.tau);
 }
 
-void PassiveRobot::signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const {
+void PassiveRobot::signals(const sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+                           Eigen::Ref<Eigen::VectorXd> out) const {
+  const State& st = own<State>(state);
   const Eigen::Index n = model_.nq;
-  const double T = multibody::kineticEnergy(model_, log_data_, y.head(n), y.tail(n));
-  const double V = multibody::potentialEnergy(model_, log_data_, y.head(n));  // also updates oMf
+  const double T = multibody::kineticEnergy(model_, st.log_data, y.head(n), y.tail(n));
+  const double V = multibody::potentialEnergy(model_, st.log_data, y.head(n));  // also updates oMf
   const double E_stop = stops_.energy(y.head(n));
   out.head(2 * n) = y;
   out[2 * n] = T;
   out[2 * n + 1] = V;
   out[2 * n + 2] = T + V + E_stop;
-  out.segment(2 * n + 3, 3) = log_data_.oMf[static_cast<size_t>(tip_)].p;
+  out.segment(2 * n + 3, 3) = st.log_data.oMf[static_cast<size_t>(tip_)].p;
   if (stops_.active()) {
     out[2 * n + 6] = E_stop;
-    stops_.torques(y.head(n), y.tail(n), tau_stop_);
+    stops_.torques(y.head(n), y.tail(n), st.tau_stop);
     Eigen::Index c = 2 * n + 7;
-    for (int i : stops_.joints()) out[c++] = tau_stop_[i];
+    for (int i : stops_.joints()) out[c++] = st.tau_stop[i];
   }
 }
 
-void PassiveRobot::roots(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
+void PassiveRobot::roots(const sim::PlantState& /*state*/, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+                         Eigen::Ref<Eigen::VectorXd> g) const {
   stops_.roots(y.head(model_.nq), g.data());
 }
 

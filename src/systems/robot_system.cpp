@@ -2,22 +2,20 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <locale>
 #include <random>
+#include <sstream>
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 
+#include "jointsim/common/bytes.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 
 namespace jointsim::systems {
-
-struct RobotSystem::Rng {
-  std::mt19937_64 engine;
-  std::normal_distribution<double> normal{0.0, 1.0};
-  double gauss(double sigma) { return sigma > 0.0 ? sigma * normal(engine) : 0.0; }
-};
 
 namespace {
 double quantise(double x, double quantum) { return quantum > 0.0 ? quantum * std::round(x / quantum) : x; }
@@ -30,7 +28,7 @@ void RobotSignals::resize(int n) {
 }
 
 RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, Eigen::MatrixXd coupling)
-    : model_(std::move(model)), drives_(std::move(drives)), data_(model_), id_data_(model_) {
+    : model_(std::move(model)), drives_(std::move(drives)) {
   const int n = model_.nq;
   if (static_cast<int>(drives_.size()) != n)
     throw InputError("robot '" + model_.name + "' has " + std::to_string(n) + " joints but " +
@@ -65,7 +63,7 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
     const DriveSpec& d = drives_[static_cast<size_t>(k)];
     const std::string where = "drive of joint '" + d.joint + "'";
     if (!d.transmission) throw InputError(where + ": missing transmission");
-    motors_.emplace_back(d.motor);  // validates
+    drive::DcMotor{d.motor};  // validates
     d.controller.validate(where + ".controller");
     controllers_.emplace_back(d.controller);
     const bool voltage_out = d.controller.type == control::ControllerType::Cascade002;
@@ -122,20 +120,6 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
   } else {
     model_.armature = file_armature + rotor;  // diagonal reflected rotor inertia: ABA handles it
   }
-  data_ = multibody::Data(model_);
-  sig_.resize(n);
-  out_is_voltage_.assign(static_cast<size_t>(n), 0);
-  zero_.setZero(n);
-  phi_.setZero(n);
-  phid_.setZero(n);
-  tau_out_.setZero(n);
-  tau_.setZero(n);
-  tmp_.setZero(n_states_);
-  fext_.setZero(6, n);
-  M_.setZero(n, n);
-  llt_ = Eigen::LLT<Eigen::MatrixXd>(n);
-  llt_.compute(Eigen::MatrixXd::Identity(n, n));  // a defined status before the first use (the object is copied)
-
   // The logged signals and the inverse-dynamics reference model (the rotor inertias of all drives as
   // armature; rigid ones are already in the system's armature).
   id_model_ = model_;
@@ -143,16 +127,7 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
     const auto& L = layout_[static_cast<size_t>(k)];
     if (!L.rigid) id_model_.armature[k] += L.ratio * L.ratio * drives_[static_cast<size_t>(k)].motor.J_M;
   }
-  id_data_ = multibody::Data(id_model_);
   tip_ = model_.frameIndex(model_.tip_frame);
-  port_.assign(static_cast<size_t>(n), CommandPort::Setpoint);
-  applied_port_ = port_;
-  cmd_.setZero(n);
-  applied_cmd_.setZero(n);
-  ref_held_.assign(static_cast<size_t>(n), 0);
-  ref_q_.setZero(n);
-  ref_qd_.setZero(n);
-  ref_qdd_.setZero(n);
   const char* per_joint[][2] = {
       {"q_set", "rad"},    {"q", "rad"},         {"q_fb", "rad"},  {"qd", "rad/s"},        {"motor_velocity", "rad/s"},
       {"current", "A"},    {"current_ref", "A"}, {"voltage", "V"}, {"gear_torque", "N·m"}, {"friction_torque", "N·m"},
@@ -161,6 +136,144 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
     for (const auto& c : per_joint) signal_names_.push_back(std::string(c[0]) + "_" + name + "[" + c[1] + "]");
   for (const char* c : {"tcp_x[m]", "tcp_y[m]", "tcp_z[m]", "tcp_roll[rad]", "tcp_pitch[rad]", "tcp_yaw[rad]"})
     signal_names_.emplace_back(c);
+}
+
+RobotSystem::State::State(const RobotSystem& robot)
+    : PlantStateOf(robot), drives(robot.drives_), data(robot.model_), id_data(robot.id_model_) {
+  const int n = robot.model_.nq;
+  port.assign(static_cast<size_t>(n), CommandPort::Setpoint);
+  applied_port = port;
+  cmd.setZero(n);
+  applied_cmd.setZero(n);
+  ref_held.assign(static_cast<size_t>(n), 0);
+  ref_q.setZero(n);
+  ref_qd.setZero(n);
+  ref_qdd.setZero(n);
+  q_start = robot.q0_.size() == n ? robot.q0_ : Eigen::VectorXd::Zero(n);
+  ctrl_x.assign(static_cast<size_t>(robot.n_ctrl_sampled_), 0.0);
+  held_u.setZero(n);
+  held_i_ref.setZero(n);
+  held_q_fb.setZero(n);
+  prev_qm_meas.setZero(n);
+  engine.seed(robot.seed_);
+  fault_applied.assign(robot.faults_.size(), 0.0);
+  stuck_episode.assign(robot.faults_.size(), -1);
+  stuck_value.assign(robot.faults_.size(), 0.0);
+  for (const DriveSpec& d : drives) motors.emplace_back(d.motor);
+  sig.resize(n);
+  out_is_voltage.assign(static_cast<size_t>(n), 0);
+  zero.setZero(n);
+  phi.setZero(n);
+  phid.setZero(n);
+  tau_out.setZero(n);
+  tau.setZero(n);
+  tmp.setZero(robot.n_states_);
+  fext.setZero(6, n);
+  M.setZero(n, n);
+  llt = Eigen::LLT<Eigen::MatrixXd>(n);
+  llt.compute(Eigen::MatrixXd::Identity(n, n));  // a defined status before the first use (the object is copied)
+  // The faults as they are at t = 0 (start() sets them for its start time and state).
+  if (!robot.faults_.empty()) robot.updateFaults(*this, 0.0, Eigen::VectorXd::Zero(robot.n_states_), true);
+}
+
+namespace {
+/// The noise generator's state as text (the standard library's portable textual form).
+template <class T>
+std::string streamed(const T& x) {
+  std::ostringstream out;
+  out.imbue(std::locale::classic());
+  out << x;
+  return out.str();
+}
+template <class T>
+bool unstreamed(const std::string& text, T& x) {
+  std::istringstream in(text);
+  in.imbue(std::locale::classic());
+  in >> x;
+  return !in.fail();
+}
+}  // namespace
+
+void RobotSystem::State::save(ByteWriter& out) const {
+  const int n = static_cast<int>(port.size());
+  out.tag("robot inputs");
+  for (int k = 0; k < n; ++k) {
+    out.u64(static_cast<std::uint64_t>(port[static_cast<size_t>(k)]));
+    out.u64(static_cast<std::uint64_t>(applied_port[static_cast<size_t>(k)]));
+  }
+  out.vector(cmd);
+  out.vector(applied_cmd);
+  out.flags(ref_held);
+  out.vector(ref_q);
+  out.vector(ref_qd);
+  out.vector(ref_qdd);
+  out.vector(q_start);
+  out.u64(user_wrenches.size());
+  for (const auto& [f, w] : user_wrenches) {
+    out.i64(f);
+    out.vector(w);
+  }
+  out.tag("sampled control");
+  out.doubles(ctrl_x);
+  out.vector(held_u);
+  out.vector(held_i_ref);
+  out.vector(held_q_fb);
+  out.vector(prev_qm_meas);
+  out.boolean(first_sample);
+  out.i64(inner_count);
+  out.text(streamed(engine));
+  out.text(streamed(normal));
+  out.tag("faults");
+  out.doubles(fault_applied);
+  out.u64(stuck_episode.size());
+  for (long e : stuck_episode) out.i64(e);
+  out.doubles(stuck_value);
+}
+
+void RobotSystem::State::load(ByteReader& in) {
+  const auto& robot = static_cast<const RobotSystem&>(owner());
+  const int n = robot.model_.nq;
+  auto portOf = [&in](const char* field) {
+    const std::uint64_t v = in.u64(field);
+    if (v > static_cast<std::uint64_t>(CommandPort::MotorTorque)) in.fail(std::string("bad ") + field);
+    return static_cast<CommandPort>(v);
+  };
+  in.tag("robot inputs");
+  for (int k = 0; k < n; ++k) {
+    port[static_cast<size_t>(k)] = portOf("command port");
+    applied_port[static_cast<size_t>(k)] = portOf("applied command port");
+  }
+  cmd = in.vector("commands", n);
+  applied_cmd = in.vector("applied commands", n);
+  ref_held = in.flags("held references", n);
+  ref_q = in.vector("held q", n);
+  ref_qd = in.vector("held qd", n);
+  ref_qdd = in.vector("held qdd", n);
+  q_start = in.vector("start angles", n);
+  const std::uint64_t wrenches = in.u64("external wrenches");
+  if (wrenches > robot.model_.frames.size()) in.fail("more external wrenches than frames");
+  user_wrenches.clear();
+  for (std::uint64_t i = 0; i < wrenches; ++i) {
+    const std::int64_t f = in.i64("wrench frame");
+    if (f < 0 || f >= static_cast<std::int64_t>(robot.model_.frames.size())) in.fail("bad wrench frame");
+    user_wrenches.emplace_back(static_cast<int>(f), in.vector("wrench", 6));
+  }
+  in.tag("sampled control");
+  ctrl_x = in.doubles("controller states", static_cast<long>(ctrl_x.size()));
+  held_u = in.vector("held outputs", n);
+  held_i_ref = in.vector("held current references", n);
+  held_q_fb = in.vector("held joint feedback", n);
+  prev_qm_meas = in.vector("encoder memory", n);
+  first_sample = in.boolean("first sample");
+  inner_count = in.i64("current-loop samples");
+  if (!unstreamed(in.text("noise generator"), engine)) in.fail("bad noise generator state");
+  if (!unstreamed(in.text("noise distribution"), normal)) in.fail("bad noise distribution state");
+  in.tag("faults");
+  fault_applied = in.doubles("applied fault values", static_cast<long>(fault_applied.size()));
+  if (in.u64("stuck episodes") != stuck_episode.size()) in.fail("another number of faults");
+  for (long& e : stuck_episode) e = in.i64("stuck episode");
+  stuck_value = in.doubles("stuck values", static_cast<long>(stuck_value.size()));
+  robot.rebuildDrives(*this, {});
 }
 
 const char* portName(CommandPort port) {
@@ -201,10 +314,11 @@ void RobotSystem::checkJoint(int joint, const char* what) const {
                      std::to_string(model_.nq - 1));
 }
 
-void RobotSystem::setCommandPort(int joint, CommandPort port) {
+void RobotSystem::setCommandPort(sim::PlantState& state, int joint, CommandPort port) const {
+  State& st = own<State>(state);
   checkJoint(joint, "setCommandPort");
   const size_t k = static_cast<size_t>(joint);
-  const DriveSpec& d = drives_[k];
+  const DriveSpec& d = st.drives[k];
   const std::string where = name() + ": joint '" + d.joint + "': the " + portName(port) + " port ";
   const bool electrics = layout_[k].current >= 0;
   switch (port) {
@@ -223,69 +337,75 @@ void RobotSystem::setCommandPort(int joint, CommandPort port) {
       break;
     case CommandPort::MotorTorque: break;
   }
-  if (port_[k] != port) {
-    port_[k] = port;
-    cmd_[joint] = 0.0;  // a new port starts from a zero command unless set
-    ++revision_;
+  if (st.port[k] != port) {
+    st.port[k] = port;
+    st.cmd[joint] = 0.0;  // a new port starts from a zero command unless set
+    st.inputsChanged();
   }
 }
 
-CommandPort RobotSystem::commandPort(int joint) const {
+CommandPort RobotSystem::commandPort(const sim::PlantState& state, int joint) const {
+  const State& st = own<State>(state);
   checkJoint(joint, "commandPort");
-  return port_[static_cast<size_t>(joint)];
+  return st.port[static_cast<size_t>(joint)];
 }
 
-void RobotSystem::setCommand(int joint, double value) {
+void RobotSystem::setCommand(sim::PlantState& state, int joint, double value) const {
+  State& st = own<State>(state);
   checkJoint(joint, "setCommand");
   const size_t k = static_cast<size_t>(joint);
-  const CommandPort port = port_[k];
+  const CommandPort port = st.port[k];
   // The message is built only on error: a controller calls this at every step.
   auto fail = [&](const std::string& why) {
-    throw InputError(name() + ": joint '" + drives_[k].joint + "': " + portName(port) + " command: " + why);
+    throw InputError(name() + ": joint '" + st.drives[k].joint + "': " + portName(port) + " command: " + why);
   };
   if (port == CommandPort::Setpoint)
     fail("the joint is under the setpoint port; use setSetpoint or choose another port");
   if (!std::isfinite(value)) fail("expected a finite number, got " + formatNumber(value));
-  if (cmd_[joint] != value) {
-    cmd_[joint] = value;
-    ++revision_;
+  if (st.cmd[joint] != value) {
+    st.cmd[joint] = value;
+    st.inputsChanged();
   }
 }
 
-void RobotSystem::setCommands(const Eigen::VectorXd& values) {
+void RobotSystem::setCommands(sim::PlantState& state, const Eigen::VectorXd& values) const {
+  const State& st = own<State>(state);
   if (values.size() != model_.nq)
     throw InputError(name() + ": setCommands: expected " + std::to_string(model_.nq) + " values, got " +
                      std::to_string(values.size()));
   for (int k = 0; k < model_.nq; ++k)
-    if (port_[static_cast<size_t>(k)] != CommandPort::Setpoint && !std::isfinite(values[k]))
-      throw InputError(name() + ": setCommands: joint '" + drives_[static_cast<size_t>(k)].joint +
+    if (st.port[static_cast<size_t>(k)] != CommandPort::Setpoint && !std::isfinite(values[k]))
+      throw InputError(name() + ": setCommands: joint '" + st.drives[static_cast<size_t>(k)].joint +
                        "': expected a finite number, got " + formatNumber(values[k]));
   for (int k = 0; k < model_.nq; ++k)
-    if (port_[static_cast<size_t>(k)] != CommandPort::Setpoint) setCommand(k, values[k]);
+    if (st.port[static_cast<size_t>(k)] != CommandPort::Setpoint) setCommand(state, k, values[k]);
 }
 
-double RobotSystem::command(int joint) const {
+double RobotSystem::command(const sim::PlantState& state, int joint) const {
+  const State& st = own<State>(state);
   checkJoint(joint, "command");
-  return cmd_[joint];
+  return st.cmd[joint];
 }
 
-void RobotSystem::setSetpoint(int joint, double q, double qd, double qdd) {
+void RobotSystem::setSetpoint(sim::PlantState& state, int joint, double q, double qd, double qdd) const {
+  State& st = own<State>(state);
   checkJoint(joint, "setSetpoint");
   if (!std::isfinite(q) || !std::isfinite(qd) || !std::isfinite(qdd))
-    throw InputError(name() + ": joint '" + drives_[static_cast<size_t>(joint)].joint +
+    throw InputError(name() + ": joint '" + st.drives[static_cast<size_t>(joint)].joint +
                      "': setpoint: expected finite q, qd, qdd, got " + formatNumber(q) + ", " + formatNumber(qd) +
                      ", " + formatNumber(qdd));
-  char& held = ref_held_[static_cast<size_t>(joint)];
-  if (!held || ref_q_[joint] != q || ref_qd_[joint] != qd || ref_qdd_[joint] != qdd) {
+  char& held = st.ref_held[static_cast<size_t>(joint)];
+  if (!held || st.ref_q[joint] != q || st.ref_qd[joint] != qd || st.ref_qdd[joint] != qdd) {
     held = 1;
-    ref_q_[joint] = q;
-    ref_qd_[joint] = qd;
-    ref_qdd_[joint] = qdd;
-    ++revision_;
+    st.ref_q[joint] = q;
+    st.ref_qd[joint] = qd;
+    st.ref_qdd[joint] = qdd;
+    st.inputsChanged();
   }
 }
 
-void RobotSystem::holdSetpoints(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd) {
+void RobotSystem::holdSetpoints(sim::PlantState& state, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                const Eigen::VectorXd& qdd) const {
   const int n = model_.nq;
   auto check = [&](const Eigen::VectorXd& v, const char* what, bool optional) {
     if ((optional && v.size() == 0)) return;
@@ -297,115 +417,120 @@ void RobotSystem::holdSetpoints(const Eigen::VectorXd& q, const Eigen::VectorXd&
   check(q, "q", false);
   check(qd, "qd", true);
   check(qdd, "qdd", true);
-  for (int k = 0; k < n; ++k) setSetpoint(k, q[k], qd.size() ? qd[k] : 0.0, qdd.size() ? qdd[k] : 0.0);
+  for (int k = 0; k < n; ++k) setSetpoint(state, k, q[k], qd.size() ? qd[k] : 0.0, qdd.size() ? qdd[k] : 0.0);
 }
 
-void RobotSystem::releaseSetpoints() {
-  for (auto& h : ref_held_)
+void RobotSystem::releaseSetpoints(sim::PlantState& state) const {
+  State& st = own<State>(state);
+  for (auto& h : st.ref_held)
     if (h) {
       h = 0;
-      ++revision_;
+      st.inputsChanged();
     }
 }
 
-void RobotSystem::setExternalWrench(const std::string& frame, const Eigen::Matrix<double, 6, 1>& wrench) {
+void RobotSystem::setExternalWrench(sim::PlantState& state, const std::string& frame,
+                                    const Eigen::Matrix<double, 6, 1>& wrench) const {
+  State& st = own<State>(state);
   const int f = model_.frameIndex(frame);
   if (!wrench.allFinite())
     throw InputError(name() + ": external wrench on frame '" + frame + "': expected finite values");
   if (model_.frames[static_cast<size_t>(f)].joint < 0)
     throw InputError(name() + ": external wrench on frame '" + frame +
                      "': the frame is fixed to the base, a wrench there does not act on the robot");
-  auto it = std::find_if(user_wrenches_.begin(), user_wrenches_.end(), [f](const auto& w) { return w.first == f; });
+  auto it = std::find_if(st.user_wrenches.begin(), st.user_wrenches.end(), [f](const auto& w) { return w.first == f; });
   if (wrench.isZero(0.0)) {
-    if (it != user_wrenches_.end()) {
-      user_wrenches_.erase(it);
-      ++revision_;
+    if (it != st.user_wrenches.end()) {
+      st.user_wrenches.erase(it);
+      st.inputsChanged();
     }
     return;
   }
-  if (it == user_wrenches_.end()) {
-    user_wrenches_.emplace_back(f, wrench);
-    ++revision_;
+  if (it == st.user_wrenches.end()) {
+    st.user_wrenches.emplace_back(f, wrench);
+    st.inputsChanged();
   } else if (it->second != wrench) {
     it->second = wrench;
-    ++revision_;
+    st.inputsChanged();
   }
 }
 
-void RobotSystem::clearExternalWrenches() {
-  if (!user_wrenches_.empty()) {
-    user_wrenches_.clear();
-    ++revision_;
+void RobotSystem::clearExternalWrenches(sim::PlantState& state) const {
+  State& st = own<State>(state);
+  if (!st.user_wrenches.empty()) {
+    st.user_wrenches.clear();
+    st.inputsChanged();
   }
 }
 
-control::ControllerInputs RobotSystem::controllerInputs(int k) const {
+control::ControllerInputs RobotSystem::controllerInputs(const State& st, int k) const {
   const auto& L = layout_[static_cast<size_t>(k)];
-  return {sig_.q_set[k], sig_.qd_set[k],  sig_.q_fb[k], sig_.qm[k],
-          sig_.qdm[k],   sig_.current[k], L.ratio,      drives_[static_cast<size_t>(k)].motor.V_supply};
+  return {st.sig.q_set[k], st.sig.qd_set[k],  st.sig.q_fb[k], st.sig.qm[k],
+          st.sig.qdm[k],   st.sig.current[k], L.ratio,        st.drives[static_cast<size_t>(k)].motor.V_supply};
 }
 
-void RobotSystem::applyInputs(double t, Eigen::Ref<Eigen::VectorXd> y) {
+void RobotSystem::applyInputs(sim::PlantState& state, double t, Eigen::Ref<Eigen::VectorXd> y) const {
+  State& st = own<State>(state);
   for (int k = 0; k < model_.nq; ++k) {
     const size_t kk = static_cast<size_t>(k);
-    if (port_[kk] != applied_port_[kk]) bumpless(k, applied_port_[kk], t, y);
+    if (st.port[kk] != st.applied_port[kk]) bumpless(st, k, st.applied_port[kk], t, y);
   }
-  applied_port_ = port_;
-  applied_cmd_ = cmd_;
+  st.applied_port = st.port;
+  st.applied_cmd = st.cmd;
 }
 
-void RobotSystem::bumpless(int k, CommandPort from, double t, Eigen::Ref<Eigen::VectorXd> y) {
+void RobotSystem::bumpless(State& st, int k, CommandPort from, double t, Eigen::Ref<Eigen::VectorXd> y) const {
   const size_t kk = static_cast<size_t>(k);
-  const DriveSpec& d = drives_[kk];
+  const DriveSpec& d = st.drives[kk];
   const DriveLayout& L = layout_[kk];
-  const CommandPort to = port_[kk];
+  const CommandPort to = st.port[kk];
   if (L.controller < 0 || !controllerDriven(to)) return;  // no integrators, or the controller is not in use
-  setpointStage(t);
-  measurementStage(t, y);
-  double* x = sampled() ? ctrl_x_.data() + L.controller : y.data() + L.controller;
+  setpointStage(st, t);
+  measurementStage(st, t, y);
+  double* x = sampled() ? st.ctrl_x.data() + L.controller : y.data() + L.controller;
   const bool cascade = d.controller.type == control::ControllerType::Cascade002;
   // The actuator value applied just before the switch: the output of the controller under its old entry (held
   // output under sampled control), the voltage or torque command, or for a cascade leaving the torque port the
   // voltage that holds the present current (V = R i + k_e q̇_m).
-  double u_prev = 0.0, i_prev = sig_.current[k];
+  double u_prev = 0.0, i_prev = st.sig.current[k];
   if (controllerDriven(from)) {
     if (sampled()) {
-      u_prev = held_u_[k];
-      i_prev = held_i_ref_[k];
+      u_prev = st.held_u[k];
+      i_prev = st.held_i_ref[k];
     } else {
-      control::ControllerInputs in = controllerInputs(k);
+      control::ControllerInputs in = controllerInputs(st, k);
       in.entry = entryOf(from);
-      in.command = applied_cmd_[k];
+      in.command = st.applied_cmd[k];
       double xdot[4];
       const control::ControllerOutputs o = controllers_[kk].evaluate(in, x, xdot);
       u_prev = o.u;
       i_prev = o.i_ref;
     }
   } else if (from == CommandPort::Voltage) {
-    u_prev = motors_[kk].supplyVoltage(applied_cmd_[k]);
+    u_prev = st.motors[kk].supplyVoltage(st.applied_cmd[k]);
   } else {  // MotorTorque
-    u_prev = cascade ? d.motor.R * sig_.current[k] + d.motor.ke * sig_.qdm[k] : applied_cmd_[k];
-    if (cascade) i_prev = sig_.current[k];
+    u_prev = cascade ? d.motor.R * st.sig.current[k] + d.motor.ke * st.sig.qdm[k] : st.applied_cmd[k];
+    if (cascade) i_prev = st.sig.current[k];
   }
-  control::ControllerInputs in = controllerInputs(k);
+  control::ControllerInputs in = controllerInputs(st, k);
   in.entry = entryOf(to);
-  in.command = cmd_[k];
+  in.command = st.cmd[k];
   controllers_[kk].matchOutput(in, u_prev, i_prev, x);
   if (sampled()) {  // the held output continues until the next sample
-    held_u_[k] = u_prev;
-    held_i_ref_[k] = to == CommandPort::Current ? cmd_[k] : i_prev;
+    st.held_u[k] = u_prev;
+    st.held_i_ref[k] = to == CommandPort::Current ? st.cmd[k] : i_prev;
   }
 }
 
 void RobotSystem::setJointLimits(const JointLimitSettings& settings) {
   signal_names_.resize(signal_names_.size() - stops_.joints().size());  // the signals of earlier stops
   stops_ = EndStops(model_, settings);
-  sig_.tau_stop.setZero();
   for (int i : stops_.joints())
     signal_names_.push_back("end_stop_torque_" + model_.joint_names[static_cast<size_t>(i)] + "[N·m]");
 }
 
-void RobotSystem::roots(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
+void RobotSystem::roots(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+                        Eigen::Ref<Eigen::VectorXd> g) const {
   stops_.roots(y.head(model_.nq), g.data());
 }
 
@@ -479,23 +604,18 @@ std::vector<double> RobotSystem::timeEvents(double t_end) const {
 }
 
 void RobotSystem::setFaults(std::vector<Fault> faults) {
-  if (nominal_drives_.empty()) nominal_drives_ = drives_;
   std::vector<int> drive;
   for (const Fault& f : faults) {
     const int k = model_.jointIndex(f.joint);  // InputError for an unknown joint
-    DriveSpec probe = nominal_drives_[static_cast<size_t>(k)];
+    DriveSpec probe = drives_[static_cast<size_t>(k)];
     applyFault(probe, f);  // applies to this drive? (InputError naming the fault and the component)
     drive.push_back(k);
   }
   faults_ = std::move(faults);
   fault_drive_ = std::move(drive);
-  fault_applied_.assign(faults_.size(), 0.0);
-  stuck_episode_.assign(faults_.size(), -1);
-  stuck_value_.assign(faults_.size(), 0.0);
-  updateFaults(0.0, Eigen::VectorXd::Zero(n_states_), true);
 }
 
-void RobotSystem::updateFaults(double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool restart) {
+void RobotSystem::updateFaults(State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool restart) const {
   if (faults_.empty()) return;
   std::vector<char> dirty(drives_.size(), restart ? 1 : 0);
   for (size_t i = 0; i < faults_.size(); ++i) {
@@ -503,36 +623,40 @@ void RobotSystem::updateFaults(double t, const Eigen::Ref<const Eigen::VectorXd>
     const int k = fault_drive_[i];
     if (f.intermittent()) {
       long episode = -1;
-      if (restart) stuck_episode_[i] = -1;
-      if (f.type == FaultType::SensorStuck && faultEpisode(f, t, &episode) && episode != stuck_episode_[i]) {
-        stuck_episode_[i] = episode;  // the reading at the episode's start, held through it
-        stuck_value_[i] = y[k] + drives_[static_cast<size_t>(k)].sensors.joint_bias;
+      if (restart) st.stuck_episode[i] = -1;
+      if (f.type == FaultType::SensorStuck && faultEpisode(f, t, &episode) && episode != st.stuck_episode[i]) {
+        st.stuck_episode[i] = episode;  // the reading at the episode's start, held through it
+        st.stuck_value[i] = y[k] + st.drives[static_cast<size_t>(k)].sensors.joint_bias;
       }
       continue;
     }
     const double v = t >= f.onset ? scheduledFaultValue(f, t) : std::numeric_limits<double>::quiet_NaN();
-    const double before = fault_applied_[i];
-    fault_applied_[i] = f.type == FaultType::BearingRipple ? (std::isnan(v) ? 0.0 : v) : v;
+    const double before = st.fault_applied[i];
+    st.fault_applied[i] = f.type == FaultType::BearingRipple ? (std::isnan(v) ? 0.0 : v) : v;
     if (f.parameterFault() && !(v == before || (std::isnan(v) && std::isnan(before))))
       dirty[static_cast<size_t>(k)] = 1;
   }
+  rebuildDrives(st, dirty);
+}
+
+void RobotSystem::rebuildDrives(State& st, const std::vector<char>& dirty) const {
   for (size_t k = 0; k < drives_.size(); ++k) {
-    if (!dirty[k]) continue;
-    DriveSpec d = nominal_drives_[k];
+    if (!dirty.empty() && !dirty[k]) continue;
+    DriveSpec d = drives_[k];
     for (size_t i = 0; i < faults_.size(); ++i)
-      if (static_cast<size_t>(fault_drive_[i]) == k && faults_[i].parameterFault() && !std::isnan(fault_applied_[i]))
-        applyFault(d, faults_[i], fault_applied_[i]);
-    drives_[k] = std::move(d);
-    motors_[k] = drive::DcMotor(drives_[k].motor);
+      if (static_cast<size_t>(fault_drive_[i]) == k && faults_[i].parameterFault() && !std::isnan(st.fault_applied[i]))
+        applyFault(d, faults_[i], st.fault_applied[i]);
+    st.drives[k] = std::move(d);
+    st.motors[k] = drive::DcMotor(st.drives[k].motor);
   }
 }
 
-double RobotSystem::faultySensor(int k, double t, double q_meas) const {
+double RobotSystem::faultySensor(const State& st, int k, double t, double q_meas) const {
   for (size_t i = 0; i < faults_.size(); ++i) {
     if (fault_drive_[i] != k || !faults_[i].intermittent() || !faultEpisode(faults_[i], t)) continue;
     switch (faults_[i].type) {
       case FaultType::SensorDropout: q_meas = 0.0; break;
-      case FaultType::SensorStuck: q_meas = stuck_value_[i]; break;
+      case FaultType::SensorStuck: q_meas = st.stuck_value[i]; break;
       case FaultType::SensorSpike: q_meas += faults_[i].value; break;
       default: break;
     }
@@ -540,18 +664,24 @@ double RobotSystem::faultySensor(int k, double t, double q_meas) const {
   return q_meas;
 }
 
-void RobotSystem::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>&) {
-  updateFaults(t, y, false);
+void RobotSystem::updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                              const std::vector<int>&) const {
+  updateFaults(own<State>(state), t, y, false);
 }
 
-void RobotSystem::start(double t0, const Eigen::Ref<const Eigen::VectorXd>& y) {
-  updateFaults(t0, y, true);
-  applied_port_ = port_;  // the state starts consistent with the ports as they are
-  applied_cmd_ = cmd_;
+void RobotSystem::start(sim::PlantState& state, double t0, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  State& st = own<State>(state);
+  st.q_start = y.head(model_.nq);
+  updateFaults(st, t0, y, true);
+  st.applied_port = st.port;  // the state starts consistent with the ports as they are
+  st.applied_cmd = st.cmd;
   if (sampled()) {
-    first_sample_ = true;  // a (re)start: the encoder speed and the outer loops begin afresh
-    inner_count_ = 0;
-    controlStep(t0, y);
+    // The controller states (outside y) holding the gravity load at y's joint angles, as initialState() sets them.
+    const Eigen::VectorXd full = initialFull(y.head(model_.nq), t0);
+    st.ctrl_x.assign(full.data() + n_states_, full.data() + full.size());
+    st.first_sample = true;  // a (re)start: the encoder speed and the outer loops begin afresh
+    st.inner_count = 0;
+    controlStep(state, t0, y);
   }
 }
 
@@ -600,39 +730,41 @@ void RobotSystem::setSampledControl(double rate, unsigned seed, double current_r
   int first = n_states_;
   for (const auto& L : layout_)
     if (L.controller >= 0) first = std::min(first, L.controller);
-  ctrl_x_.assign(static_cast<size_t>(n_states_ - first), 0.0);
+  n_ctrl_sampled_ = n_states_ - first;
   for (auto& L : layout_)
-    if (L.controller >= 0) L.controller -= first;  // now an index into ctrl_x_
+    if (L.controller >= 0) L.controller -= first;  // now an index into State::ctrl_x
   n_states_ = first;
-  held_u_.setZero(model_.nq);
-  held_i_ref_.setZero(model_.nq);
-  held_q_fb_.setZero(model_.nq);
-  prev_qm_meas_.setZero(model_.nq);
-  tmp_.setZero(n_states_);
-  rng_ = std::make_shared<Rng>();
-  rng_->engine.seed(seed);
+  seed_ = seed;
 }
 
 Eigen::VectorXd RobotSystem::initialState(const Eigen::VectorXd& q0, double t0) const {
+  if (q0.size() != model_.nq)
+    throw InputError("initial joint positions: expected " + std::to_string(model_.nq) + " values");
+  // With sampled control the controller states live outside y (start() sets them from the same computation).
+  return initialFull(q0, t0).head(n_states_);
+}
+
+Eigen::VectorXd RobotSystem::initialFull(const Eigen::VectorXd& q0, double t0) const {
   const int n = model_.nq;
-  if (q0.size() != n) throw InputError("initial joint positions: expected " + std::to_string(n) + " values");
-  // With sampled control the controller states live outside y: build the full vector, then split.
-  const int n_full = sampled() ? n_states_ + static_cast<int>(ctrl_x_.size()) : n_states_;
+  // A state for its workspace and the drives with the faults active at t0.
+  State st(*this);
+  updateFaults(st, t0, Eigen::VectorXd::Zero(n_states_), true);
+  const int n_full = n_states_ + n_ctrl_sampled_;
   Eigen::VectorXd y = Eigen::VectorXd::Zero(n_full);
   y.head(n) = q0;
   if (setpoints_) {
-    setpoints_(t0, sig_.q_set, sig_.qd_set, sig_.qdd_set);
+    setpoints_(t0, st.sig.q_set, st.sig.qd_set, st.sig.qdd_set);
   } else {
-    sig_.q_set = q0;
-    sig_.qd_set.setZero();
-    sig_.qdd_set.setZero();
+    st.sig.q_set = q0;
+    st.sig.qd_set.setZero();
+    st.sig.qdd_set.setZero();
   }
   // Gravity preload: each drive starts holding its share of the static joint torques.
-  const Eigen::VectorXd g = multibody::gravityTorques(model_, data_, q0);
+  const Eigen::VectorXd g = multibody::gravityTorques(model_, st.data, q0);
   const Eigen::VectorXd tau_out_needed = coupled_ ? Eigen::VectorXd(G_.transpose() * g) : g;
   const Eigen::VectorXd phi = Ginv_ * q0;
   for (int k = 0; k < n; ++k) {
-    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveSpec& d = st.drives[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
     const bool holds = d.controller.type != control::ControllerType::None;
     const double target = holds ? tau_out_needed[k] : 0.0;
@@ -666,7 +798,7 @@ Eigen::VectorXd RobotSystem::initialState(const Eigen::VectorXd& q0, double t0) 
     if (L.friction >= 0) d.friction->initialState(y.data() + L.friction);
     if (L.controller >= 0) {
       const int c = sampled() ? n_states_ + L.controller : L.controller;
-      control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], q0[k], q_in, 0.0, i, L.ratio, d.motor.V_supply};
+      control::ControllerInputs in{st.sig.q_set[k], st.sig.qd_set[k], q0[k], q_in, 0.0, i, L.ratio, d.motor.V_supply};
       controllers_[static_cast<size_t>(k)].initialState(in, y.data() + c);
       if (holds && d.controller.type == control::ControllerType::Cascade002) {
         // Integrators holding the static current and voltage: i_ref = I_vel ∫e_vel, V = I_cur ∫e_cur = R i.
@@ -677,320 +809,325 @@ Eigen::VectorXd RobotSystem::initialState(const Eigen::VectorXd& q0, double t0) 
       }
     }
   }
-  if (!sampled()) return y;
-  const_cast<RobotSystem*>(this)->ctrl_x_.assign(y.data() + n_states_, y.data() + n_full);
-  const_cast<RobotSystem*>(this)->first_sample_ = true;
-  const_cast<RobotSystem*>(this)->inner_count_ = 0;
-  return y.head(n_states_);
+  return y;
 }
 
-RobotSystem::MotionMeasurement RobotSystem::measureMotion(int k, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                                                          double phi, double phid, double Ts) {
+RobotSystem::MotionMeasurement RobotSystem::measureMotion(State& st, int k, double t,
+                                                          const Eigen::Ref<const Eigen::VectorXd>& y, double phi,
+                                                          double phid, double Ts) const {
   const DriveLayout& L = layout_[static_cast<size_t>(k)];
-  const SensorSpec& S = drives_[static_cast<size_t>(k)].sensors;
+  const SensorSpec& S = st.drives[static_cast<size_t>(k)].sensors;
   const double qm = L.rigid ? L.ratio * phi : y[L.motor];
   const double qdm = L.rigid ? L.ratio * phid : y[L.motor + 1];
   // Noise first, then the sensor's quantiser; encoder speed by differencing over Ts.
   MotionMeasurement m;
-  m.q = faultySensor(k, t, quantise(y[k] + S.joint_bias + rng_->gauss(S.joint_noise), S.joint_quantum));
+  m.q = faultySensor(st, k, t, quantise(y[k] + S.joint_bias + st.gauss(S.joint_noise), S.joint_quantum));
   m.qm = quantise(qm, S.motor_quantum);
   m.qdm = qdm;
-  if (S.motor_quantum > 0.0) m.qdm = first_sample_ ? 0.0 : (m.qm - prev_qm_meas_[k]) / Ts;
-  m.qdm += rng_->gauss(S.motor_velocity_noise);
-  prev_qm_meas_[k] = m.qm;
-  held_q_fb_[k] = m.q;
+  if (S.motor_quantum > 0.0) m.qdm = st.first_sample ? 0.0 : (m.qm - st.prev_qm_meas[k]) / Ts;
+  m.qdm += st.gauss(S.motor_velocity_noise);
+  st.prev_qm_meas[k] = m.qm;
+  st.held_q_fb[k] = m.q;
   return m;
 }
 
-double RobotSystem::measureCurrent(int k, const Eigen::Ref<const Eigen::VectorXd>& y) {
+double RobotSystem::measureCurrent(State& st, int k, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   const DriveLayout& L = layout_[static_cast<size_t>(k)];
-  const SensorSpec& S = drives_[static_cast<size_t>(k)].sensors;
-  return quantise((L.current >= 0 ? y[L.current] : 0.0) + rng_->gauss(S.current_noise), S.current_quantum);
+  const SensorSpec& S = st.drives[static_cast<size_t>(k)].sensors;
+  return quantise((L.current >= 0 ? y[L.current] : 0.0) + st.gauss(S.current_noise), S.current_quantum);
 }
 
-void RobotSystem::controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
+void RobotSystem::controlStep(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  State& st = own<State>(state);
   if (!sampled()) throw InputError("controlStep: sampled control is not enabled");
   if (current_rate_ > 0.0) {
-    multiRateStep(t, y);
+    multiRateStep(st, t, y);
     return;
   }
   const int n = model_.nq;
   const double Ts = 1.0 / sample_rate_;
-  setpointStage(t);
+  setpointStage(st, t);
   const Eigen::VectorXd phi = coupled_ ? Eigen::VectorXd(Ginv_ * y.head(n)) : Eigen::VectorXd(y.head(n));
   const Eigen::VectorXd phid = coupled_ ? Eigen::VectorXd(Ginv_ * y.segment(n, n)) : Eigen::VectorXd(y.segment(n, n));
   std::vector<double> xdot(4, 0.0);
   for (int k = 0; k < n; ++k) {
-    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveSpec& d = st.drives[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
-    const MotionMeasurement m = measureMotion(k, t, y, phi[k], phid[k], Ts);
-    const double i_meas = measureCurrent(k, y);
-    const CommandPort port = port_[static_cast<size_t>(k)];
+    const MotionMeasurement m = measureMotion(st, k, t, y, phi[k], phid[k], Ts);
+    const double i_meas = measureCurrent(st, k, y);
+    const CommandPort port = st.port[static_cast<size_t>(k)];
     if (!controllerDriven(port)) continue;  // voltage or torque command: the controller holds its state
-    control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], m.q, m.qm, m.qdm, i_meas, L.ratio, d.motor.V_supply};
+    control::ControllerInputs in{st.sig.q_set[k], st.sig.qd_set[k], m.q,     m.qm,
+                                 m.qdm,           i_meas,           L.ratio, d.motor.V_supply};
     in.entry = entryOf(port);
-    in.command = cmd_[k];
-    double* x = L.controller >= 0 ? ctrl_x_.data() + L.controller : nullptr;
+    in.command = st.cmd[k];
+    double* x = L.controller >= 0 ? st.ctrl_x.data() + L.controller : nullptr;
     const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(in, x, xdot.data());
     for (int j = 0; j < L.n_controller; ++j) x[j] += Ts * xdot[static_cast<size_t>(j)];  // forward Euler
-    held_u_[k] = out.u;
-    held_i_ref_[k] = out.i_ref;
+    st.held_u[k] = out.u;
+    st.held_i_ref[k] = out.i_ref;
   }
-  first_sample_ = false;
+  st.first_sample = false;
 }
 
-void RobotSystem::multiRateStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y) {
+void RobotSystem::multiRateStep(State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   // Every call is a current-loop sample; every inner_per_outer_-th also an outer (position, velocity) sample.
   const int n = model_.nq;
   const double Ts_in = 1.0 / current_rate_, Ts_out = 1.0 / sample_rate_;
-  const bool outer = inner_count_ % inner_per_outer_ == 0;
-  ++inner_count_;
-  setpointStage(t);
+  const bool outer = st.inner_count % inner_per_outer_ == 0;
+  ++st.inner_count;
+  setpointStage(st, t);
   double xdot[4] = {0.0, 0.0, 0.0, 0.0};
   for (int k = 0; k < n; ++k) {
-    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveSpec& d = st.drives[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
-    const CommandPort port = port_[static_cast<size_t>(k)];
+    const CommandPort port = st.port[static_cast<size_t>(k)];
     const bool cascade = d.controller.type == control::ControllerType::Cascade002;
-    double* x = L.controller >= 0 ? ctrl_x_.data() + L.controller : nullptr;
-    const double i_meas = measureCurrent(k, y);
+    double* x = L.controller >= 0 ? st.ctrl_x.data() + L.controller : nullptr;
+    const double i_meas = measureCurrent(st, k, y);
     if (outer) {  // measure the joint and the motor, advance the outer loops over Ts_out
       const double phi = coupled_ ? Ginv_.row(k).dot(y.head(n)) : y[k];
       const double phid = coupled_ ? Ginv_.row(k).dot(y.segment(n, n)) : y[n + k];
-      const MotionMeasurement m = measureMotion(k, t, y, phi, phid, Ts_out);
+      const MotionMeasurement m = measureMotion(st, k, t, y, phi, phid, Ts_out);
       if (controllerDriven(port)) {
-        control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], m.q,     m.qm,
-                                     m.qdm,         i_meas,         L.ratio, d.motor.V_supply};
+        control::ControllerInputs in{st.sig.q_set[k], st.sig.qd_set[k], m.q,     m.qm,
+                                     m.qdm,           i_meas,           L.ratio, d.motor.V_supply};
         in.entry = entryOf(port);
-        in.command = cmd_[k];
+        in.command = st.cmd[k];
         const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(in, x, xdot);
         if (cascade) {
           x[0] += Ts_out * xdot[0];  // the velocity integrator; the current loop below
-          held_i_ref_[k] = out.i_ref;
+          st.held_i_ref[k] = out.i_ref;
         } else {
           for (int j = 0; j < L.n_controller; ++j) x[j] += Ts_out * xdot[j];
-          held_u_[k] = out.u;
-          held_i_ref_[k] = out.i_ref;
+          st.held_u[k] = out.u;
+          st.held_i_ref[k] = out.i_ref;
         }
       }
     }
     if (!cascade || !controllerDriven(port)) continue;
     // The current loop on the held reference (or the Current port's command), over Ts_in.
-    control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k], held_q_fb_[k], 0.0,
-                                 0.0,           i_meas,         L.ratio,       d.motor.V_supply};
+    control::ControllerInputs in{st.sig.q_set[k], st.sig.qd_set[k], st.held_q_fb[k], 0.0, 0.0,
+                                 i_meas,          L.ratio,          d.motor.V_supply};
     in.entry = control::ControlEntry::Current;
-    in.command = port == CommandPort::Current ? cmd_[k] : held_i_ref_[k];
+    in.command = port == CommandPort::Current ? st.cmd[k] : st.held_i_ref[k];
     const control::ControllerOutputs out = controllers_[static_cast<size_t>(k)].evaluate(in, x, xdot);
     x[1] += Ts_in * xdot[1];
-    held_u_[k] = out.u;
+    st.held_u[k] = out.u;
   }
-  first_sample_ = false;
+  st.first_sample = false;
 }
 
-void RobotSystem::setpointStage(double t) const {
-  if (setpoints_) setpoints_(t, sig_.q_set, sig_.qd_set, sig_.qdd_set);
+void RobotSystem::setpointStage(const State& st, double t) const {
+  if (setpoints_) {
+    setpoints_(t, st.sig.q_set, st.sig.qd_set, st.sig.qdd_set);
+  } else {  // no reference given: hold the start pose
+    st.sig.q_set = st.q_start;
+    st.sig.qd_set.setZero();
+    st.sig.qdd_set.setZero();
+  }
   for (int k = 0; k < model_.nq; ++k)
-    if (ref_held_[static_cast<size_t>(k)]) {
-      sig_.q_set[k] = ref_q_[k];
-      sig_.qd_set[k] = ref_qd_[k];
-      sig_.qdd_set[k] = ref_qdd_[k];
+    if (st.ref_held[static_cast<size_t>(k)]) {
+      st.sig.q_set[k] = st.ref_q[k];
+      st.sig.qd_set[k] = st.ref_qd[k];
+      st.sig.qdd_set[k] = st.ref_qdd[k];
     }
 }
 
-void RobotSystem::measurementStage(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+void RobotSystem::measurementStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   const int n = model_.nq;
   const auto q = y.head(n);
   const auto qd = y.segment(n, n);
   // Gear output angles and speeds: φ = G⁻¹ q.
   if (coupled_) {
-    phi_.noalias() = Ginv_ * q;
-    phid_.noalias() = Ginv_ * qd;
+    st.phi.noalias() = Ginv_ * q;
+    st.phid.noalias() = Ginv_ * qd;
   } else {
-    phi_ = q;
-    phid_ = qd;
+    st.phi = q;
+    st.phid = qd;
   }
   for (int k = 0; k < n; ++k) {
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
-    sig_.qm[k] = L.rigid ? L.ratio * phi_[k] : y[L.motor];
-    sig_.qdm[k] = L.rigid ? L.ratio * phid_[k] : y[L.motor + 1];
-    sig_.current[k] = L.current >= 0 ? y[L.current] : 0.0;
-    sig_.q_fb[k] =
-        sampled() ? held_q_fb_[k] : faultySensor(k, t, q[k] + drives_[static_cast<size_t>(k)].sensors.joint_bias);
+    st.sig.qm[k] = L.rigid ? L.ratio * st.phi[k] : y[L.motor];
+    st.sig.qdm[k] = L.rigid ? L.ratio * st.phid[k] : y[L.motor + 1];
+    st.sig.current[k] = L.current >= 0 ? y[L.current] : 0.0;
+    st.sig.q_fb[k] = sampled() ? st.held_q_fb[k]
+                               : faultySensor(st, k, t, q[k] + st.drives[static_cast<size_t>(k)].sensors.joint_bias);
   }
 }
 
-void RobotSystem::controllerStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
+void RobotSystem::controllerStage(const State& st, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
   for (int k = 0; k < model_.nq; ++k) {
-    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveSpec& d = st.drives[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
     control::ControllerOutputs out;
-    const CommandPort port = port_[static_cast<size_t>(k)];
+    const CommandPort port = st.port[static_cast<size_t>(k)];
     if (!controllerDriven(port)) {  // the command bypasses the controller, whose integrators hold
       out.voltage = port == CommandPort::Voltage;
-      out.u = cmd_[k];
+      out.u = st.cmd[k];
       if (!sampled())
         for (int j = 0; j < L.n_controller; ++j) ydot[L.controller + j] = 0.0;
     } else if (sampled()) {  // zero-order hold of the last sample's outputs
       out.voltage = d.controller.type == control::ControllerType::Cascade002;
-      out.u = held_u_[k];
-      out.i_ref = held_i_ref_[k];
+      out.u = st.held_u[k];
+      out.i_ref = st.held_i_ref[k];
     } else {
-      control::ControllerInputs in{sig_.q_set[k], sig_.qd_set[k],  sig_.q_fb[k], sig_.qm[k],
-                                   sig_.qdm[k],   sig_.current[k], L.ratio,      d.motor.V_supply};
+      control::ControllerInputs in{st.sig.q_set[k], st.sig.qd_set[k],  st.sig.q_fb[k], st.sig.qm[k],
+                                   st.sig.qdm[k],   st.sig.current[k], L.ratio,        d.motor.V_supply};
       in.entry = entryOf(port);
-      in.command = cmd_[k];
+      in.command = st.cmd[k];
       out = controllers_[static_cast<size_t>(k)].evaluate(in, L.controller >= 0 ? y.data() + L.controller : nullptr,
                                                           L.controller >= 0 ? ydot + L.controller : nullptr);
     }
-    sig_.i_ref[k] = out.i_ref;
-    sig_.u[k] = out.u;
-    out_is_voltage_[static_cast<size_t>(k)] = out.voltage;
+    st.sig.i_ref[k] = out.i_ref;
+    st.sig.u[k] = out.u;
+    st.out_is_voltage[static_cast<size_t>(k)] = out.voltage;
   }
 }
 
-void RobotSystem::powerElectronicsStage() const {
+void RobotSystem::powerElectronicsStage(const State& st) const {
   // Averaged PWM: the commanded voltage, saturated at the supply [Raviola2023, eq. 1].
   for (int k = 0; k < model_.nq; ++k) {
     const bool electrics = layout_[static_cast<size_t>(k)].current >= 0;
-    const double V_cmd = out_is_voltage_[static_cast<size_t>(k)] ? sig_.u[k] : 0.0;
-    sig_.voltage[k] = electrics ? motors_[static_cast<size_t>(k)].supplyVoltage(V_cmd) : 0.0;
+    const double V_cmd = st.out_is_voltage[static_cast<size_t>(k)] ? st.sig.u[k] : 0.0;
+    st.sig.voltage[k] = electrics ? st.motors[static_cast<size_t>(k)].supplyVoltage(V_cmd) : 0.0;
   }
 }
 
-void RobotSystem::motorElectricsStage(double* ydot) const {
+void RobotSystem::motorElectricsStage(const State& st, double* ydot) const {
   // L di/dt = V − R i − k_e q̇_m, τ_M = k_t i; a motor without electrics gives the commanded torque.
   for (int k = 0; k < model_.nq; ++k) {
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
-    const drive::DcMotor& motor = motors_[static_cast<size_t>(k)];
-    if (L.current >= 0 && port_[static_cast<size_t>(k)] == CommandPort::MotorTorque) {
+    const drive::DcMotor& motor = st.motors[static_cast<size_t>(k)];
+    if (L.current >= 0 && st.port[static_cast<size_t>(k)] == CommandPort::MotorTorque) {
       // Electrics bypassed: the torque is the command; the current relaxes to τ/k_t with L/R.
-      const drive::DcMotorParams& m = drives_[static_cast<size_t>(k)].motor;
-      sig_.tau_motor[k] = sig_.u[k];
-      ydot[L.current] = (sig_.u[k] / m.kt - sig_.current[k]) * m.R / m.L;
+      const drive::DcMotorParams& m = st.drives[static_cast<size_t>(k)].motor;
+      st.sig.tau_motor[k] = st.sig.u[k];
+      ydot[L.current] = (st.sig.u[k] / m.kt - st.sig.current[k]) * m.R / m.L;
     } else if (L.current >= 0) {
-      const double V_cmd = out_is_voltage_[static_cast<size_t>(k)] ? sig_.u[k] : 0.0;
-      ydot[L.current] = motor.currentDerivative(sig_.current[k], V_cmd, sig_.qdm[k]);
-      sig_.tau_motor[k] = motor.torque(sig_.current[k]);
+      const double V_cmd = st.out_is_voltage[static_cast<size_t>(k)] ? st.sig.u[k] : 0.0;
+      ydot[L.current] = motor.currentDerivative(st.sig.current[k], V_cmd, st.sig.qdm[k]);
+      st.sig.tau_motor[k] = motor.torque(st.sig.current[k]);
     } else {
-      sig_.tau_motor[k] = out_is_voltage_[static_cast<size_t>(k)] ? 0.0 : sig_.u[k];
+      st.sig.tau_motor[k] = st.out_is_voltage[static_cast<size_t>(k)] ? 0.0 : st.sig.u[k];
     }
   }
 }
 
-void RobotSystem::transmissionStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
+void RobotSystem::transmissionStage(const State& st, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
   for (int k = 0; k < model_.nq; ++k) {
-    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveSpec& d = st.drives[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
     if (L.rigid) {
-      sig_.tau_gear[k] = L.ratio * sig_.tau_motor[k];  // the rotor's inertial reaction follows the accelerations
+      st.sig.tau_gear[k] = L.ratio * st.sig.tau_motor[k];  // the rotor's inertial reaction follows the accelerations
       continue;
     }
     const drive::PortTorques pt =
-        d.transmission->evaluate({sig_.qm[k], sig_.qdm[k], phi_[k], phid_[k]},
+        d.transmission->evaluate({st.sig.qm[k], st.sig.qdm[k], st.phi[k], st.phid[k]},
                                  L.gear >= 0 ? y.data() + L.gear : nullptr, L.gear >= 0 ? ydot + L.gear : nullptr);
-    sig_.tau_gear[k] = pt.tau_out;
-    ydot[L.motor] = sig_.qdm[k];
-    ydot[L.motor + 1] = (sig_.tau_motor[k] - pt.tau_in) / d.motor.J_M;  // rotor: J_M q̈_m = τ_M − τ_in
+    st.sig.tau_gear[k] = pt.tau_out;
+    ydot[L.motor] = st.sig.qdm[k];
+    ydot[L.motor + 1] = (st.sig.tau_motor[k] - pt.tau_in) / d.motor.J_M;  // rotor: J_M q̈_m = τ_M − τ_in
   }
 }
 
-void RobotSystem::frictionStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
+void RobotSystem::frictionStage(const State& st, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
   // On the gear output shaft, driven by the gear output torque.
   for (int k = 0; k < model_.nq; ++k) {
-    const DriveSpec& d = drives_[static_cast<size_t>(k)];
+    const DriveSpec& d = st.drives[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
-    sig_.tau_friction[k] = d.friction ? d.friction->evaluate({phid_[k], sig_.tau_gear[k]},
-                                                             L.friction >= 0 ? y.data() + L.friction : nullptr,
-                                                             L.friction >= 0 ? ydot + L.friction : nullptr)
-                                      : 0.0;
+    st.sig.tau_friction[k] = d.friction ? d.friction->evaluate({st.phid[k], st.sig.tau_gear[k]},
+                                                               L.friction >= 0 ? y.data() + L.friction : nullptr,
+                                                               L.friction >= 0 ? ydot + L.friction : nullptr)
+                                        : 0.0;
   }
   // A bearing defect of the output shaft: τ_b = A sin(order · φ_out), with the amplitude of its schedule.
   for (size_t i = 0; i < faults_.size(); ++i)
     if (faults_[i].type == FaultType::BearingRipple) {
       const int k = fault_drive_[i];
-      sig_.tau_friction[k] += fault_applied_[i] * std::sin(faults_[i].order * phi_[k]);
+      st.sig.tau_friction[k] += st.fault_applied[i] * std::sin(faults_[i].order * st.phi[k]);
     }
 }
 
-void RobotSystem::jointTorqueStage() const {
+void RobotSystem::jointTorqueStage(const State& st) const {
   // τ_out = τ_gear − τ_f on the gear outputs; τ_joint = G⁻ᵀ τ_out.
-  tau_out_ = sig_.tau_gear - sig_.tau_friction;
+  st.tau_out = st.sig.tau_gear - st.sig.tau_friction;
   if (coupled_)
-    tau_.noalias() = Ginv_.transpose() * tau_out_;
+    st.tau.noalias() = Ginv_.transpose() * st.tau_out;
   else
-    tau_ = tau_out_;
-  sig_.tau_joint = tau_;
+    st.tau = st.tau_out;
+  st.sig.tau_joint = st.tau;
 }
 
-void RobotSystem::multibodyStage(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+void RobotSystem::multibodyStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   const int n = model_.nq;
   const auto q = y.head(n);
   const auto qd = y.segment(n, n);
   if (stops_.active()) {  // end stops act on the joints beside the drives
-    stops_.torques(q, qd, sig_.tau_stop);
-    tau_ += sig_.tau_stop;
+    stops_.torques(q, qd, st.sig.tau_stop);
+    st.tau += st.sig.tau_stop;
   }
   const multibody::Matrix6Xd* fext = nullptr;
-  if (wrenches_ || !user_wrenches_.empty()) {
-    multibody::forwardKinematics(model_, data_, q);
-    fext_.setZero();
-    if (wrenches_) wrenches_(t, model_, data_, q, qd, fext_);
-    for (const auto& [f, w] : user_wrenches_) {
+  if (wrenches_ || !st.user_wrenches.empty()) {
+    multibody::forwardKinematics(model_, st.data, q);
+    st.fext.setZero();
+    if (wrenches_) wrenches_(t, model_, st.data, q, qd, st.fext);
+    for (const auto& [f, w] : st.user_wrenches) {
       // World wrench at the frame origin → body frame of the carrying body, moment about the body origin.
       const multibody::Frame& fr = model_.frames[static_cast<size_t>(f)];
-      const multibody::Placement& B = data_.oMi[static_cast<size_t>(fr.joint)];
-      const Eigen::Vector3d r = data_.oMf[static_cast<size_t>(f)].p - B.p;
-      fext_.col(fr.joint).head<3>() += B.R.transpose() * (w.tail<3>() + r.cross(w.head<3>()));
-      fext_.col(fr.joint).tail<3>() += B.R.transpose() * w.head<3>();
+      const multibody::Placement& B = st.data.oMi[static_cast<size_t>(fr.joint)];
+      const Eigen::Vector3d r = st.data.oMf[static_cast<size_t>(f)].p - B.p;
+      st.fext.col(fr.joint).head<3>() += B.R.transpose() * (w.tail<3>() + r.cross(w.head<3>()));
+      st.fext.col(fr.joint).tail<3>() += B.R.transpose() * w.head<3>();
     }
-    fext = &fext_;
+    fext = &st.fext;
   }
   if (crba_path_) {
     // (M + G⁻ᵀ diag(N² J_M) G⁻¹) q̈ = τ − h(q, q̇) [− Jᵀ f_ext through RNEA]
     if (fext)
-      data_.nle = multibody::rnea(model_, data_, q, qd, zero_, fext);
+      st.data.nle = multibody::rnea(model_, st.data, q, qd, st.zero, fext);
     else
-      multibody::nonLinearEffects(model_, data_, q, qd);
-    M_ = multibody::crba(model_, data_, q);
-    M_ += reflected_;
-    llt_.compute(M_);
-    sig_.qdd = tau_ - data_.nle;
-    llt_.solveInPlace(sig_.qdd);
+      multibody::nonLinearEffects(model_, st.data, q, qd);
+    st.M = multibody::crba(model_, st.data, q);
+    st.M += reflected_;
+    st.llt.compute(st.M);
+    st.sig.qdd = st.tau - st.data.nle;
+    st.llt.solveInPlace(st.sig.qdd);
   } else {
-    sig_.qdd = multibody::aba(model_, data_, q, qd, tau_, fext);
+    st.sig.qdd = multibody::aba(model_, st.data, q, qd, st.tau, fext);
   }
 }
 
-void RobotSystem::rotorReactionStage() const {
+void RobotSystem::rotorReactionStage(const State& st) const {
   // Rigid drives: the gear output torque includes the rotor's inertial reaction −N² J_M φ̈.
   for (int k = 0; k < model_.nq; ++k) {
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
     if (!L.rigid) continue;
-    const double phidd = coupled_ ? Ginv_.row(k).dot(sig_.qdd) : sig_.qdd[k];
-    sig_.tau_gear[k] -= L.ratio * L.ratio * drives_[static_cast<size_t>(k)].motor.J_M * phidd;
+    const double phidd = coupled_ ? Ginv_.row(k).dot(st.sig.qdd) : st.sig.qdd[k];
+    st.sig.tau_gear[k] -= L.ratio * L.ratio * st.drives[static_cast<size_t>(k)].motor.J_M * phidd;
   }
 }
 
-void RobotSystem::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
-  setpointStage(t);
-  measurementStage(t, y);
-  controllerStage(y, ydot);
-  powerElectronicsStage();
-  motorElectricsStage(ydot);
-  transmissionStage(y, ydot);
-  frictionStage(y, ydot);
-  jointTorqueStage();
-  multibodyStage(t, y);
-  rotorReactionStage();
+void RobotSystem::evaluate(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
+  setpointStage(st, t);
+  measurementStage(st, t, y);
+  controllerStage(st, y, ydot);
+  powerElectronicsStage(st);
+  motorElectricsStage(st, ydot);
+  transmissionStage(st, y, ydot);
+  frictionStage(st, y, ydot);
+  jointTorqueStage(st);
+  multibodyStage(st, t, y);
+  rotorReactionStage(st);
   const int n = model_.nq;
   Eigen::Map<Eigen::VectorXd> yd(ydot, n_states_);
   yd.head(n) = y.segment(n, n);
-  yd.segment(n, n) = sig_.qdd;
+  yd.segment(n, n) = st.sig.qdd;
 }
 
-void RobotSystem::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void RobotSystem::derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                               Eigen::Ref<Eigen::VectorXd> ydot) const {
-  evaluate(t, y, ydot.data());
+  evaluate(own<State>(state), t, y, ydot.data());
 }
 
 sim::JacobianStructure RobotSystem::jacobianStructure() const { return jacobianStructure(nullptr); }
@@ -1019,85 +1156,90 @@ sim::JacobianStructure RobotSystem::jacobianStructure(std::vector<int>* drive_of
   return s;
 }
 
-void RobotSystem::jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void RobotSystem::jacobian(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                            const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
                            Eigen::Ref<Eigen::MatrixXd> J) const {
+  const State& st = own<State>(state);
   const int n = model_.nq;
-  if (jac_y_.size() != n_states_) {  // first call for this state layout
-    jac_structure_ = jacobianStructure(&jac_block_drive_);
-    jac_y_.resize(n_states_);
-    jac_f_.resize(n_states_);
-    jac_tau0_.resize(n);
-    jac_qdd0_.resize(n);
-    jac_tau_.resize(n);
-    jac_P_.resize(n, n);
+  if (st.jac_y.size() != n_states_) {  // first call for this state layout
+    st.jac_structure = jacobianStructure(&st.jac_block_drive);
+    st.jac_y.resize(n_states_);
+    st.jac_f.resize(n_states_);
+    st.jac_tau0.resize(n);
+    st.jac_qdd0.resize(n);
+    st.jac_tau.resize(n);
+    st.jac_P.resize(n, n);
   }
-  Eigen::VectorXd& yp = jac_y_;
-  Eigen::VectorXd& fp = jac_f_;
+  Eigen::VectorXd& yp = st.jac_y;
+  Eigen::VectorXd& fp = st.jac_f;
   yp = y;
   // The base point: the drives' output torques and the total joint torque (drives, end stops) behind q̈.
-  evaluate(t, y, fp.data());
-  jac_tau0_ = tau_out_;
-  jac_qdd0_ = sig_.qdd;
-  const Eigen::VectorXd& tau_total = tau_;
+  evaluate(st, t, y, fp.data());
+  st.jac_tau0 = st.tau_out;
+  st.jac_qdd0 = st.sig.qdd;
+  const Eigen::VectorXd& tau_total = st.tau;
   // ∂q̈/∂τ_out = M⁻¹ G⁻ᵀ, column by column; q̈ is affine in the joint torque, so a unit difference is exact to
-  // rounding. (The external wrenches fext_ of the base evaluation stay in place.)
+  // rounding. (The external wrenches st.fext of the base evaluation stay in place.)
   const auto q = y.head(n);
   const auto qd = y.segment(n, n);
-  const bool with_fext = wrenches_ || !user_wrenches_.empty();
+  const bool with_fext = wrenches_ || !st.user_wrenches.empty();
   for (int j = 0; j < n; ++j) {
-    jac_tau_ = tau_total;
+    st.jac_tau = tau_total;
     if (coupled_)
-      jac_tau_ += Ginv_.row(j).transpose();
+      st.jac_tau += Ginv_.row(j).transpose();
     else
-      jac_tau_[j] += 1.0;
+      st.jac_tau[j] += 1.0;
     if (crba_path_) {
-      jac_P_.col(j) = jac_tau_ - data_.nle;
-      llt_.solveInPlace(jac_P_.col(j));
+      st.jac_P.col(j) = st.jac_tau - st.data.nle;
+      st.llt.solveInPlace(st.jac_P.col(j));
     } else {
-      jac_P_.col(j) = multibody::aba(model_, data_, q, qd, jac_tau_, with_fext ? &fext_ : nullptr);
+      st.jac_P.col(j) = multibody::aba(model_, st.data, q, qd, st.jac_tau, with_fext ? &st.fext : nullptr);
     }
-    jac_P_.col(j) -= jac_qdd0_;
+    st.jac_P.col(j) -= st.jac_qdd0;
   }
   // Hub columns: whole difference quotients.
   for (int j = 0; j < 2 * n; ++j) {
     yp[j] = y[j] + inc[j];
-    evaluate(t, yp, fp.data());
+    evaluate(st, t, yp, fp.data());
     J.col(j) = (fp - f) / inc[j];
     yp[j] = y[j];
   }
   // Drive columns: state c of every drive at once.
   size_t max_m = 0;
-  for (const auto& b : jac_structure_.blocks) max_m = std::max(max_m, b.size());
-  const auto& blocks = jac_structure_.blocks;
+  for (const auto& b : st.jac_structure.blocks) max_m = std::max(max_m, b.size());
+  const auto& blocks = st.jac_structure.blocks;
   for (size_t c = 0; c < max_m; ++c) {
     for (const auto& b : blocks)
       if (b.size() > c) yp[b[c]] = y[b[c]] + inc[b[c]];
-    evaluate(t, yp, fp.data());
+    evaluate(st, t, yp, fp.data());
     for (size_t bi = 0; bi < blocks.size(); ++bi) {
       const auto& b = blocks[bi];
       if (b.size() <= c) continue;
       const int s = b[c];
       for (int r : b) J(r, s) = (fp[r] - f[r]) / inc[s];
-      const int k = jac_block_drive_[bi];
-      J.col(s).segment(n, n) = jac_P_.col(k) * ((tau_out_[k] - jac_tau0_[k]) / inc[s]);
+      const int k = st.jac_block_drive[bi];
+      J.col(s).segment(n, n) = st.jac_P.col(k) * ((st.tau_out[k] - st.jac_tau0[k]) / inc[s]);
       yp[s] = y[s];
     }
   }
 }
 
-const RobotSignals& RobotSystem::driveSignals(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
-  evaluate(t, y, tmp_.data());
-  return sig_;
+const RobotSignals& RobotSystem::driveSignals(const sim::PlantState& state, double t,
+                                              const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const State& st = own<State>(state);
+  evaluate(st, t, y, st.tmp.data());
+  return st.sig;
 }
 
-void RobotSystem::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const {
+void RobotSystem::signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                          Eigen::Ref<Eigen::VectorXd> out) const {
+  const State& st = own<State>(state);
   const int n = model_.nq;
-  const RobotSignals& s = driveSignals(t, y);
-  const Eigen::VectorXd& id = multibody::rnea(id_model_, id_data_, s.q_set, s.qd_set, s.qdd_set);
+  const RobotSignals& s = driveSignals(state, t, y);
+  const Eigen::VectorXd& id = multibody::rnea(id_model_, st.id_data, s.q_set, s.qd_set, s.qdd_set);
   Eigen::Index c = 0;
   for (int k = 0; k < n; ++k) {
-    const auto& d = drives_[static_cast<size_t>(k)];
+    const auto& d = st.drives[static_cast<size_t>(k)];
     const double f_ss = d.friction ? d.friction->steadyState(s.qd_set[k]) : 0.0;
     out[c++] = s.q_set[k];
     out[c++] = y[k];
@@ -1111,8 +1253,8 @@ void RobotSystem::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, 
     out[c++] = s.tau_friction[k];
     out[c++] = id[k] + f_ss;
   }
-  multibody::forwardKinematics(id_model_, id_data_, y.head(n));
-  const multibody::Placement& X = id_data_.oMf[static_cast<size_t>(tip_)];
+  multibody::forwardKinematics(id_model_, st.id_data, y.head(n));
+  const multibody::Placement& X = st.id_data.oMf[static_cast<size_t>(tip_)];
   // Roll-pitch-yaw (URDF convention R = Rz(yaw) Ry(pitch) Rx(roll)).
   const double pitch = std::asin(std::clamp(-X.R(2, 0), -1.0, 1.0));
   const double roll = std::atan2(X.R(2, 1), X.R(2, 2));
@@ -1129,7 +1271,8 @@ double RobotSystem::mechanicalEnergy(const Eigen::Ref<const Eigen::VectorXd>& y)
   const int n = model_.nq;
   const auto q = y.head(n);
   const auto qd = y.segment(n, n);
-  double E = multibody::kineticEnergy(model_, data_, q, qd) + multibody::potentialEnergy(model_, data_, q);
+  multibody::Data data(model_);
+  double E = multibody::kineticEnergy(model_, data, q, qd) + multibody::potentialEnergy(model_, data, q);
   if (crba_path_) E += 0.5 * qd.dot(reflected_ * qd);
   E += stops_.energy(q);
   const Eigen::VectorXd phi = Ginv_ * q, phid = Ginv_ * qd;

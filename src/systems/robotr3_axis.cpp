@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <string>
 
 #include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
@@ -61,6 +63,18 @@ RobotR3Axis::RobotR3Axis(RobotR3AxisSetup setup)
               "energy.friction_loss[J]"};
 }
 
+RobotR3Axis::State::State(const RobotR3Axis& axis) : PlantStateOf(axis) {}
+
+void RobotR3Axis::State::save(ByteWriter& out) const { drive::saveModes(out, {mode}); }
+
+void RobotR3Axis::State::load(ByteReader& in) {
+  std::vector<FrictionMode> modes(1);
+  drive::loadModes(in, modes);
+  mode = modes[0];
+}
+
+FrictionMode RobotR3Axis::mode(const sim::PlantState& state) const { return own<State>(state).mode; }
+
 std::string RobotR3Axis::name() const { return "RobotR3 axis '" + s_.name + "'"; }
 
 sim::SimulateOptions RobotR3Axis::simulateOptions() const {
@@ -89,7 +103,13 @@ Eigen::VectorXd RobotR3Axis::initialState() const {
   return y;
 }
 
-RobotR3Axis::Eval RobotR3Axis::evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+RobotR3Axis::Eval RobotR3Axis::evaluate(const sim::PlantState& state, double t,
+                                        const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  return evaluateIn(own<State>(state).mode, t, y);
+}
+
+RobotR3Axis::Eval RobotR3Axis::evaluateIn(FrictionMode mode, double t,
+                                          const Eigen::Ref<const Eigen::VectorXd>& y) const {
   Eval ev{};
   const auto& m = s_.motor;
   const double q = y[0], qd = y[1], phi_rel = y[2], w_rel = y[3], x = y[4], i = y[6];
@@ -114,14 +134,14 @@ RobotR3Axis::Eval RobotR3Axis::evaluate(double t, const Eigen::Ref<const Eigen::
   ev.qdd = -N * ev.tau_s / s_.load_inertia;
   const double tau_motor = m.k * i;
   ev.stuck_torque = tau_motor + ev.tau_s;  // the friction that keeps dω_m/dt = 0
-  ev.tau_f = drive::frictionTorque(mode_, s_.Rv0 + s_.Rv1 * std::abs(ev.wm), ev.stuck_torque);
-  ev.wm_dot = mode_ == FrictionMode::Stuck ? 0.0 : (tau_motor - ev.tau_f + ev.tau_s) / m.J;
+  ev.tau_f = drive::frictionTorque(mode, s_.Rv0 + s_.Rv1 * std::abs(ev.wm), ev.stuck_torque);
+  ev.wm_dot = mode == FrictionMode::Stuck ? 0.0 : (tau_motor - ev.tau_f + ev.tau_s) / m.J;
   return ev;
 }
 
-void RobotR3Axis::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void RobotR3Axis::derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                               Eigen::Ref<Eigen::VectorXd> ydot) const {
-  const Eval ev = evaluate(t, y);
+  const Eval ev = evaluate(state, t, y);
   const auto& m = s_.motor;
   ydot[0] = y[1];
   ydot[1] = ev.qdd;
@@ -142,31 +162,37 @@ double RobotR3Axis::storedEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) con
          0.5 * s_.motor.La() * y[6] * y[6];
 }
 
-void RobotR3Axis::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
-  const Eval ev = evaluate(t, y);
+void RobotR3Axis::roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                        Eigen::Ref<Eigen::VectorXd> g) const {
+  const FrictionMode mode = own<State>(state).mode;
+  const Eval ev = evaluateIn(mode, t, y);
   const double t0 = s_.Rv0, t0max = s_.peak * s_.Rv0;
   double g0 = 1, g1 = 1;
-  drive::frictionRoots(mode_, ev.stuck_torque, ev.wm, ev.wm_dot, t0, t0max, g0, g1);
+  drive::frictionRoots(mode, ev.stuck_torque, ev.wm, ev.wm_dot, t0, t0max, g0, g1);
   g[0] = g0;
   g[1] = g1;
 }
 
-void RobotR3Axis::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+void RobotR3Axis::updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                              const std::vector<int>& fired) const {
+  FrictionMode& mode = own<State>(state).mode;
   for (int iter = 0; iter < 20; ++iter) {
-    const Eval ev = evaluate(t, y);
+    const Eval ev = evaluateIn(mode, t, y);
     const drive::FrictionEventFlags f = iter == 0 ? drive::frictionEventFlags(fired, 0) : drive::FrictionEventFlags{};
     const FrictionMode m =
-        drive::nextFrictionMode(mode_, false, ev.stuck_torque, ev.wm, ev.wm_dot, s_.Rv0, s_.peak * s_.Rv0, f);
-    if (m == mode_) break;
-    mode_ = m;
+        drive::nextFrictionMode(mode, false, ev.stuck_torque, ev.wm, ev.wm_dot, s_.Rv0, s_.peak * s_.Rv0, f);
+    if (m == mode) break;
+    mode = m;
   }
 }
 
-void RobotR3Axis::signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const {
-  const Eval ev = evaluate(t, y);
-  const int mode = drive::frictionModeNumber(mode_);
-  row << y[4], y[2], y[3], y[0], y[1], y[5], y[6], mode, mode_ == FrictionMode::StartBackward ? 1.0 : 0.0,
-      mode_ == FrictionMode::StartForward ? 1.0 : 0.0, ev.tau_f, ev.i_ref, y[7], storedEnergy(y), y[8], y[9], y[10];
+void RobotR3Axis::signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                          Eigen::Ref<Eigen::VectorXd> row) const {
+  const FrictionMode m = own<State>(state).mode;
+  const Eval ev = evaluateIn(m, t, y);
+  const int mode = drive::frictionModeNumber(m);
+  row << y[4], y[2], y[3], y[0], y[1], y[5], y[6], mode, m == FrictionMode::StartBackward ? 1.0 : 0.0,
+      m == FrictionMode::StartForward ? 1.0 : 0.0, ev.tau_f, ev.i_ref, y[7], storedEnergy(y), y[8], y[9], y[10];
 }
 
 }  // namespace jointsim::systems

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <string>
 
 #include <Eigen/Cholesky>
 
@@ -59,15 +61,13 @@ void RobotR3FullSetup::validate() const {
 RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
     : s_((setup.validate(), std::move(setup))),
       n_(s_.arm.nq),
-      path_(s_.q_begin, s_.q_end, s_.qd_max, s_.qdd_max, s_.start_time),
-      data_(s_.arm) {
+      path_(s_.q_begin, s_.q_end, s_.qd_max, s_.qdd_max, s_.start_time) {
   // Type-2 rotors move with the joints: N² J joins the arm's joint-space inertia ([MSL, RobotR3.Utilities.GearType2]).
   s_.arm.armature = Eigen::VectorXd::Zero(n_);
   for (int j = 0; j < n_; ++j) {
     const auto& a = s_.axes[static_cast<size_t>(j)];
     if (a.type == 2) s_.arm.armature[j] = a.ratio * a.ratio * a.motor.J;
   }
-  data_ = multibody::Data(s_.arm);
   n_states_ = 2 * n_;
   rel_.assign(static_cast<size_t>(n_), -1);
   for (int j = 0; j < n_; ++j)
@@ -80,10 +80,6 @@ RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
     ctrl_[static_cast<size_t>(j)] = n_states_;
     n_states_ += 3;
   }
-  modes_.assign(static_cast<size_t>(n_), FrictionMode::Stuck);
-  for (Eigen::VectorXd* v : {&q_ref_, &qd_ref_, &qdd_ref_, &tau_, &qdd_, &wm_, &wm_dot_, &tau_f_, &stuck_, &e_, &iref_})
-    v->setZero(n_);
-  Mbar_.setZero(n_, n_);
   for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".controller.PI.x[rad/s]");
   for (int j = 1; j <= n_; ++j)
     if (s_.axes[static_cast<size_t>(j - 1)].type == 1)
@@ -98,6 +94,21 @@ RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
   for (int j = 1; j <= n_; ++j)
     if (j != 2) signals_.push_back("mechanics.r" + std::to_string(j) + ".w[rad/s]");
   for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".gear.bearingFriction.mode[-]");
+}
+
+RobotR3Full::State::State(const RobotR3Full& robot)
+    : PlantStateOf(robot), modes(static_cast<size_t>(robot.n_), FrictionMode::Stuck), data(robot.s_.arm) {
+  for (Eigen::VectorXd* v : {&q_ref, &qd_ref, &qdd_ref, &tau, &qdd, &wm, &wm_dot, &tau_f, &stuck, &e, &iref})
+    v->setZero(robot.n_);
+  Mbar.setZero(robot.n_, robot.n_);
+}
+
+void RobotR3Full::State::save(ByteWriter& out) const { drive::saveModes(out, modes); }
+
+void RobotR3Full::State::load(ByteReader& in) { drive::loadModes(in, modes); }
+
+const std::vector<FrictionMode>& RobotR3Full::modes(const sim::PlantState& state) const {
+  return own<State>(state).modes;
 }
 
 std::string RobotR3Full::name() const { return "RobotR3 '" + s_.name + "'"; }
@@ -116,7 +127,8 @@ Eigen::VectorXd RobotR3Full::initialState() const {
   // holding gravity, electrical and PI steady state.
   Eigen::VectorXd y = Eigen::VectorXd::Zero(n_states_);
   y.head(n_) = s_.q_begin;
-  const Eigen::VectorXd G = multibody::gravityTorques(s_.arm, data_, s_.q_begin);
+  multibody::Data data(s_.arm);
+  const Eigen::VectorXd G = multibody::gravityTorques(s_.arm, data, s_.q_begin);
   for (int j = 0; j < n_; ++j) {
     const auto& a = s_.axes[static_cast<size_t>(j)];
     double phi_rel = 0.0, i = 0.0;
@@ -136,129 +148,134 @@ Eigen::VectorXd RobotR3Full::initialState() const {
   return y;
 }
 
-void RobotR3Full::solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+void RobotR3Full::solve(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   const auto q = y.head(n_);
   const auto qd = y.segment(n_, n_);
-  path_.evaluate(t, q_ref_, qd_ref_, qdd_ref_);
+  path_.evaluate(t, st.q_ref, st.qd_ref, st.qdd_ref);
   // Drive torques on the joints, with the friction of sliding type-2 joints.
   for (int j = 0; j < n_; ++j) {
     const auto& a = s_.axes[static_cast<size_t>(j)];
     const int c = ctrl_[static_cast<size_t>(j)];
     const double i = y[c + 2], N = a.ratio;
     double phi_m = N * q[j];
-    wm_[j] = N * qd[j];
+    st.wm[j] = N * qd[j];
     if (a.type == 1) {
       const int r = rel_[static_cast<size_t>(j)];
       phi_m -= y[r];
-      wm_[j] -= y[r + 1];
+      st.wm[j] -= y[r + 1];
       const double tau_s = a.c * y[r] + a.d * y[r + 1];
-      tau_[j] = -N * tau_s;
-      stuck_[j] = a.motor.k * i + tau_s;  // motor-side friction that keeps dω_m/dt = 0
+      st.tau[j] = -N * tau_s;
+      st.stuck[j] = a.motor.k * i + tau_s;  // motor-side friction that keeps dω_m/dt = 0
     } else {
-      tau_[j] = N * a.motor.k * i;
+      st.tau[j] = N * a.motor.k * i;
     }
-    e_[j] = a.kp * (N * q_ref_[j] - phi_m) + N * qd_ref_[j] - wm_[j];
-    iref_[j] = a.ks * (y[c] + e_[j]);
-    const double w = a.type == 1 ? wm_[j] : qd[j];
-    tau_f_[j] =
-        drive::frictionTorque(modes_[static_cast<size_t>(j)], a.Rv0 + a.Rv1 * std::abs(w), 0.0);  // stuck: below
-    if (a.type == 2 && modes_[static_cast<size_t>(j)] != FrictionMode::Stuck) tau_[j] -= tau_f_[j];
+    st.e[j] = a.kp * (N * st.q_ref[j] - phi_m) + N * st.qd_ref[j] - st.wm[j];
+    st.iref[j] = a.ks * (y[c] + st.e[j]);
+    const double w = a.type == 1 ? st.wm[j] : qd[j];
+    st.tau_f[j] =
+        drive::frictionTorque(st.modes[static_cast<size_t>(j)], a.Rv0 + a.Rv1 * std::abs(w), 0.0);  // stuck: below
+    if (a.type == 2 && st.modes[static_cast<size_t>(j)] != FrictionMode::Stuck) st.tau[j] -= st.tau_f[j];
   }
   // Arm: M̄ q̈ = τ − h, with q̈_j = 0 and τ_f,j unknown for stuck type-2 joints.
-  Mbar_ = multibody::crba(s_.arm, data_, q);
-  const Eigen::VectorXd& h = multibody::nonLinearEffects(s_.arm, data_, q, qd);
-  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 12, 1> rhs = tau_ - h;
+  st.Mbar = multibody::crba(s_.arm, st.data, q);
+  const Eigen::VectorXd& h = multibody::nonLinearEffects(s_.arm, st.data, q, qd);
+  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 12, 1> rhs = st.tau - h;
   Eigen::Matrix<int, Eigen::Dynamic, 1, 0, 12, 1> freeIdx(n_);
   int nf = 0;
   for (int j = 0; j < n_; ++j) {
     const bool stuck2 =
-        s_.axes[static_cast<size_t>(j)].type == 2 && modes_[static_cast<size_t>(j)] == FrictionMode::Stuck;
+        s_.axes[static_cast<size_t>(j)].type == 2 && st.modes[static_cast<size_t>(j)] == FrictionMode::Stuck;
     if (!stuck2) freeIdx[nf++] = j;
   }
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 12, 12> Mff(nf, nf);
   Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 12, 1> bf(nf);
   for (int a = 0; a < nf; ++a) {
     bf[a] = rhs[freeIdx[a]];
-    for (int b = 0; b < nf; ++b) Mff(a, b) = Mbar_(freeIdx[a], freeIdx[b]);
+    for (int b = 0; b < nf; ++b) Mff(a, b) = st.Mbar(freeIdx[a], freeIdx[b]);
   }
-  qdd_.setZero();
+  st.qdd.setZero();
   if (nf > 0) {
     const Eigen::LLT<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 12, 12>> llt(Mff);
     const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 12, 1> x = llt.solve(bf);
-    for (int a = 0; a < nf; ++a) qdd_[freeIdx[a]] = x[a];
+    for (int a = 0; a < nf; ++a) st.qdd[freeIdx[a]] = x[a];
   }
   for (int j = 0; j < n_; ++j) {
     const auto& a = s_.axes[static_cast<size_t>(j)];
-    if (a.type == 2 && modes_[static_cast<size_t>(j)] == FrictionMode::Stuck) {
+    if (a.type == 2 && st.modes[static_cast<size_t>(j)] == FrictionMode::Stuck) {
       // τ_f = τ_drive − h − (M̄ q̈)_j.
-      stuck_[j] = rhs[j] - Mbar_.row(j).dot(qdd_);
-      tau_f_[j] = stuck_[j];
+      st.stuck[j] = rhs[j] - st.Mbar.row(j).dot(st.qdd);
+      st.tau_f[j] = st.stuck[j];
     }
   }
   // Motor accelerations of type-1 axes.
   for (int j = 0; j < n_; ++j) {
     const auto& a = s_.axes[static_cast<size_t>(j)];
     if (a.type == 2) {
-      wm_dot_[j] = a.ratio * qdd_[j];
+      st.wm_dot[j] = a.ratio * st.qdd[j];
       continue;
     }
-    if (modes_[static_cast<size_t>(j)] == FrictionMode::Stuck) {
-      tau_f_[j] = stuck_[j];
-      wm_dot_[j] = 0.0;
+    if (st.modes[static_cast<size_t>(j)] == FrictionMode::Stuck) {
+      st.tau_f[j] = st.stuck[j];
+      st.wm_dot[j] = 0.0;
     } else {
       const int r = rel_[static_cast<size_t>(j)];
       const double tau_s = a.c * y[r] + a.d * y[r + 1];
-      wm_dot_[j] = (a.motor.k * y[ctrl_[static_cast<size_t>(j)] + 2] - tau_f_[j] + tau_s) / a.motor.J;
+      st.wm_dot[j] = (a.motor.k * y[ctrl_[static_cast<size_t>(j)] + 2] - st.tau_f[j] + tau_s) / a.motor.J;
     }
   }
 }
 
-void RobotR3Full::derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void RobotR3Full::derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                               Eigen::Ref<Eigen::VectorXd> ydot) const {
-  solve(t, y);
+  const State& st = own<State>(state);
+  solve(st, t, y);
   ydot.head(n_) = y.segment(n_, n_);
-  ydot.segment(n_, n_) = qdd_;
+  ydot.segment(n_, n_) = st.qdd;
   for (int j = 0; j < n_; ++j) {
     const auto& a = s_.axes[static_cast<size_t>(j)];
     if (a.type == 1) {
       const int r = rel_[static_cast<size_t>(j)];
       ydot[r] = y[r + 1];
-      ydot[r + 1] = a.ratio * qdd_[j] - wm_dot_[j];
+      ydot[r + 1] = a.ratio * st.qdd[j] - st.wm_dot[j];
     }
     const int c = ctrl_[static_cast<size_t>(j)];
     const auto& m = a.motor;
-    ydot[c] = e_[j] / a.Ts;
-    ydot[c + 1] = (y[c + 2] - iref_[j]) / (m.Ri * m.C());
-    ydot[c + 2] = (-m.amp_gain * y[c + 1] - m.Ra * y[c + 2] - m.k * wm_[j]) / m.La();
+    ydot[c] = st.e[j] / a.Ts;
+    ydot[c + 1] = (y[c + 2] - st.iref[j]) / (m.Ri * m.C());
+    ydot[c + 2] = (-m.amp_gain * y[c + 1] - m.Ra * y[c + 2] - m.k * st.wm[j]) / m.La();
   }
 }
 
-void RobotR3Full::roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const {
-  solve(t, y);
+void RobotR3Full::roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                        Eigen::Ref<Eigen::VectorXd> g) const {
+  const State& st = own<State>(state);
+  solve(st, t, y);
   for (int j = 0; j < n_; ++j) {
     const auto& a = s_.axes[static_cast<size_t>(j)];
-    const double w = a.type == 1 ? wm_[j] : y[n_ + j];
-    const double acc = a.type == 1 ? wm_dot_[j] : qdd_[j];
+    const double w = a.type == 1 ? st.wm[j] : y[n_ + j];
+    const double acc = a.type == 1 ? st.wm_dot[j] : st.qdd[j];
     double g0 = 1, g1 = 1;
-    drive::frictionRoots(modes_[static_cast<size_t>(j)], stuck_[j], w, acc, a.Rv0, a.peak * a.Rv0, g0, g1);
+    drive::frictionRoots(st.modes[static_cast<size_t>(j)], st.stuck[j], w, acc, a.Rv0, a.peak * a.Rv0, g0, g1);
     g[2 * j] = g0;
     g[2 * j + 1] = g1;
   }
 }
 
-void RobotR3Full::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) {
+void RobotR3Full::updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                              const std::vector<int>& fired) const {
+  State& st = own<State>(state);
   for (int iter = 0; iter < 30; ++iter) {
-    solve(t, y);
+    solve(st, t, y);
     bool changed = false;
     for (int j = 0; j < n_; ++j) {
       const auto& a = s_.axes[static_cast<size_t>(j)];
       const auto k = static_cast<size_t>(j);
       const drive::FrictionEventFlags f = iter == 0 ? drive::frictionEventFlags(fired, k) : drive::FrictionEventFlags{};
-      const double w = a.type == 1 ? wm_[j] : y[n_ + j];
-      const double acc = a.type == 1 ? wm_dot_[j] : qdd_[j];
-      const FrictionMode m = drive::nextFrictionMode(modes_[k], false, stuck_[j], w, acc, a.Rv0, a.peak * a.Rv0, f);
-      if (m != modes_[k]) {
-        modes_[k] = m;
+      const double w = a.type == 1 ? st.wm[j] : y[n_ + j];
+      const double acc = a.type == 1 ? st.wm_dot[j] : st.qdd[j];
+      const FrictionMode m = drive::nextFrictionMode(st.modes[k], false, st.stuck[j], w, acc, a.Rv0, a.peak * a.Rv0, f);
+      if (m != st.modes[k]) {
+        st.modes[k] = m;
         changed = true;
         break;  // re-solve: the stuck torques of type-2 joints are coupled
       }
@@ -267,8 +284,9 @@ void RobotR3Full::updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>&
   }
 }
 
-void RobotR3Full::signals(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y,
+void RobotR3Full::signals(const sim::PlantState& state, double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y,
                           Eigen::Ref<Eigen::VectorXd> row) const {
+  const State& st = own<State>(state);
   Eigen::Index c = 0;
   for (int j = 0; j < n_; ++j) row[c++] = y[ctrl_[static_cast<size_t>(j)]];
   for (int j = 0; j < n_; ++j)
@@ -281,7 +299,7 @@ void RobotR3Full::signals(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>&
   for (int j = 0; j < n_; ++j) row[c++] = y[j];
   for (int j = 0; j < n_; ++j)
     if (j != 1) row[c++] = y[n_ + j];
-  for (int j = 0; j < n_; ++j) row[c++] = drive::frictionModeNumber(modes_[static_cast<size_t>(j)]);
+  for (int j = 0; j < n_; ++j) row[c++] = drive::frictionModeNumber(st.modes[static_cast<size_t>(j)]);
 }
 
 }  // namespace jointsim::systems

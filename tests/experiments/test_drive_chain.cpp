@@ -40,7 +40,7 @@ DriveChainSetup bearing(control::Profile torque, double duration) {
   return s;
 }
 
-std::vector<Eigen::VectorXd> run(DriveChain& chain) {
+std::vector<Eigen::VectorXd> run(const DriveChain& chain) {
   std::vector<Eigen::VectorXd> rows;
   sim::simulate(chain, chain.simulateOptions(), [&](const Eigen::VectorXd& r) { rows.push_back(r); });
   return rows;

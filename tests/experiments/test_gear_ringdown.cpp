@@ -29,8 +29,9 @@ RingDown ringDown(const std::vector<std::string>& solver_overrides, double ampli
   std::vector<std::string> o = {"duration=0.1"};
   o.insert(o.end(), solver_overrides.begin(), solver_overrides.end());
   auto e = experiments::loadExperiment(test::sourcePath("config/experiments/ur5_swg_joint_velocity.yaml"), o);
-  auto& rig = dynamic_cast<systems::JointRig&>(e->plant());
-  rig.setCommand(0.0);  // velocity reference held at zero: the rig stays at rest apart from the excited mode
+  const auto& rig = dynamic_cast<const systems::JointRig&>(e->plant());
+  const std::unique_ptr<sim::PlantState> state = rig.makeState();
+  rig.setCommand(*state, 0.0);  // velocity reference held at zero: the rig stays at rest apart from the excited mode
   const Eigen::VectorXd y0 = rig.initialState();
   const Eigen::Index n = y0.size();
   // Linearisation at rest by central differences, its eigenpair near 4.6 kHz, and the left eigenvector (row of V⁻¹).
@@ -40,8 +41,8 @@ RingDown ringDown(const std::vector<std::string>& solver_overrides, double ampli
     const double h = 1e-6 * std::max(std::abs(y0[j]), 1e-6);
     yp[j] += h;
     ym[j] -= h;
-    rig.derivatives(0.0, yp, fp);
-    rig.derivatives(0.0, ym, fm);
+    rig.derivatives(*state, 0.0, yp, fp);
+    rig.derivatives(*state, 0.0, ym, fm);
     A.col(j) = (fp - fm) / (2 * h);
     yp[j] = ym[j] = y0[j];
   }
@@ -63,6 +64,7 @@ RingDown ringDown(const std::vector<std::string>& solver_overrides, double ampli
   Eigen::VectorXd v = es.eigenvectors().col(m).real();
   v *= amplitude / v.cwiseAbs().maxCoeff();
   sim::Simulator s(rig, e->simulateOptions().solver);
+  rig.setCommand(s.plantState(), 0.0);  // the simulator's own state: the same held reference
   s.setState(y0 + v);
   const double T = 0.016;
   const double z0 = modal(s.state());

@@ -30,14 +30,15 @@ class MassSpringDamper : public sim::Plant {
   std::string name() const override { return "mass-spring-damper"; }
   int stateSize() const override { return 2; }
   Eigen::VectorXd initialState() const override { return Eigen::Vector2d::Zero(); }
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+  void derivatives(const sim::PlantState&, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> yd) const override {
     yd[0] = y[1];
     yd[1] = (force(t) - c_ * y[1] - k_ * y[0]) / m_;
   }
   std::vector<double> timeEvents(double) const override { return {t_step_}; }
   const std::vector<std::string>& signalNames() const override { return names_; }
-  void signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override {
+  void signals(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override {
     out << y[0], y[1], k_ * y[0];
   }
   /// Closed form: underdamped step response x(t) = F/k (1 − e^{−ζω τ} (cos ω_d τ + ζω/ω_d sin ω_d τ)), τ = t − t_step.

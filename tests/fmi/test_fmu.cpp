@@ -125,16 +125,16 @@ TEST(FmuInstance, RobotVoltageInputsMatchSimulatorCommands) {
   ASSERT_EQ(inst.exitInitializationMode(), fmi::Status::OK);
   auto e = std::shared_ptr<experiments::Experiment>(experiments::loadExperiment(kUr5));
   auto sim = experiments::makeSimulator(e);
-  auto& robot = dynamic_cast<systems::RobotSystem&>(sim->plant());
-  robot.setCommandPort(0, systems::CommandPort::Voltage);
-  robot.setCommandPort(2, systems::CommandPort::Current);
+  const auto& robot = dynamic_cast<const systems::RobotSystem&>(sim->plant());
+  robot.setCommandPort(sim->plantState(), 0, systems::CommandPort::Voltage);
+  robot.setCommandPort(sim->plantState(), 2, systems::CommandPort::Current);
   const unsigned in[2] = {0, 1}, out[2] = {2, 3};
   double t = 0.0, dev = 0.0, q_start = 0.0, q_end = 0.0;
   for (int k = 0; k < 100; ++k) {
     const double u[2] = {2.0 * std::sin(20.0 * t), 0.5};
     ASSERT_EQ(inst.setReal(in, 2, u), fmi::Status::OK);
-    robot.setCommand(0, u[0]);
-    robot.setCommand(2, u[1]);
+    robot.setCommand(sim->plantState(), 0, u[0]);
+    robot.setCommand(sim->plantState(), 2, u[1]);
     ASSERT_EQ(inst.doStep(t, 1e-3), fmi::Status::OK) << (log.lines.empty() ? "" : log.lines.back());
     t = sim->advance(1e-3);
     double y[2];

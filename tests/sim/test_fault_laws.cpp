@@ -66,8 +66,8 @@ void holdPose(systems::RobotSystem& sys) {
   sys.setInitialPositions(q0);
 }
 
-double stiffness(const systems::RobotSystem& sys) {
-  const drive::Transmission* t = sys.drives()[kElbow].transmission.get();
+double stiffness(const systems::RobotSystem& sys, const sim::PlantState& st) {
+  const drive::Transmission* t = sys.drives(st)[kElbow].transmission.get();
   if (auto* b = dynamic_cast<const drive::ElastoBacklash*>(t)) return b->params().stiffness;
   return dynamic_cast<const drive::ElasticGear&>(*t).params().stiffness;
 }
@@ -171,19 +171,20 @@ TEST(FaultLaws, ProgressiveParametersAreRebuiltOnTheirSchedule) {
   const Fault c = ramp(FaultType::CoulombFrictionScale, 3.0, Progression::Exponential, 0.2, 0.5, 50, 4.0);
   const Fault b = ramp(FaultType::BacklashAdd, 1e-3, Progression::Linear, 0.0, 1.0, 20);
   systems::RobotSystem nominal = twin({});
-  const double k0 = stiffness(nominal);
+  const double k0 = stiffness(nominal, *nominal.makeState());
   const double fc0 = dynamic_cast<const drive::LuGreUr5Friction&>(*nominal.drives()[kElbow].friction).params().f_c;
   systems::RobotSystem sys = twin({k, c, b});
   holdPose(sys);
   const Eigen::VectorXd y = sys.initialState();
+  const auto st = sys.makeState();
   for (double t : {0.0, 0.1, 0.2, 0.33, 0.5, 0.69, 0.7, 0.95}) {
-    sys.start(t, y);  // the faults' state at t, as at a (re)start
-    EXPECT_DOUBLE_EQ(stiffness(sys), k0 * systems::scheduledFaultValue(k, t)) << t;
-    EXPECT_DOUBLE_EQ(dynamic_cast<const drive::LuGreUr5Friction&>(*sys.drives()[kElbow].friction).params().f_c,
+    sys.start(*st, t, y);  // the faults' state at t, as at a (re)start
+    EXPECT_DOUBLE_EQ(stiffness(sys, *st), k0 * systems::scheduledFaultValue(k, t)) << t;
+    EXPECT_DOUBLE_EQ(dynamic_cast<const drive::LuGreUr5Friction&>(*sys.drives(*st)[kElbow].friction).params().f_c,
                      fc0 * systems::scheduledFaultValue(c, t))
         << t;
     // An elastic gear with growing backlash is an elasto-backlash gear of the same stiffness from the start.
-    const auto& eb = dynamic_cast<const drive::ElastoBacklash&>(*sys.drives()[kElbow].transmission).params();
+    const auto& eb = dynamic_cast<const drive::ElastoBacklash&>(*sys.drives(*st)[kElbow].transmission).params();
     int step = 0;  // t_k = T·k/steps <= t < t_k+1
     while (step + 1 < 20 && 1.0 * (step + 1) / 20 <= t) ++step;
     EXPECT_DOUBLE_EQ(eb.backlash, 1e-3 * (step + 0.5) / 20) << t;
@@ -192,13 +193,13 @@ TEST(FaultLaws, ProgressiveParametersAreRebuiltOnTheirSchedule) {
   std::set<double> instants;
   for (const Fault& f : {k, c, b})
     for (double e : systems::faultEvents(f, 1.0)) instants.insert(e);
-  sys.start(0.0, y);
+  const auto run = sys.makeState();
   const auto o = sim::SimulateOptions::atRate(1.0, 100, sim::CvodeOptions{});
-  const sim::SimulationResult r = sim::simulate(sys, o, [](const Eigen::VectorXd&) {});
+  const sim::SimulationResult r = sim::simulate(sys, *run, o, [](const Eigen::VectorXd&) {});
   EXPECT_GE(r.events, static_cast<long>(instants.size()));
   EXPECT_GE(instants.size(), 60u);
-  EXPECT_DOUBLE_EQ(stiffness(sys), 0.5 * k0);
-  EXPECT_DOUBLE_EQ(dynamic_cast<const drive::LuGreUr5Friction&>(*sys.drives()[kElbow].friction).params().f_c,
+  EXPECT_DOUBLE_EQ(stiffness(sys, *run), 0.5 * k0);
+  EXPECT_DOUBLE_EQ(dynamic_cast<const drive::LuGreUr5Friction&>(*sys.drives(*run)[kElbow].friction).params().f_c,
                    3.0 * fc0);
 }
 
@@ -209,11 +210,12 @@ TEST(FaultLaws, TorqueConstantLossScalesTheMotorTorque) {
   const int i_state = sys.layout(kElbow).current;
   y[i_state] = 2.5;  // [A]
   const double kt0 = twin({}).drives()[kElbow].motor.kt;
+  const auto st = sys.makeState();
   for (double t : {0.1, 0.4, 0.6, 0.9, 1.2}) {
-    sys.start(t, y);
+    sys.start(*st, t, y);
     const double s = systems::scheduledFaultValue(sys.faults()[0], t);
-    EXPECT_NEAR(sys.driveSignals(t, y).tau_motor[kElbow], kt0 * s * 2.5, 1e-12) << t;  // τ_M = k_t(t) i
-    EXPECT_DOUBLE_EQ(sys.drives()[kElbow].motor.ke, twin({}).drives()[kElbow].motor.ke * s);
+    EXPECT_NEAR(sys.driveSignals(*st, t, y).tau_motor[kElbow], kt0 * s * 2.5, 1e-12) << t;  // τ_M = k_t(t) i
+    EXPECT_DOUBLE_EQ(sys.drives(*st)[kElbow].motor.ke, twin({}).drives()[kElbow].motor.ke * s);
   }
 }
 
@@ -227,17 +229,18 @@ TEST(FaultLaws, SensorEpisodesChangeTheMeasuredAngleAsDefined) {
   holdPose(sys);
   const Eigen::VectorXd y = sys.initialState();
   const double q = y[kElbow];
-  sys.start(0.0, y);
-  EXPECT_DOUBLE_EQ(sys.driveSignals(0.2, y).q_fb[kElbow], q + 1e-3);           // biased, no episode
-  EXPECT_EQ(sys.driveSignals(0.305, y).q_fb[kElbow], 0.0);                     // dropout: reads 0 rad
-  EXPECT_DOUBLE_EQ(sys.driveSignals(0.355, y).q_fb[kElbow], q + 1e-3 + 0.02);  // spike: + A
-  EXPECT_DOUBLE_EQ(sys.driveSignals(0.365, y).q_fb[kElbow], q + 1e-3);         // after the spike's width
+  const auto st = sys.makeState();
+  sys.start(*st, 0.0, y);
+  EXPECT_DOUBLE_EQ(sys.driveSignals(*st, 0.2, y).q_fb[kElbow], q + 1e-3);           // biased, no episode
+  EXPECT_EQ(sys.driveSignals(*st, 0.305, y).q_fb[kElbow], 0.0);                     // dropout: reads 0 rad
+  EXPECT_DOUBLE_EQ(sys.driveSignals(*st, 0.355, y).q_fb[kElbow], q + 1e-3 + 0.02);  // spike: + A
+  EXPECT_DOUBLE_EQ(sys.driveSignals(*st, 0.365, y).q_fb[kElbow], q + 1e-3);         // after the spike's width
   // Stuck: the reading at the episode's start is held while the joint moves on.
   Eigen::VectorXd moved = y;
   moved[kElbow] += 0.05;
-  sys.updateModes(0.6, y, {});  // the time event at the episode's start
-  EXPECT_DOUBLE_EQ(sys.driveSignals(0.65, moved).q_fb[kElbow], q + 1e-3);
-  EXPECT_DOUBLE_EQ(sys.driveSignals(0.71, moved).q_fb[kElbow], q + 0.05 + 1e-3);
+  sys.updateModes(*st, 0.6, y, {});  // the time event at the episode's start
+  EXPECT_DOUBLE_EQ(sys.driveSignals(*st, 0.65, moved).q_fb[kElbow], q + 1e-3);
+  EXPECT_DOUBLE_EQ(sys.driveSignals(*st, 0.71, moved).q_fb[kElbow], q + 0.05 + 1e-3);
   // Through a run at 1 kHz: the logged q_fb is 0 in every dropout episode and the biased angle elsewhere.
   systems::RobotSystem run = twin({drop, fault(FaultType::SensorBias, 1e-3)});
   holdPose(run);
@@ -274,13 +277,14 @@ TEST(FaultLaws, BearingRippleAddsASineOfTheShaftAngle) {
   holdPose(with);
   holdPose(without);
   Eigen::VectorXd y = with.initialState();
+  const auto st = with.makeState(), st0 = without.makeState();
   for (double phi : {0.3, 1.1, -2.0}) {
     y[kElbow] = phi;
     for (double t : {0.1, 0.6, 1.5}) {
-      with.start(t, y);
+      with.start(*st, t, y);
       const double A = systems::scheduledFaultValue(r, t);  // the amplitude's schedule [N·m]
       const double extra =
-          with.driveSignals(t, y).tau_friction[kElbow] - without.driveSignals(t, y).tau_friction[kElbow];
+          with.driveSignals(*st, t, y).tau_friction[kElbow] - without.driveSignals(*st0, t, y).tau_friction[kElbow];
       EXPECT_NEAR(extra, A * std::sin(7.0 * phi), 1e-12) << "t = " << t << ", φ = " << phi;
     }
   }

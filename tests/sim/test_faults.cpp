@@ -57,16 +57,18 @@ std::pair<Eigen::VectorXd, Eigen::VectorXd> hold(const std::vector<Fault>& fault
   o.rtol = 1e-8;
   o.atol = 1e-10;
   o.max_order = 2;
+  const auto st = sys.makeState();
   sim::CvodeIntegrator integ(
       sys.stateSize(),
       [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-        sys.derivatives(t, y, yd);
+        sys.derivatives(*st, t, y, yd);
       },
       o);
   Eigen::VectorXd y = sys.initialState(q0);
+  sys.start(*st, 0.0, y);
   integ.initialize(0.0, y);
   integ.advance(1.5, y);
-  const auto& s = sys.driveSignals(1.5, y);
+  const auto& s = sys.driveSignals(*st, 1.5, y);
   return {y.head(6), s.current};
 }
 }  // namespace

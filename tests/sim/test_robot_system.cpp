@@ -71,10 +71,11 @@ TEST(RobotSystem, RigidGearJointTorqueEqualsRneaOfSimulatedMotion) {
   o.rtol = 1e-8;
   o.atol = 1e-10;
   o.max_order = 2;
+  const auto st = sys.makeState();
   sim::CvodeIntegrator integ(
       sys.stateSize(),
       [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-        sys.derivatives(t, y, yd);
+        sys.derivatives(*st, t, y, yd);
       },
       o);
   Eigen::VectorXd y = sys.initialState(homePose());
@@ -83,7 +84,7 @@ TEST(RobotSystem, RigidGearJointTorqueEqualsRneaOfSimulatedMotion) {
   double max_track = 0;
   for (double t = 0.1; t <= 1.0 + 1e-9; t += 0.1) {
     integ.advance(t, y);
-    const auto& s = sys.driveSignals(t, y);
+    const auto& s = sys.driveSignals(*st, t, y);
     // The drives' output torques are exactly what the rigid arm needs for the simulated motion.
     const Eigen::VectorXd tau = multibody::rnea(ur5, data, y.head(6), y.segment(6, 6), s.qdd);
     EXPECT_TRUE(test::MatricesNear(s.tau_gear, tau, 1e-9)) << "t = " << t;
@@ -104,7 +105,9 @@ TEST(RobotSystem, StartsAtRestHoldingGravity) {
                                     true));
   const Eigen::VectorXd y0 = sys.initialState(homePose());
   Eigen::VectorXd yd(sys.stateSize());
-  sys.derivatives(0.0, y0, yd);
+  const auto st = sys.makeState();
+  sys.start(*st, 0.0, y0);  // no trajectory: the reference holds the start pose
+  sys.derivatives(*st, 0.0, y0, yd);
   // Every state derivative vanishes: joints at rest, gears in static equilibrium, currents and integrators steady.
   EXPECT_LT(yd.cwiseAbs().maxCoeff(), 1e-6) << "max |ydot| at index " << [&] {
     Eigen::Index i;
@@ -145,10 +148,11 @@ TEST(RobotSystem, StrainWaveGearSpeedRatio101) {
   o.atol = 1e-10;
   o.max_order = 2;
   o.max_step = 1e-3;
+  const auto st = sys.makeState();
   sim::CvodeIntegrator integ(
       sys.stateSize(),
       [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-        sys.derivatives(t, y, yd);
+        sys.derivatives(*st, t, y, yd);
       },
       o);
   Eigen::VectorXd y = sys.initialState(q0);
@@ -157,7 +161,7 @@ TEST(RobotSystem, StrainWaveGearSpeedRatio101) {
   integ.advance(0.2, y);
   integ.initialize(0.2, y);
   integ.advance(1.0, y);
-  const auto& s = sys.driveSignals(1.0, y);
+  const auto& s = sys.driveSignals(*st, 1.0, y);
   EXPECT_NEAR(y[6], 0.5, 1e-4);
   EXPECT_NEAR(s.qdm[0] / y[6], 101.0, 1e-4);
 }
@@ -176,10 +180,11 @@ TEST(RobotSystem, TorqueFreeFrictionlessRunConservesEnergy) {
   o.method = sim::Method::Adams;
   o.rtol = 1e-10;
   o.atol = 1e-12;
+  const auto st = sys.makeState();
   sim::CvodeIntegrator integ(
       sys.stateSize(),
       [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-        sys.derivatives(t, y, yd);
+        sys.derivatives(*st, t, y, yd);
       },
       o);
   Eigen::VectorXd y = sys.initialState(homePose());
@@ -232,7 +237,8 @@ TEST(RobotSystem, Irb140CoupledWristWith000ControllersHoldsAndBalancesTorques) {
       });
   Eigen::VectorXd y = sys.initialState(q0);
   Eigen::VectorXd yd(sys.stateSize());
-  sys.derivatives(0.0, y, yd);
+  const auto st = sys.makeState();
+  sys.derivatives(*st, 0.0, y, yd);
   EXPECT_LT(yd.segment(6, 6).cwiseAbs().maxCoeff(), 1e-9) << "gravity held at the start";
   sim::CvodeOptions o;
   o.rtol = 1e-9;
@@ -241,7 +247,7 @@ TEST(RobotSystem, Irb140CoupledWristWith000ControllersHoldsAndBalancesTorques) {
   sim::CvodeIntegrator integ(
       sys.stateSize(),
       [&](double t, const Eigen::Ref<const Eigen::VectorXd>& yy, Eigen::Ref<Eigen::VectorXd> d) {
-        sys.derivatives(t, yy, d);
+        sys.derivatives(*st, t, yy, d);
       },
       o);
   integ.initialize(0.0, y);
@@ -254,7 +260,7 @@ TEST(RobotSystem, Irb140CoupledWristWith000ControllersHoldsAndBalancesTorques) {
   EXPECT_GT(std::abs(R(4, 3)), 1e-3) << "the wrist coupling matters";
   for (double t = 0.2; t <= 1.0 + 1e-9; t += 0.2) {
     integ.advance(t, y);
-    const auto& s = sys.driveSignals(t, y);
+    const auto& s = sys.driveSignals(*st, t, y);
     // Joint torques from the motors = rigid-body torques + reflected rotor inertia.
     const Eigen::VectorXd rhs = multibody::rnea(irb, data, y.head(6), y.segment(6, 6), s.qdd) + R * s.qdd;
     EXPECT_TRUE(test::MatricesNear(s.tau_joint, rhs, 1e-8)) << "t = " << t;

@@ -1,13 +1,20 @@
 // sim::Simulator: stepping with inputs, root events, samples and time events against closed forms, and
-// against the one simulate loop on a shipped experiment.
+// against the one simulate loop on a shipped experiment; snapshots (restore, saved bytes, copies) repeat a run bit
+// for bit.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "jointsim/common/bytes.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/text.hpp"
@@ -22,29 +29,38 @@ namespace {
 /// ẏ = −a y + u with an input u set between steps: y(t) = u/a + (y(t0) − u/a) e^{−a (t − t0)}.
 class FirstOrder : public sim::Plant {
  public:
+  /// The run's input u (held between steps; 0 in a fresh state).
+  struct State : sim::PlantStateOf<State> {
+    using PlantStateOf::PlantStateOf;
+    double u = 0.0;
+    void save(ByteWriter& out) const override { out.f64(u); }
+    void load(ByteReader& in) override { u = in.f64("u"); }
+  };
   double a = 2.0;
-  void setInput(double u) {
-    if (u != u_) {
-      u_ = u;
-      ++revision_;
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
+  void setInput(sim::PlantState& state, double u) const {
+    State& s = own<State>(state);
+    if (u != s.u) {
+      s.u = u;
+      s.inputsChanged();
     }
   }
+  double input(const sim::PlantState& state) const { return own<State>(state).u; }
   std::string name() const override { return "first order"; }
   int stateSize() const override { return 1; }
   Eigen::VectorXd initialState() const override { return Eigen::VectorXd::Constant(1, 1.0); }
-  void derivatives(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) const override {
-    yd[0] = -a * y[0] + u_;
+  void derivatives(const sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> yd) const override {
+    yd[0] = -a * y[0] + own<State>(state).u;
   }
-  long inputRevision() const override { return revision_; }
   const std::vector<std::string>& signalNames() const override { return names_; }
-  void signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override {
+  void signals(const sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override {
     out[0] = y[0];
-    out[1] = u_;
+    out[1] = own<State>(state).u;
   }
 
  private:
-  double u_ = 0.0;
-  long revision_ = 0;
   std::vector<std::string> names_{"y[1]", "u[1]"};
 };
 
@@ -64,11 +80,11 @@ TEST(Simulator, InputStepsFollowTheClosedFormAndRestartOnlyWhenTheInputJumps) {
   const long restarts_before = s.restarts();
   EXPECT_NEAR(s.state()[0], std::exp(-2.0 * 0.5), 1e-9);
   const double y05 = s.state()[0];
-  p.setInput(3.0);
-  p.setInput(3.0);
+  p.setInput(s.plantState(), 3.0);
+  p.setInput(s.plantState(), 3.0);
   for (int k = 0; k < 50; ++k) {
     s.advance(0.01);
-    p.setInput(3.0);  // unchanged: no restart
+    p.setInput(s.plantState(), 3.0);  // unchanged: no restart
   }
   EXPECT_EQ(s.restarts(), restarts_before + 1);
   EXPECT_NEAR(s.time(), 1.0, 1e-12);
@@ -76,7 +92,7 @@ TEST(Simulator, InputStepsFollowTheClosedFormAndRestartOnlyWhenTheInputJumps) {
   EXPECT_DOUBLE_EQ(s.signal("u"), 3.0);
   EXPECT_DOUBLE_EQ(s.signal("y[1]"), s.state()[0]);
   // The signals follow an input change before the next step.
-  p.setInput(-1.0);
+  p.setInput(s.plantState(), -1.0);
   EXPECT_DOUBLE_EQ(s.signal("u"), -1.0);
   const double y1 = 1.5 + (y05 - 1.5) * std::exp(-1.0);
   s.advanceTo(1.2);
@@ -113,31 +129,52 @@ TEST(Simulator, BadTimesAndStatesAreInputErrorsAndLeaveTheSimulatorUnchanged) {
 /// ẏ = m with a mode m ∈ {+1, −1} switched by root functions at y = ±1: a triangle wave of period 4 s.
 class Triangle : public sim::Plant {
  public:
+  /// The run's mode m and the number of switches so far.
+  struct State : sim::PlantStateOf<State> {
+    using PlantStateOf::PlantStateOf;
+    double m = 1.0;
+    long switches = 0;
+    void save(ByteWriter& out) const override {
+      out.f64(m);
+      out.i64(switches);
+    }
+    void load(ByteReader& in) override {
+      m = in.f64("mode");
+      if (m != 1.0 && m != -1.0) in.fail("mode: expected +1 or -1");
+      switches = in.i64("switches");
+    }
+  };
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
   std::string name() const override { return "triangle"; }
   int stateSize() const override { return 1; }
   Eigen::VectorXd initialState() const override { return Eigen::VectorXd::Zero(1); }
-  void derivatives(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::VectorXd> yd) const override {
-    yd[0] = m_;
+  void derivatives(const sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>&,
+                   Eigen::Ref<Eigen::VectorXd> yd) const override {
+    yd[0] = own<State>(state).m;
   }
   int rootCount() const override { return 2; }
-  void roots(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override {
+  void roots(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+             Eigen::Ref<Eigen::VectorXd> g) const override {
     g[0] = y[0] - 1.0;
     g[1] = y[0] + 1.0;
   }
-  void updateModes(double, const Eigen::Ref<const Eigen::VectorXd>&, const std::vector<int>& fired) override {
-    const double before = m_;
-    if (fired.size() == 2 && fired[0] > 0) m_ = -1.0;  // reaching +1 from below
-    if (fired.size() == 2 && fired[1] < 0) m_ = 1.0;   // reaching −1 from above
-    switches += m_ != before;
+  void updateModes(sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>&,
+                   const std::vector<int>& fired) const override {
+    State& s = own<State>(state);
+    const double before = s.m;
+    if (fired.size() == 2 && fired[0] > 0) s.m = -1.0;  // reaching +1 from below
+    if (fired.size() == 2 && fired[1] < 0) s.m = 1.0;   // reaching −1 from above
+    s.switches += s.m != before;
   }
-  int switches = 0;
+  long switches(const sim::PlantState& state) const { return own<State>(state).switches; }
+  double mode(const sim::PlantState& state) const { return own<State>(state).m; }
   const std::vector<std::string>& signalNames() const override { return names_; }
-  void signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override {
+  void signals(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override {
     out[0] = y[0];
   }
 
  private:
-  double m_ = 1.0;
   std::vector<std::string> names_{"y[1]"};
 };
 
@@ -151,7 +188,7 @@ TEST(Simulator, RootEventsInsideASteppedRun) {
     const double expected = ph < 2.0 ? ph - 1.0 : 3.0 - ph;
     ASSERT_NEAR(s.state()[0], expected, 1e-8) << "t = " << t;
   }
-  EXPECT_EQ(p.switches, 2);  // at t = 1 and t = 3
+  EXPECT_EQ(p.switches(s.plantState()), 2);  // at t = 1 and t = 3
   EXPECT_GE(s.events(), 2);
 }
 
@@ -159,27 +196,51 @@ TEST(Simulator, RootEventsInsideASteppedRun) {
 /// A time event at 0.35 s (no effect on the physics) must not disturb it.
 class SampledDecay : public sim::Plant {
  public:
+  /// The run's held input u_k and the number of time events seen.
+  struct State : sim::PlantStateOf<State> {
+    using PlantStateOf::PlantStateOf;
+    double u = 0.0;
+    long events = 0;
+    void save(ByteWriter& out) const override {
+      out.f64(u);
+      out.i64(events);
+    }
+    void load(ByteReader& in) override {
+      u = in.f64("u");
+      events = in.i64("events");
+    }
+  };
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
   std::string name() const override { return "sampled decay"; }
   int stateSize() const override { return 1; }
   Eigen::VectorXd initialState() const override { return Eigen::VectorXd::Constant(1, 1.0); }
-  void derivatives(double, const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::VectorXd> yd) const override {
-    yd[0] = u_;
+  void derivatives(const sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>&,
+                   Eigen::Ref<Eigen::VectorXd> yd) const override {
+    yd[0] = own<State>(state).u;
   }
   std::vector<double> timeEvents(double t_end) const override {
     return t_end > 0.35 ? std::vector<double>{0.35} : std::vector<double>{};
   }
-  void updateModes(double, const Eigen::Ref<const Eigen::VectorXd>&, const std::vector<int>&) override { ++events; }
-  void start(double, const Eigen::Ref<const Eigen::VectorXd>& y) override { u_ = -y[0]; }
+  void updateModes(sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>&,
+                   const std::vector<int>&) const override {
+    ++own<State>(state).events;
+  }
+  void start(sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>& y) const override {
+    own<State>(state).u = -y[0];
+  }
   double samplePeriod() const override { return 0.1; }
-  void sample(double, const Eigen::Ref<const Eigen::VectorXd>& y) override { u_ = -y[0]; }
+  void sample(sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>& y) const override {
+    own<State>(state).u = -y[0];
+  }
   const std::vector<std::string>& signalNames() const override { return names_; }
-  void signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override {
+  void signals(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override {
     out[0] = y[0];
   }
-  int events = 0;
+  long events(const sim::PlantState& state) const { return own<State>(state).events; }
+  double input(const sim::PlantState& state) const { return own<State>(state).u; }
 
  private:
-  double u_ = 0.0;
   std::vector<std::string> names_{"y[1]"};
 };
 
@@ -190,7 +251,7 @@ TEST(Simulator, SamplesAndTimeEventsAtTheirInstantsWhateverTheStep) {
   s.advanceTo(1.0);                              // ...and one that ends on a sample (taken at the next advance)
   EXPECT_NEAR(s.state()[0], std::pow(0.9, 10), 1e-10);
   EXPECT_EQ(s.samples(), 10);  // t = 0, 0.1, ..., 0.9
-  EXPECT_EQ(p.events, 1);
+  EXPECT_EQ(p.events(s.plantState()), 1);
   s.advance(0.05);  // the sample at 1.0 first, then half a period
   EXPECT_NEAR(s.state()[0], std::pow(0.9, 10) * 0.95, 1e-10);
   // 1 kHz steps accumulate rounding in t + dt; samples are still met.
@@ -230,14 +291,28 @@ class SampledFirstOrder : public sim::Plant {
   std::string name() const override { return "sampled first order"; }
   int stateSize() const override { return 1; }
   Eigen::VectorXd initialState() const override { return Eigen::VectorXd::Constant(1, 1.0); }
-  void derivatives(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) const override {
-    yd[0] = -a * y[0] + u_;
+  /// The run's held controller output u_k.
+  struct State : sim::PlantStateOf<State> {
+    using PlantStateOf::PlantStateOf;
+    double u = 0.0;
+    void save(ByteWriter& out) const override { out.f64(u); }
+    void load(ByteReader& in) override { u = in.f64("u"); }
+  };
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
+  void derivatives(const sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> yd) const override {
+    yd[0] = -a * y[0] + own<State>(state).u;
   }
   double samplePeriod() const override { return Ts; }
-  void start(double, const Eigen::Ref<const Eigen::VectorXd>& y) override { u_ = -K * y[0]; }
-  void sample(double, const Eigen::Ref<const Eigen::VectorXd>& y) override { u_ = -K * y[0]; }
+  void start(sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>& y) const override {
+    own<State>(state).u = -K * y[0];
+  }
+  void sample(sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>& y) const override {
+    own<State>(state).u = -K * y[0];
+  }
   const std::vector<std::string>& signalNames() const override { return names_; }
-  void signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override {
+  void signals(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override {
     out[0] = y[0];
   }
   double exact(int samples) const {
@@ -248,7 +323,6 @@ class SampledFirstOrder : public sim::Plant {
   }
 
  private:
-  double u_ = 0.0;
   std::vector<std::string> names_{"y[1]"};
 };
 
@@ -292,13 +366,13 @@ TEST(Simulator, SmallInputJumpsKeepTheHistoryAndLargeOnesRestart) {
   sim::Simulator s(p, tight());
   s.advanceTo(0.5);
   const long restarts = s.restarts(), kept = s.inputJumps();
-  p.setInput(3.0);
+  p.setInput(s.plantState(), 3.0);
   s.advanceTo(0.6);
   EXPECT_EQ(s.restarts(), restarts + 1);
   EXPECT_EQ(s.inputJumps(), kept);
   // A jump of 1e-13 on that tolerance keeps the history, and the closed form still holds.
   const double y06 = s.state()[0];
-  p.setInput(3.0 + 1e-13);
+  p.setInput(s.plantState(), 3.0 + 1e-13);
   s.advanceTo(0.7);
   EXPECT_EQ(s.restarts(), restarts + 1);
   EXPECT_EQ(s.inputJumps(), kept + 1);
@@ -313,13 +387,15 @@ class Oscillator : public sim::Plant {
   std::string name() const override { return "oscillator"; }
   int stateSize() const override { return 2; }
   Eigen::VectorXd initialState() const override { return Eigen::Vector2d(1.0, 0.0); }
-  void derivatives(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) const override {
+  void derivatives(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> yd) const override {
     yd[0] = y[1];
     yd[1] = -w * w * y[0];
   }
   std::string stateName(int i) const override { return i == 0 ? "x [m]" : "v [m/s]"; }
   const std::vector<std::string>& signalNames() const override { return names_; }
-  void signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override {
+  void signals(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override {
     out[0] = y[0];
   }
 
@@ -453,11 +529,13 @@ class Chatter : public sim::Plant {
   std::string name() const override { return "chatter"; }
   int stateSize() const override { return 1; }
   Eigen::VectorXd initialState() const override { return Eigen::VectorXd::Constant(1, 1.0); }
-  void derivatives(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) const override {
+  void derivatives(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> yd) const override {
     yd[0] = y[0] > 0.0 ? -1.0 : 1.0;
   }
   const std::vector<std::string>& signalNames() const override { return names_; }
-  void signals(double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override {
+  void signals(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override {
     out[0] = y[0];
   }
 
@@ -561,6 +639,313 @@ TEST(SimulatorLimits, TheStateBoundLeavesStatesThatMayGrowAlone) {
   limits.max_state = 100.0;
   s.setLimits(limits);
   EXPECT_EQ(s.advanceTo(1.0), 1.0);
+}
+
+// ------------------------------------------------------------------------------------------ snapshots
+// Simulator::snapshot/restore, saveState/loadState and the copy constructor on the small plants above: a run taken
+// up again from a snapshot repeats the original continuation bit for bit (both restart the integrator there).
+
+/// Advances in steps of `dt` to exactly `t_end` (the same sequence of calls for the same start time).
+void runTo(sim::Simulator& s, double t_end, double dt) {
+  while (s.time() < t_end) s.advanceTo(std::min(t_end, s.time() + dt));
+}
+
+/// Where a run ended: time, continuous state and signals.
+struct RunEnd {
+  double t = 0.0;
+  Eigen::VectorXd y, signals;
+};
+
+RunEnd endOf(const sim::Simulator& s) { return {s.time(), s.state(), s.signals()}; }
+
+/// Bit for bit: EXPECT_EQ on the time and on every entry.
+void expectSameBits(const RunEnd& a, const RunEnd& b, const std::string& what) {
+  EXPECT_EQ(a.t, b.t) << what;
+  ASSERT_EQ(a.y.size(), b.y.size()) << what;
+  for (Eigen::Index i = 0; i < a.y.size(); ++i) EXPECT_EQ(a.y[i], b.y[i]) << what << ": state " << i;
+  ASSERT_EQ(a.signals.size(), b.signals.size()) << what;
+  for (Eigen::Index i = 0; i < a.signals.size(); ++i) EXPECT_EQ(a.signals[i], b.signals[i]) << what << ": signal " << i;
+}
+
+/// Snapshot of `s` at its time, on to `t_end` (the reference), restore, on to `t_end` again: the same bits.
+RunEnd expectRestoreRepeats(sim::Simulator& s, double t_end, double dt, const std::string& what) {
+  const sim::Snapshot snap = s.snapshot();
+  EXPECT_FALSE(snap.empty());
+  EXPECT_EQ(&snap.plantState().owner(), &s.plant());
+  EXPECT_EQ(snap.time(), s.time());
+  EXPECT_EQ(snap.state(), s.state());
+  runTo(s, t_end, dt);
+  const RunEnd first = endOf(s);
+  s.restore(snap);
+  EXPECT_EQ(s.time(), snap.time()) << what;
+  EXPECT_EQ(s.state(), snap.state()) << what;
+  runTo(s, t_end, dt);
+  expectSameBits(first, endOf(s), what + ", restored");
+  // The snapshot is a copy: the run did not change it, and it restores once more alike.
+  s.restore(snap);
+  runTo(s, t_end, dt);
+  expectSameBits(first, endOf(s), what + ", restored twice");
+  return first;
+}
+
+TEST(SimulatorSnapshot, RestoringAMidRunSnapshotRepeatsTheRestBitForBit) {
+  {  // A sampled part and a time event after the snapshot (taken between two samples).
+    SampledDecay p;
+    sim::Simulator s(p, tight());
+    runTo(s, 0.23, 0.03);
+    const double u = p.input(s.plantState());
+    EXPECT_NEAR(u, -std::pow(0.9, 2), 1e-10);  // held since the sample at 0.2 s
+    const sim::Snapshot snap = s.snapshot();
+    EXPECT_EQ(p.input(snap.plantState()), u);
+    EXPECT_EQ(p.events(snap.plantState()), 0);
+    const RunEnd end = expectRestoreRepeats(s, 1.05, 0.03, "sampled decay");
+    EXPECT_NEAR(end.y[0], std::pow(0.9, 10) * 0.95, 1e-10);  // and it is the right run
+    EXPECT_EQ(p.events(s.plantState()), 1);                  // the time event at 0.35 s, once per run
+  }
+  {  // Root events after the snapshot: the mode switches at t = 1 and t = 3.
+    Triangle p;
+    sim::Simulator s(p, tight());
+    runTo(s, 0.5, 0.07);
+    const RunEnd end = expectRestoreRepeats(s, 3.5, 0.07, "triangle");
+    EXPECT_NEAR(end.y[0], -0.5, 1e-8);
+    EXPECT_EQ(p.switches(s.plantState()), 2);
+    EXPECT_EQ(p.mode(s.plantState()), 1.0);
+  }
+  {  // An input change set just before the snapshot and not yet applied is part of it.
+    FirstOrder p;
+    sim::Simulator s(p, tight());
+    runTo(s, 0.3, 0.1);
+    const double y03 = s.state()[0];
+    p.setInput(s.plantState(), 3.0);
+    const RunEnd end = expectRestoreRepeats(s, 1.0, 0.1, "first order, input pending");
+    EXPECT_NEAR(end.y[0], 1.5 + (y03 - 1.5) * std::exp(-2.0 * 0.7), 1e-8);
+    EXPECT_EQ(end.signals[1], 3.0);
+  }
+}
+
+/// saveState() of `s` at its time, loaded into `other` (the same plant's configuration); both on to `t_end`: the
+/// same bits.
+void expectLoadRepeats(sim::Simulator& s, sim::Simulator& other, double t_end, double dt, const std::string& what) {
+  const std::string bytes = s.saveState();
+  other.loadState(bytes);
+  EXPECT_EQ(other.time(), s.time()) << what;
+  EXPECT_EQ(other.state(), s.state()) << what;
+  runTo(s, t_end, dt);
+  runTo(other, t_end, dt);
+  expectSameBits(endOf(s), endOf(other), what);
+}
+
+TEST(SimulatorSnapshot, SavedBytesLoadIntoASecondSimulatorThatContinuesBitForBit) {
+  {
+    SampledDecay p, q;  // q: another object of the same configuration (the bytes carry no object identity)
+    sim::Simulator s(p, tight()), s2(p, tight()), s3(q, tight());
+    s2.advanceTo(0.7);  // somewhere else: loading replaces everything
+    runTo(s, 0.23, 0.03);
+    sim::Simulator reference(s);
+    expectLoadRepeats(s, s2, 1.05, 0.03, "sampled decay, same plant");
+    EXPECT_EQ(p.events(s2.plantState()), 1);
+    EXPECT_EQ(p.input(s2.plantState()), p.input(s.plantState()));
+    expectLoadRepeats(reference, s3, 1.05, 0.03, "sampled decay, a second plant object");
+    expectSameBits(endOf(s), endOf(s3), "sampled decay, a second plant object against the first");
+    EXPECT_EQ(q.events(s3.plantState()), 1);
+  }
+  {
+    Triangle p;
+    sim::Simulator s(p, tight()), s2(p, tight());
+    runTo(s, 1.5, 0.07);  // after the first switch: the mode −1 travels in the bytes
+    EXPECT_EQ(p.mode(s.plantState()), -1.0);
+    expectLoadRepeats(s, s2, 3.5, 0.07, "triangle");
+    EXPECT_EQ(p.switches(s2.plantState()), 2);
+    EXPECT_NEAR(s2.state()[0], -0.5, 1e-8);
+  }
+  {
+    FirstOrder p;
+    sim::Simulator s(p, tight()), s2(p, tight());
+    runTo(s, 0.3, 0.1);
+    const double y03 = s.state()[0];
+    p.setInput(s.plantState(), 3.0);  // pending at the save
+    expectLoadRepeats(s, s2, 1.0, 0.1, "first order, input pending");
+    EXPECT_EQ(p.input(s2.plantState()), 3.0);
+    EXPECT_NEAR(s2.state()[0], 1.5 + (y03 - 1.5) * std::exp(-2.0 * 0.7), 1e-8);
+  }
+}
+
+TEST(SimulatorSnapshot, ACopyContinuesIdenticallyAndIndependently) {
+  {
+    SampledDecay p;
+    sim::Simulator s(p, tight());
+    runTo(s, 0.23, 0.03);
+    sim::Simulator c(s);
+    EXPECT_EQ(&c.plant(), &p);
+    EXPECT_EQ(c.time(), s.time());
+    EXPECT_EQ(c.state(), s.state());
+    EXPECT_NE(&c.plantState(), &s.plantState());
+    runTo(s, 1.05, 0.03);
+    runTo(c, 1.05, 0.03);
+    expectSameBits(endOf(s), endOf(c), "sampled decay, copy");
+    EXPECT_EQ(p.events(c.plantState()), 1);
+  }
+  {
+    Triangle p;
+    sim::Simulator s(p, tight());
+    runTo(s, 0.5, 0.07);
+    sim::Simulator c(s);
+    runTo(c, 3.5, 0.07);  // the copy first: the original does not follow it
+    EXPECT_EQ(s.time(), 0.5);
+    EXPECT_EQ(p.switches(s.plantState()), 0);
+    runTo(s, 3.5, 0.07);
+    expectSameBits(endOf(s), endOf(c), "triangle, copy");
+    EXPECT_EQ(p.switches(c.plantState()), 2);
+  }
+  {  // Inputs set on the copy stay with the copy, and the other way round.
+    FirstOrder p;
+    sim::Simulator s(p, tight());
+    p.setInput(s.plantState(), 1.0);
+    runTo(s, 0.5, 0.1);
+    const double y05 = s.state()[0];
+    sim::Simulator reference(s), c(s);
+    p.setInput(c.plantState(), 3.0);
+    EXPECT_EQ(p.input(s.plantState()), 1.0);
+    EXPECT_EQ(s.signal("u"), 1.0);
+    EXPECT_EQ(c.signal("u"), 3.0);
+    runTo(s, 1.0, 0.1);
+    runTo(c, 1.0, 0.1);
+    runTo(reference, 1.0, 0.1);
+    expectSameBits(endOf(reference), endOf(s), "first order: the original, untouched by the copy's input");
+    EXPECT_NEAR(s.state()[0], 0.5 + (y05 - 0.5) * std::exp(-1.0), 1e-8);
+    EXPECT_NEAR(c.state()[0], 1.5 + (y05 - 1.5) * std::exp(-1.0), 1e-8);
+    p.setInput(s.plantState(), -2.0);
+    EXPECT_EQ(p.input(c.plantState()), 3.0);
+    EXPECT_EQ(c.signal("u"), 3.0);
+  }
+}
+
+TEST(SimulatorSnapshot, LoadStateRefusesTruncatedForeignAndGarbageBytesAndLeavesTheSimulatorUnchanged) {
+  FirstOrder p;
+  sim::Simulator s(p, tight());
+  p.setInput(s.plantState(), 2.0);
+  runTo(s, 0.4, 0.1);
+  const std::string good = s.saveState();
+  runTo(s, 0.7, 0.1);  // on beyond the saved state, with an input change pending
+  p.setInput(s.plantState(), -1.0);
+  const double t = s.time();
+  const Eigen::VectorXd y = s.state();
+  sim::Simulator reference(s);  // how s continues when nothing changed it
+
+  Triangle other;
+  sim::Simulator so(other, tight());
+  so.advanceTo(0.5);
+  const std::string foreign = so.saveState();
+  // The triangle's bytes with a mode other than ±1: refused by the plant's own State::load.
+  std::string bad_mode = foreign;
+  {
+    const size_t at = bad_mode.find("plant state");
+    ASSERT_NE(at, std::string::npos);
+    ByteWriter half;
+    half.f64(0.5);
+    bad_mode.replace(at + 11, 8, half.bytes());
+  }
+  sim::Simulator so2(other, tight());
+  EXPECT_THROW(so2.loadState(bad_mode), InputError);
+  EXPECT_EQ(so2.time(), 0.0);
+  EXPECT_EQ(other.mode(so2.plantState()), 1.0);
+
+  std::vector<std::pair<std::string, std::string>> bad = {
+      {"no bytes", ""},
+      {"text", "not a saved simulator state"},
+      {"0xff bytes", std::string(64, '\xff')},
+      {"zero bytes", std::string(200, '\0')},
+      {"another plant", foreign},
+      {"another plant with a bad mode", bad_mode},
+      {"a byte too many", good + 'x'},
+  };
+  for (size_t n = 0; n < good.size(); ++n)
+    bad.emplace_back("truncated to " + std::to_string(n) + " bytes", good.substr(0, n));
+  for (const auto& [what, bytes] : bad) {
+    EXPECT_THROW(s.loadState(bytes), InputError) << what;
+    EXPECT_EQ(s.time(), t) << what;
+    EXPECT_EQ(s.state(), y) << what;
+    EXPECT_EQ(p.input(s.plantState()), -1.0) << what;
+  }
+  try {
+    s.loadState(foreign);
+    FAIL() << "the triangle's state loaded into the first-order plant";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("'triangle'"));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("first order"));
+  }
+  // Unchanged, the pending input change included: it continues as its copy made before the refused loads.
+  runTo(s, 1.0, 0.1);
+  runTo(reference, 1.0, 0.1);
+  expectSameBits(endOf(reference), endOf(s), "after the refused loads");
+  // The good bytes still load: back to 0.4 s with u = 2.
+  s.loadState(good);
+  EXPECT_EQ(s.time(), 0.4);
+  EXPECT_EQ(p.input(s.plantState()), 2.0);
+}
+
+TEST(SimulatorSnapshot, ASnapshotOfAnotherPlantObjectIsRefused) {
+  FirstOrder p, q;  // the same type, name and configuration, but two objects
+  sim::Simulator sp(p, tight()), sq(q, tight());
+  p.setInput(sp.plantState(), 3.0);
+  sp.advanceTo(0.5);
+  q.setInput(sq.plantState(), 1.0);
+  sq.advanceTo(0.2);
+  const double y = sq.state()[0];
+  const sim::Snapshot snap = sp.snapshot();
+  EXPECT_THROW(sq.restore(snap), InputError);
+  EXPECT_THROW(sq.restore(sim::Snapshot{}), InputError);  // an empty one
+  Triangle other;
+  sim::Simulator so(other, tight());
+  EXPECT_THROW(sq.restore(so.snapshot()), InputError);  // another type of plant
+  EXPECT_EQ(sq.time(), 0.2);
+  EXPECT_EQ(sq.state()[0], y);
+  EXPECT_EQ(q.input(sq.plantState()), 1.0);
+  // A plant refuses another plant object's state in its own methods too.
+  EXPECT_THROW(q.setInput(sp.plantState(), 1.0), InputError);
+  EXPECT_THROW(q.input(sp.plantState()), InputError);
+  EXPECT_EQ(p.input(sp.plantState()), 3.0);
+  // The bytes of the snapshot load (they name the plant, not the object); the simulator of p restores it.
+  sq.loadState(snap.toBytes());
+  EXPECT_EQ(sq.time(), 0.5);
+  EXPECT_EQ(q.input(sq.plantState()), 3.0);
+  sp.advanceTo(0.8);
+  sp.restore(snap);
+  EXPECT_EQ(sp.time(), 0.5);
+}
+
+TEST(SimulatorSnapshot, ResetClearsTheInputsSetInTheState) {
+  FirstOrder p;
+  sim::Simulator s(p, tight());
+  p.setInput(s.plantState(), 3.0);
+  s.advanceTo(0.5);
+  EXPECT_EQ(s.signal("u"), 3.0);
+  s.reset();  // a fresh state (the one before is gone: take plantState() anew)
+  EXPECT_EQ(s.time(), 0.0);
+  EXPECT_EQ(p.input(s.plantState()), 0.0);
+  EXPECT_EQ(s.signal("u"), 0.0);
+  s.advanceTo(0.5);
+  EXPECT_NEAR(s.state()[0], std::exp(-1.0), 1e-8);  // u = 0 again
+  p.setInput(s.plantState(), -1.0);                 // pending, not yet applied
+  s.reset(2.0, Eigen::VectorXd::Constant(1, 4.0));
+  EXPECT_EQ(p.input(s.plantState()), 0.0);
+  s.advanceTo(2.5);
+  EXPECT_NEAR(s.state()[0], 4.0 * std::exp(-1.0), 1e-8);
+  // The discrete state of the other plants goes back to its start too.
+  Triangle tri;
+  sim::Simulator st(tri, tight());
+  st.advanceTo(1.5);
+  EXPECT_EQ(tri.mode(st.plantState()), -1.0);
+  st.reset();
+  EXPECT_EQ(tri.mode(st.plantState()), 1.0);
+  EXPECT_EQ(tri.switches(st.plantState()), 0);
+  SampledDecay dec;
+  sim::Simulator sd(dec, tight());
+  sd.advanceTo(0.5);
+  EXPECT_EQ(dec.events(sd.plantState()), 1);
+  sd.reset();
+  EXPECT_EQ(dec.events(sd.plantState()), 0);
+  EXPECT_EQ(dec.input(sd.plantState()), -1.0);  // start(): u = −y(0)
 }
 
 }  // namespace

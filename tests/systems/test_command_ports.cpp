@@ -69,14 +69,14 @@ double jointInertia(const systems::RobotSystem& r) { return kIzz + kN * kN * r.d
 TEST(CommandPorts, VoltageGivesTheMotorsNoLoadSpeed) {
   systems::RobotSystem r = singleJoint();
   sim::Simulator s(r, tight());
-  r.setCommandPort(0, CommandPort::Voltage);
-  r.setCommand(0, 12.0);
+  r.setCommandPort(s.plantState(), 0, CommandPort::Voltage);
+  r.setCommand(s.plantState(), 0, 12.0);
   s.advanceTo(1.5);  // mechanical time constant J R / (k_t k_e) ≈ 40 ms
   const auto& m = r.drives()[0].motor;
   EXPECT_NEAR(s.signal("motor_velocity_j1"), 12.0 / m.ke, 1e-6 * 12.0 / m.ke);
   EXPECT_DOUBLE_EQ(s.signal("voltage_j1"), 12.0);
   // Beyond the supply the PWM saturates at V_supply.
-  r.setCommand(0, 1e3);
+  r.setCommand(s.plantState(), 0, 1e3);
   s.advance(1.5);
   EXPECT_DOUBLE_EQ(s.signal("voltage_j1"), m.V_supply);
   EXPECT_NEAR(s.signal("motor_velocity_j1"), m.V_supply / m.ke, 1e-6 * m.V_supply / m.ke);
@@ -85,8 +85,8 @@ TEST(CommandPorts, VoltageGivesTheMotorsNoLoadSpeed) {
 TEST(CommandPorts, MotorTorqueAcceleratesTheReflectedInertia) {
   systems::RobotSystem r = singleJoint();
   sim::Simulator s(r, tight());
-  r.setCommandPort(0, CommandPort::MotorTorque);
-  r.setCommand(0, 0.5);
+  r.setCommandPort(s.plantState(), 0, CommandPort::MotorTorque);
+  r.setCommand(s.plantState(), 0, 0.5);
   s.advanceTo(0.3);
   const double a = kN * 0.5 / jointInertia(r);  // q̈ = N τ / (J_l + N² J_M)
   EXPECT_NEAR(s.signal("q_j1"), 0.5 * a * 0.09, 1e-8);
@@ -98,8 +98,8 @@ TEST(CommandPorts, MotorTorqueAcceleratesTheReflectedInertia) {
 TEST(CommandPorts, CurrentReferenceIsTrackedAndGivesTorqueConstantTimesCurrent) {
   systems::RobotSystem r = singleJoint();
   sim::Simulator s(r, tight());
-  r.setCommandPort(0, CommandPort::Current);
-  r.setCommand(0, 2.0);
+  r.setCommandPort(s.plantState(), 0, CommandPort::Current);
+  r.setCommand(s.plantState(), 0, 2.0);
   s.advanceTo(0.2);
   // The motor speeds up at a constant rate, so the back-EMF k_e ω_m is a ramp disturbance of the current PI loop:
   // it leaves the steady error k_e ω̇_m / I_cur. With ω̇_m = N² k_t i / J: i = i_ref / (1 + k_e N² k_t / (J I_cur)).
@@ -117,13 +117,13 @@ TEST(CommandPorts, CurrentReferenceIsTrackedAndGivesTorqueConstantTimesCurrent) 
 TEST(CommandPorts, MotorVelocityAndHeldSetpointsReachTheirReferences) {
   systems::RobotSystem r = singleJoint();
   sim::Simulator s(r, tight());
-  r.setCommandPort(0, CommandPort::MotorVelocity);
-  r.setCommand(0, 50.0);
+  r.setCommandPort(s.plantState(), 0, CommandPort::MotorVelocity);
+  r.setCommand(s.plantState(), 0, 50.0);
   s.advanceTo(4.0);
   EXPECT_NEAR(s.signal("motor_velocity_j1"), 50.0, 1e-4);
   // Back to the set-point port, holding 0.3 rad: no load torque, so the PI loops remove every error.
-  r.setCommandPort(0, CommandPort::Setpoint);
-  r.setSetpoint(0, 0.3);
+  r.setCommandPort(s.plantState(), 0, CommandPort::Setpoint);
+  r.setSetpoint(s.plantState(), 0, 0.3);
   s.advance(4.0);
   EXPECT_NEAR(s.signal("q_j1"), 0.3, 1e-5);
   EXPECT_DOUBLE_EQ(s.signal("q_set_j1"), 0.3);
@@ -131,41 +131,43 @@ TEST(CommandPorts, MotorVelocityAndHeldSetpointsReachTheirReferences) {
 
 TEST(CommandPorts, TorqueControlledDriveAcceptsVelocityButNotCurrentOrVoltage) {
   systems::RobotSystem r = singleJoint(false);
-  EXPECT_THROW(r.setCommandPort(0, CommandPort::Voltage), InputError);
-  EXPECT_THROW(r.setCommandPort(0, CommandPort::Current), InputError);
+  const auto st = r.makeState();
+  EXPECT_THROW(r.setCommandPort(*st, 0, CommandPort::Voltage), InputError);
+  EXPECT_THROW(r.setCommandPort(*st, 0, CommandPort::Current), InputError);
   sim::Simulator s(r, tight());
-  r.setCommandPort(0, CommandPort::MotorVelocity);
-  r.setCommand(0, 20.0);
+  r.setCommandPort(s.plantState(), 0, CommandPort::MotorVelocity);
+  r.setCommand(s.plantState(), 0, 20.0);
   s.advanceTo(4.0);
   EXPECT_NEAR(s.signal("motor_velocity_j1"), 20.0, 1e-4);
 }
 
 TEST(CommandPorts, BadCommandsAreInputErrorsAndChangeNothing) {
   systems::RobotSystem r = singleJoint();
-  const long rev = r.inputRevision();
-  EXPECT_THROW(r.setCommand(0, 1.0), InputError);  // under the set-point port
-  r.setCommandPort(0, CommandPort::Voltage);
-  const long rev2 = r.inputRevision();
+  const auto st = r.makeState();
+  const long rev = st->inputRevision();
+  EXPECT_THROW(r.setCommand(*st, 0, 1.0), InputError);  // under the set-point port
+  r.setCommandPort(*st, 0, CommandPort::Voltage);
+  const long rev2 = st->inputRevision();
   EXPECT_GT(rev2, rev);
-  EXPECT_THROW(r.setCommand(0, std::nan("")), InputError);
-  EXPECT_THROW(r.setCommand(0, INFINITY), InputError);
-  EXPECT_THROW(r.setCommand(1, 1.0), InputError);
-  EXPECT_THROW(r.setCommandPort(-1, CommandPort::Voltage), InputError);
-  EXPECT_THROW(r.setCommandPort("j9", CommandPort::Voltage), InputError);
-  EXPECT_THROW(r.setCommands(Eigen::VectorXd::Zero(2)), InputError);
-  EXPECT_THROW(r.setSetpoint(0, std::nan("")), InputError);
-  EXPECT_THROW(r.holdSetpoints(Eigen::VectorXd::Zero(3)), InputError);
-  EXPECT_THROW(r.setExternalWrench("nowhere", Eigen::Matrix<double, 6, 1>::Ones()), InputError);
-  EXPECT_THROW(r.setExternalWrench("base", Eigen::Matrix<double, 6, 1>::Ones()), InputError);
+  EXPECT_THROW(r.setCommand(*st, 0, std::nan("")), InputError);
+  EXPECT_THROW(r.setCommand(*st, 0, INFINITY), InputError);
+  EXPECT_THROW(r.setCommand(*st, 1, 1.0), InputError);
+  EXPECT_THROW(r.setCommandPort(*st, -1, CommandPort::Voltage), InputError);
+  EXPECT_THROW(r.setCommandPort(*st, "j9", CommandPort::Voltage), InputError);
+  EXPECT_THROW(r.setCommands(*st, Eigen::VectorXd::Zero(2)), InputError);
+  EXPECT_THROW(r.setSetpoint(*st, 0, std::nan("")), InputError);
+  EXPECT_THROW(r.holdSetpoints(*st, Eigen::VectorXd::Zero(3)), InputError);
+  EXPECT_THROW(r.setExternalWrench(*st, "nowhere", Eigen::Matrix<double, 6, 1>::Ones()), InputError);
+  EXPECT_THROW(r.setExternalWrench(*st, "base", Eigen::Matrix<double, 6, 1>::Ones()), InputError);
   EXPECT_THROW(systems::parsePort("pwm"), InputError);
-  EXPECT_EQ(r.inputRevision(), rev2);
-  EXPECT_EQ(r.command(0), 0.0);
+  EXPECT_EQ(st->inputRevision(), rev2);
+  EXPECT_EQ(r.command(*st, 0), 0.0);
   // The same value again is not a change.
-  r.setCommand(0, 3.0);
-  const long rev3 = r.inputRevision();
-  r.setCommand(0, 3.0);
-  r.setCommandPort(0, CommandPort::Voltage);
-  EXPECT_EQ(r.inputRevision(), rev3);
+  r.setCommand(*st, 0, 3.0);
+  const long rev3 = st->inputRevision();
+  r.setCommand(*st, 0, 3.0);
+  r.setCommandPort(*st, 0, CommandPort::Voltage);
+  EXPECT_EQ(st->inputRevision(), rev3);
   EXPECT_EQ(systems::parsePort("motor_torque"), CommandPort::MotorTorque);
 }
 
@@ -183,24 +185,25 @@ TEST(CommandPorts, ExternalWrenchActsAsTheJacobianTransposeSays) {
     drives.push_back(d);
   }
   systems::RobotSystem r(model, drives);
+  const auto st = r.makeState();
   const std::string frame = r.model().tip_frame;
-  for (int k = 0; k < 2; ++k) r.setCommandPort(k, CommandPort::MotorTorque);
+  for (int k = 0; k < 2; ++k) r.setCommandPort(*st, k, CommandPort::MotorTorque);
   Eigen::VectorXd y = r.initialState(Eigen::Vector2d(0.4, -0.7));
   y.segment(2, 2) << 0.3, -0.2;
   Eigen::VectorXd yd0(y.size()), yd1(y.size());
-  r.derivatives(0.0, y, yd0);
+  r.derivatives(*st, 0.0, y, yd0);
   Eigen::Matrix<double, 6, 1> W;
   W << 3.0, -2.0, 5.0, 0.4, -0.3, 0.7;  // [f (N); n (N·m)], world axes, at the frame origin
-  r.setExternalWrench(frame, W);
-  r.derivatives(0.0, y, yd1);
+  r.setExternalWrench(*st, frame, W);
+  r.derivatives(*st, 0.0, y, yd1);
   multibody::Data data(r.model());
   const Eigen::MatrixXd M = multibody::crba(r.model(), data, y.head(2));
   const Eigen::MatrixXd J = multibody::frameJacobian(r.model(), data, y.head(2), r.model().frameIndex(frame));
   const Eigen::VectorXd expected = M.ldlt().solve(J.transpose() * W);
   EXPECT_TRUE(test::MatricesNear(yd1.segment(2, 2) - yd0.segment(2, 2), expected, 1e-10));
   // Removing it restores the free motion.
-  r.setExternalWrench(frame, Eigen::Matrix<double, 6, 1>::Zero());
-  r.derivatives(0.0, y, yd1);
+  r.setExternalWrench(*st, frame, Eigen::Matrix<double, 6, 1>::Zero());
+  r.derivatives(*st, 0.0, y, yd1);
   EXPECT_TRUE(test::MatricesNear(yd1, yd0, 0.0));
 }
 
@@ -211,10 +214,10 @@ TEST(CommandPorts, SetpointVoltageSetpointSwitchOnTheUr5TwinIsBumpless) {
   std::shared_ptr<experiments::Experiment> e =
       experiments::loadExperiment(test::sourcePath("config/experiments/ur5_pick_and_place.yaml"));
   auto s = experiments::makeSimulator(e);
-  auto& r = dynamic_cast<systems::RobotSystem&>(s->plant());
+  const auto& r = dynamic_cast<const systems::RobotSystem&>(s->plant());
   const int k = r.model().jointIndex("elbow_joint");
   const Eigen::VectorXd q0 = s->state().head(6);
-  r.holdSetpoints(q0);
+  r.holdSetpoints(s->plantState(), q0);
   const int iv = s->signalIndex("voltage_elbow_joint"), iq = s->signalIndex("q_elbow_joint");
   double worst = 0.0;
   auto run = [&](double until) {
@@ -225,15 +228,15 @@ TEST(CommandPorts, SetpointVoltageSetpointSwitchOnTheUr5TwinIsBumpless) {
   };
   run(0.2);
   const double v_before = s->signals()[iv];
-  r.setCommandPort(k, CommandPort::Voltage);
-  r.setCommand(k, v_before);
+  r.setCommandPort(s->plantState(), k, CommandPort::Voltage);
+  r.setCommand(s->plantState(), k, v_before);
   s->advance(1e-7);
   EXPECT_NEAR(s->signals()[iv], v_before, 1e-6);
   run(0.3);
   const double v_open = s->signals()[iv];
   EXPECT_DOUBLE_EQ(v_open, v_before);
   const double drift = std::abs(s->signals()[iq] - q0[k]);
-  r.setCommandPort(k, CommandPort::Setpoint);
+  r.setCommandPort(s->plantState(), k, CommandPort::Setpoint);
   s->advance(1e-7);
   EXPECT_NEAR(s->signals()[iv], v_open, 1e-3);  // bumpless: the cascade continues from the applied voltage
   run(0.8);
@@ -251,15 +254,15 @@ TEST(CommandPorts, JointRigHoldsACommandAndTakesALoadTorque) {
   setup.profile = control::Profile::constant(1.0);
   systems::JointRig rig(setup);
   sim::Simulator s(rig, tight());
-  rig.setCommand(0.3);
-  rig.setLoadTorque(-0.4);
-  EXPECT_THROW(rig.setCommand(std::nan("")), InputError);
-  EXPECT_THROW(rig.setLoadTorque(INFINITY), InputError);
+  rig.setCommand(s.plantState(), 0.3);
+  rig.setLoadTorque(s.plantState(), -0.4);
+  EXPECT_THROW(rig.setCommand(s.plantState(), std::nan("")), InputError);
+  EXPECT_THROW(rig.setLoadTorque(s.plantState(), INFINITY), InputError);
   s.advanceTo(0.5);
   const double a = (0.3 - 0.4 / 4.0) / (2e-3 + 0.5 / 16.0);
   EXPECT_NEAR(s.signal("motor_angle"), 0.5 * a * 0.25, 1e-9);
   EXPECT_DOUBLE_EQ(s.signal("command_torque"), 0.3);
-  rig.releaseCommand();  // back to the profile (1 N·m)
+  rig.releaseCommand(s.plantState());  // back to the profile (1 N·m)
   EXPECT_DOUBLE_EQ(s.signal("command_torque"), 1.0);
 }
 

@@ -228,8 +228,8 @@ TEST(EndStops, RobotWithDrivesGetsStopsRootsAndSignals) {
   sys.setJointLimits(stop(1.0e5, 0.0));
   const Eigen::VectorXd y = sys.initialState(q0);
   const double E_stop = sys.mechanicalEnergy(y);
-  EXPECT_NEAR(sys.driveSignals(0.0, y).tau_stop[0], -1.0e5 * 0.01, 1e-6);
+  EXPECT_NEAR(sys.driveSignals(*sys.makeState(), 0.0, y).tau_stop[0], -1.0e5 * 0.01, 1e-6);
   sys.setJointLimits(JointLimitSettings{});
   EXPECT_NEAR(E_stop - sys.mechanicalEnergy(y), 0.5 * 1.0e5 * 0.01 * 0.01, 1e-9);
-  EXPECT_EQ(sys.driveSignals(0.0, y).tau_stop[0], 0.0);
+  EXPECT_EQ(sys.driveSignals(*sys.makeState(), 0.0, y).tau_stop[0], 0.0);
 }

@@ -28,7 +28,7 @@ Trace runPd(const sim::CvodeOptions& solver, double duration) {
   q0 << 0.0, -1.2, 1.2, -1.5, -1.5708, 0.0;
   robot.setInitialPositions(q0);
   sim::Simulator sim(robot, solver);
-  for (int k = 0; k < n; ++k) robot.setCommandPort(k, systems::CommandPort::Voltage);
+  for (int k = 0; k < n; ++k) robot.setCommandPort(sim.plantState(), k, systems::CommandPort::Voltage);
   multibody::Data data(robot.model());
   Eigen::VectorXd V(n), q_ref = q0;
   Trace tr;
@@ -46,7 +46,7 @@ Trace runPd(const sim::CvodeOptions& solver, double duration) {
     }
     tr.q.push_back(q);
     tr.i.push_back(cur);
-    robot.setCommands(V);
+    robot.setCommands(sim.plantState(), V);
     sim.advance(1e-3);
   }
   tr.stats = sim.stats();

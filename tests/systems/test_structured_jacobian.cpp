@@ -45,14 +45,14 @@ Eigen::VectorXd movingState(const systems::RobotSystem& sys, unsigned seed) {
 Eigen::VectorXd increments(const Eigen::VectorXd& y) { return 1e-5 * y.cwiseAbs().cwiseMax(1e-2); }
 
 /// Forward differences of the whole right-hand side, one state at a time.
-Eigen::MatrixXd plainDifferences(const sim::Plant& p, double t, const Eigen::VectorXd& y, const Eigen::VectorXd& f,
-                                 const Eigen::VectorXd& inc) {
+Eigen::MatrixXd plainDifferences(const sim::Plant& p, const sim::PlantState& state, double t, const Eigen::VectorXd& y,
+                                 const Eigen::VectorXd& f, const Eigen::VectorXd& inc) {
   const Eigen::Index n = y.size();
   Eigen::MatrixXd J(n, n);
   Eigen::VectorXd yp = y, fp(n);
   for (Eigen::Index j = 0; j < n; ++j) {
     yp[j] += inc[j];
-    p.derivatives(t, yp, fp);
+    p.derivatives(state, t, yp, fp);
     J.col(j) = (fp - f) / inc[j];
     yp[j] = y[j];
   }
@@ -65,11 +65,13 @@ void expectStructuredEqualsPlain(const systems::RobotSystem& sys, unsigned seed)
   const Eigen::VectorXd y = movingState(sys, seed);
   const Eigen::Index n = y.size();
   Eigen::VectorXd f(n);
-  sys.derivatives(0.37, y, f);
+  const auto state = sys.makeState();
+  sys.start(*state, 0.37, y);
+  sys.derivatives(*state, 0.37, y, f);
   const Eigen::VectorXd inc = increments(y);
-  const Eigen::MatrixXd plain = plainDifferences(sys, 0.37, y, f, inc);
+  const Eigen::MatrixXd plain = plainDifferences(sys, *state, 0.37, y, f, inc);
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
-  sys.jacobian(0.37, y, f, inc, J);
+  sys.jacobian(*state, 0.37, y, f, inc, J);
   for (Eigen::Index j = 0; j < n; ++j) {
     const double scale = std::max(plain.col(j).cwiseAbs().maxCoeff(), 1e-300);
     EXPECT_LE((J.col(j) - plain.col(j)).cwiseAbs().maxCoeff(), 1e-6 * scale) << "column " << j;

@@ -10,6 +10,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "jointsim/common/bytes.hpp"
+
 namespace jointsim::drive {
 
 /// Friction mode (MSL numbering in the logs: −1 backward, 0 stuck/start, +1 forward, 2 free).
@@ -45,5 +47,11 @@ int frictionModeNumber(FrictionMode m);
 /// MSL friction table (tau_pos rows [w, τ], w ascending) at speed v >= 0: linear interpolation, extrapolated
 /// through the end segments; a single row is a constant.
 double frictionTableValue(const std::vector<std::array<double, 2>>& table, double v);
+
+/// Friction modes in a saved simulator state (sim::Simulator::saveState): their count, then one number each.
+void saveModes(ByteWriter& out, const std::vector<FrictionMode>& modes);
+/// Reads what saveModes wrote into `modes`, whose size is the count expected (InputError otherwise, or for a number
+/// that is no mode).
+void loadModes(ByteReader& in, std::vector<FrictionMode>& modes);
 
 }  // namespace jointsim::drive

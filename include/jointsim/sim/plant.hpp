@@ -14,20 +14,77 @@
 ///                                   samplePeriod() seconds (zero-order hold of a digital controller)
 /// with named output signals (signalNames(), `name[unit]`, SI units) evaluated by signals().
 ///
-/// Contract: derivatives(), roots() and signals() are pure functions of (t, y) and of the discrete state the
-/// plant holds (modes, held inputs); they may use mutable workspace but must not allocate on the heap, so
-/// that CVODE can call and difference them freely. The discrete state changes only in start(),
-/// updateModes() and sample(), which sim::simulate() calls at the event times and follows by a restart of
-/// the integrator.
+/// Model and state (as mjModel/mjData in MuJoCo, System/Context in Drake): a Plant is constant once built and may
+/// be shared between threads and simulators; everything that changes during a run besides the time and the
+/// continuous state y — held inputs and command-port choices, sampled controllers' states and sample phase, sensor
+/// memory, the random generator, hybrid modes, the faults' applied values — lives in a PlantState made by
+/// makeState(), together with the workspace of the right-hand side. A simulator owns one state per run.
+///
+/// Contract: derivatives(), roots(), jacobian() and signals() are pure functions of (t, y) and of the discrete
+/// state in `state`; they may use the state's workspace but must not allocate on the heap, so that CVODE can call
+/// and difference them freely. The discrete state changes only in start(), updateModes(), sample() and by a
+/// plant's input setters, which the simulators follow by a restart (or a kept history, at an input jump).
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "jointsim/common/bytes.hpp"
 #include "jointsim/sim/cvode_integrator.hpp"
 
 namespace jointsim::sim {
+
+class Plant;
+
+/// Everything about one run of a plant that changes, apart from the time and the continuous state: made by
+/// Plant::makeState(), owned by a simulator, copied (clone) for snapshots, saved as bytes. A plant's own state
+/// type derives from PlantStateOf<...> and adds its discrete state (saved by save()/load()) and its workspace
+/// (mutable; not saved: it holds nothing between calls).
+class PlantState {
+ public:
+  explicit PlantState(const Plant& owner) : owner_(&owner) {}
+  virtual ~PlantState() = default;
+  /// The plant that made this state; a plant refuses a state of another plant.
+  const Plant& owner() const { return *owner_; }
+  /// A deep copy: an independent state with the same values.
+  virtual std::unique_ptr<PlantState> clone() const = 0;
+  /// The discrete state as bytes (ByteWriter, common/bytes.hpp).
+  virtual void save(ByteWriter& /*out*/) const {}
+  /// Reads what save() wrote; on InputError (bytes of another plant or configuration) the state is unspecified and
+  /// the caller discards it (sim::Simulator loads into a copy).
+  virtual void load(ByteReader& /*in*/) {}
+  /// Counts changes of the inputs set between steps (command ports, held commands, wrenches): a plant's input
+  /// setters call inputsChanged() when a value actually changes; the simulator then calls Plant::applyInputs() and
+  /// restarts the integrator (the right-hand side jumps there), and only then.
+  long inputRevision() const { return revision_; }
+  void inputsChanged() { ++revision_; }
+
+ protected:
+  PlantState(const PlantState&) = default;
+  PlantState& operator=(const PlantState&) = default;
+
+ private:
+  const Plant* owner_;
+  long revision_ = 0;
+};
+
+/// Base of a plant's own state type `Derived` (copyable): clone() by its copy constructor.
+template <class Derived>
+class PlantStateOf : public PlantState {
+ public:
+  using PlantState::PlantState;
+  std::unique_ptr<PlantState> clone() const override {
+    return std::make_unique<Derived>(static_cast<const Derived&>(*this));
+  }
+};
+
+/// A state without discrete parts (a plant with nothing but continuous states).
+class EmptyPlantState final : public PlantStateOf<EmptyPlantState> {
+ public:
+  using PlantStateOf::PlantStateOf;
+};
 
 class Plant {
  public:
@@ -39,42 +96,40 @@ class Plant {
   virtual int stateSize() const = 0;
   /// Initial state y(0) (size n).
   virtual Eigen::VectorXd initialState() const = 0;
-  /// ẏ = f(t, y) for the current discrete state; writes all n entries of `ydot`.
-  virtual void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+  /// A fresh state for a run (inputs at their defaults); start() then makes it consistent with y at t0.
+  virtual std::unique_ptr<PlantState> makeState() const { return std::make_unique<EmptyPlantState>(*this); }
+  /// ẏ = f(t, y) for the discrete state in `state`; writes all n entries of `ydot`.
+  virtual void derivatives(const PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                            Eigen::Ref<Eigen::VectorXd> ydot) const = 0;
 
   /// Number of root functions (0: none).
   virtual int rootCount() const { return 0; }
   /// Root functions g(t, y) (size rootCount()); a sign change is an event.
-  virtual void roots(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
+  virtual void roots(const PlantState& /*state*/, double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
                      Eigen::Ref<Eigen::VectorXd> /*g*/) const {}
   /// Input discontinuities in (0, t_end) [s] (any order, duplicates allowed).
   virtual std::vector<double> timeEvents(double /*t_end*/) const { return {}; }
-  /// Sets the initial discrete state (modes, first controller sample) consistent with y at t0.
-  virtual void start(double /*t0*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/) {}
+  /// Sets the initial discrete state (modes, first controller sample) consistent with y at t0. Keeps the inputs
+  /// set in `state` (command ports, held commands).
+  virtual void start(PlantState& /*state*/, double /*t0*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/) const {}
   /// Discrete update at a located root (`fired`: CVODE's direction per root function, +1 rising, −1 falling,
   /// 0 none) or at a time event (`fired` empty).
-  virtual void updateModes(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
-                           const std::vector<int>& /*fired*/) {}
+  virtual void updateModes(PlantState& /*state*/, double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
+                           const std::vector<int>& /*fired*/) const {}
   /// Period of the sampled part [s]; 0: none.
   virtual double samplePeriod() const { return 0.0; }
   /// One update of the sampled part at t = k·samplePeriod() (measure, compute, hold).
-  virtual void sample(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/) {}
-
-  /// Inputs set between steps (command ports; sim::Simulator). A plant with such inputs increments this counter
-  /// whenever an input value actually changes; the simulator then calls applyInputs() and restarts the
-  /// integrator (the right-hand side jumps there), and only then.
-  virtual long inputRevision() const { return 0; }
-  /// Called by sim::Simulator at time t after inputRevision() changed, before the restart: the plant may set its
-  /// states for the new inputs (e.g. controller integrators for a bumpless switch of a command port).
-  virtual void applyInputs(double /*t*/, Eigen::Ref<Eigen::VectorXd> /*y*/) {}
+  virtual void sample(PlantState& /*state*/, double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/) const {}
+  /// Called by sim::Simulator at time t after the state's inputRevision() changed, before the restart: the plant
+  /// may set its states for the new inputs (e.g. controller integrators for a bumpless switch of a command port).
+  virtual void applyInputs(PlantState& /*state*/, double /*t*/, Eigen::Ref<Eigen::VectorXd> /*y*/) const {}
 
   /// A Jacobian of its own (jacobian(), jacobianStructure()) that the simulators use for BDF (unless
   /// CvodeOptions::plant_jacobian is false).
   virtual bool providesJacobian() const { return false; }
   /// J = ∂f/∂y at (t, y) with f = f(t, y), J zero on entry; `inc` holds the difference increment CVODE would use
   /// per state (DifferenceJacobianFunction). Pure like derivatives(); must respect jacobianStructure().
-  virtual void jacobian(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
+  virtual void jacobian(const PlantState& /*state*/, double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
                         const Eigen::Ref<const Eigen::VectorXd>& /*f*/,
                         const Eigen::Ref<const Eigen::VectorXd>& /*inc*/, Eigen::Ref<Eigen::MatrixXd> /*J*/) const {}
   /// Block structure of the Jacobian (empty: dense).
@@ -89,7 +144,24 @@ class Plant {
   /// Output signals as `name[unit]` (the CSV column names after "time[s]").
   virtual const std::vector<std::string>& signalNames() const = 0;
   /// Values of the output signals at (t, y), in signalNames() order (size signalNames().size()).
-  virtual void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const = 0;
+  virtual void signals(const PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                       Eigen::Ref<Eigen::VectorXd> out) const = 0;
+
+ protected:
+  /// `state` as this plant's own state type S (InputError when it was made by another plant).
+  template <class S>
+  const S& own(const PlantState& state) const {
+    if (&state.owner() != this) foreignState(state);
+    return static_cast<const S&>(state);
+  }
+  template <class S>
+  S& own(PlantState& state) const {
+    if (&state.owner() != this) foreignState(state);
+    return static_cast<S&>(state);
+  }
+
+ private:
+  [[noreturn]] void foreignState(const PlantState& state) const;
 };
 
 /// Index of the signal called `name` (without or with its `[unit]`) in plant.signalNames(); throws InputError

@@ -96,13 +96,17 @@ constexpr double kKeepHistoryLimit = 1.0;
 
 /// Gives `integ` the plant's own Jacobian and its block structure when the plant provides them and the
 /// integrator's options ask for it (plant_jacobian, BDF); before integ.initialize().
-void installPlantJacobian(const Plant& plant, CvodeIntegrator& integ);
+void installPlantJacobian(const Plant& plant, const PlantState& state, CvodeIntegrator& integ);
 
 /// Runs `plant` from its initialState() at t = 0 to options.t_end. Throws InputError for bad options (also an
 /// output grid over max_rows), SimulationFailure (a SolverError with the simulated time, the flag and the plant's
 /// name, plus the statistics so far) when the integration fails, events chatter or a budget runs out, and
 /// Interrupted when jointsim::requestStop() was called.
-SimulationResult simulate(Plant& plant, const SimulateOptions& options, const OutputSink& sink);
+SimulationResult simulate(const Plant& plant, const SimulateOptions& options, const OutputSink& sink);
+/// The same from a given state of the plant (its inputs set beforehand, e.g. command ports); `state` is the state
+/// at the end of the run afterwards (or where it failed).
+SimulationResult simulate(const Plant& plant, PlantState& state, const SimulateOptions& options,
+                          const OutputSink& sink);
 
 /// Time series of named signals, in memory (what `jointsim run` writes as CSV).
 struct SignalTable {
@@ -133,6 +137,6 @@ class TableSink {
 std::vector<std::string> tableColumns(const Plant& plant);
 
 /// simulate() into memory.
-SignalTable simulateTable(Plant& plant, const SimulateOptions& options, SimulationResult* result = nullptr);
+SignalTable simulateTable(const Plant& plant, const SimulateOptions& options, SimulationResult* result = nullptr);
 
 }  // namespace jointsim::sim

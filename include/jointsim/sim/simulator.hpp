@@ -5,16 +5,16 @@
 /// steps.
 ///
 ///   systems::RobotSystem robot = systems::loadRobotWithDrives("config/robots/ur5_drives.yaml");
-///   sim::Simulator sim(robot, solver);
-///   robot.setCommandPort(0, systems::CommandPort::Voltage);
+///   sim::Simulator sim(robot, solver);                        // the robot is only read; sim owns the run's state
+///   robot.setCommandPort(sim.plantState(), 0, systems::CommandPort::Voltage);
 ///   for (int k = 0; k < 1000; ++k) {                        // 1 kHz
-///     robot.setCommand(0, pd(sim.signal("q_shoulder_pan_joint"), ...));
+///     robot.setCommand(sim.plantState(), 0, pd(sim.signal("q_shoulder_pan_joint"), ...));
 ///     sim.advance(1e-3);
 ///   }
 ///
 /// Events are handled inside advance()/advanceTo() exactly as in sim::simulate(): root events (the plant's
 /// updateModes) and time events (the plant's timeEvents) restart the integrator. At the plant's samples
-/// (sample() at k·T_s from the reset time) and at an input change (Plant::inputRevision(), taken at the start of
+/// (sample() at k·T_s from the reset time) and at an input change (PlantState::inputRevision(), taken at the start of
 /// the next advance) a held input jumps: the integrator goes on with its history (CvodeOptions::input_jump
 /// KeepHistory, the default) or restarts (Restart). A change of the state (setState, or applyInputs moving
 /// controller states for a bumpless switch) always restarts. Between unchanged inputs CVODE keeps its step-size
@@ -60,25 +60,66 @@ struct AdvanceLimits {
   void validate() const;
 };
 
+/// A complete snapshot of a simulator (Simulator::snapshot): the time, the continuous state, the plant's state
+/// (inputs, controllers, sensor memory, random generator, modes, faults) and the sample phase. Copyable (a deep
+/// copy); restore() it into the simulator it came from or into any simulator of the same plant.
+class Snapshot {
+ public:
+  Snapshot() = default;
+  Snapshot(const Snapshot& other);
+  Snapshot& operator=(const Snapshot& other);
+  Snapshot(Snapshot&&) noexcept = default;
+  Snapshot& operator=(Snapshot&&) noexcept = default;
+  ~Snapshot();
+  double time() const { return t_; }                   ///< [s]
+  const Eigen::VectorXd& state() const { return y_; }  ///< continuous state
+  /// The plant's state in the snapshot (its owner() is the plant it belongs to); empty(): none.
+  const PlantState& plantState() const { return *plant_state_; }
+  bool empty() const { return plant_state_ == nullptr; }
+  /// The snapshot as bytes (ByteWriter format: portable between processes of the same build and plant
+  /// configuration); InputError for an empty snapshot.
+  std::string toBytes() const;
+  /// A snapshot of `plant` from toBytes(); InputError naming what did not match for bytes of another plant or
+  /// configuration, of another format version, or truncated ones.
+  static Snapshot fromBytes(const Plant& plant, const std::string& bytes);
+
+ private:
+  friend class Simulator;
+  double t_ = 0.0, t0_ = 0.0;
+  Eigen::VectorXd y_;
+  std::unique_ptr<PlantState> plant_state_;
+  long sample_k_ = 1;
+  double t_sample_ = 0.0;
+  long seen_revision_ = 0;
+};
+
 class Simulator {
  public:
-  /// Steps `plant`, which must outlive the simulator; reset() to the plant's initial state at t = 0.
-  explicit Simulator(Plant& plant, const CvodeOptions& solver = {});
+  /// Steps `plant`, which must outlive the simulator; reset() to the plant's initial state at t = 0. The plant is
+  /// only read: any number of simulators (in any threads) may step one plant, each with its own state.
+  explicit Simulator(const Plant& plant, const CvodeOptions& solver = {});
   /// Shares ownership of the plant (e.g. an aliasing pointer that keeps an experiment alive).
-  explicit Simulator(std::shared_ptr<Plant> plant, const CvodeOptions& solver = {});
-  ~Simulator();
-  Simulator(const Simulator&) = delete;
+  explicit Simulator(std::shared_ptr<const Plant> plant, const CvodeOptions& solver = {});
+  /// An independent copy: the same plant, settings and limits, a copy of the complete state (as snapshot() and
+  /// restore()); both then continue alike, bit for bit, and neither sees the other's inputs.
+  Simulator(const Simulator& other);
   Simulator& operator=(const Simulator&) = delete;
+  ~Simulator();
 
   /// The integrator's settings (CvodeOptions::max_num_steps caps one CVODE call, not one advance()).
   const CvodeOptions& integratorOptions() const;
 
-  Plant& plant() { return *plant_; }
   const Plant& plant() const { return *plant_; }
+  std::shared_ptr<const Plant> sharedPlant() const { return plant_; }
+  /// The plant's state of this run: give it to the plant's input setters (e.g. RobotSystem::setCommand) between
+  /// steps. A change of inputs is picked up at the next advance (Plant::applyInputs, then a restart).
+  PlantState& plantState() { return *state_; }
+  const PlantState& plantState() const { return *state_; }
 
-  /// Back to the plant's initialState() at t = 0 (the plant's start() is called: first controller sample).
+  /// Back to the plant's initialState() at t = 0 with a fresh plant state (inputs at their defaults: command
+  /// ports, commands and wrenches cleared); the plant's start() is called (first controller sample).
   void reset();
-  /// To state `y0` (size stateSize()) at time `t0` [s]; samples continue at t0 + k·T_s.
+  /// To state `y0` (size stateSize()) at time `t0` [s], with a fresh plant state; samples continue at t0 + k·T_s.
   void reset(double t0, const Eigen::VectorXd& y0);
   /// Integrates over `dt` [s] (> 0, finite); returns the time reached [s]. A target within 1e-12 s (relative)
   /// of a sample or time event is moved onto it, so steps of 1e-3 s meet samples at k·1e-3 s.
@@ -90,6 +131,18 @@ class Simulator {
   const Eigen::VectorXd& state() const { return y_; }  ///< continuous state (the plant's layout)
   /// Replaces the continuous state at time() (size stateSize(), finite); the integrator restarts.
   void setState(const Eigen::VectorXd& y);
+
+  /// The complete state now. The integrator restarts at the next advance (as it does after restore()), so that
+  /// this simulator and every one restored from the snapshot continue identically, bit for bit (CVODE's step
+  /// history is not part of a snapshot; the cost is one restart).
+  Snapshot snapshot();
+  /// Back to `snapshot` (of this plant; InputError otherwise, the simulator unchanged). Statistics are kept.
+  void restore(const Snapshot& snapshot);
+  /// The complete state as bytes (a snapshot serialised: portable between processes of the same build and plant
+  /// configuration), and back. loadState() refuses bytes of another plant or configuration, or truncated ones, with
+  /// an InputError naming what did not match; the simulator is then unchanged.
+  std::string saveState();
+  void loadState(const std::string& bytes);
 
   /// Signal names `name[unit]`, the CSV column names of the plant after "time[s]".
   const std::vector<std::string>& signalNames() const { return plant_->signalNames(); }
@@ -125,7 +178,11 @@ class Simulator {
   /// Checked in the right-hand side: a stop request, the wall-clock limit (every 256 calls), the state bound.
   void guard(double t, const Eigen::Ref<const Eigen::VectorXd>& y);
 
-  std::shared_ptr<Plant> plant_;
+  void build(const CvodeOptions& solver);  // the integrator and the plant's constants (constructors)
+  void checkSnapshot(const Snapshot& snapshot, const char* what) const;
+
+  std::shared_ptr<const Plant> plant_;
+  std::unique_ptr<PlantState> state_;
   std::unique_ptr<CvodeIntegrator> integ_;
   std::string component_;
   double t_ = 0.0, t0_ = 0.0;

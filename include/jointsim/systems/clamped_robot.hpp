@@ -29,6 +29,7 @@
 
 #include <array>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -91,8 +92,31 @@ struct ClampingSetup {
   void validate() const;
 };
 
+/// The clamped robot as a plant. Constant once built (sim::Plant): the run's friction modes and the workspace of
+/// the right-hand side live in ClampedRobot::State.
 class ClampedRobot : public sim::Plant {
  public:
+  /// The run's state: the motors' friction modes (discrete state, saved) and the workspace of the right-hand side.
+  struct State : sim::PlantStateOf<State> {
+    /// Modes all Stuck (start() makes them consistent with the initial state); the workspace sized for `robot`,
+    /// so that derivatives(), roots() and signals() allocate nothing.
+    explicit State(const ClampedRobot& robot);
+    /// MSL friction mode of each axis's motor bearing.
+    std::vector<FrictionMode> modes;
+    // Workspace (mutable: the right-hand side is const; not saved, holds nothing between calls).
+    mutable multibody::Data data;       ///< kinematics and dynamics of model()
+    mutable multibody::Matrix6Xd fext;  ///< clamp wrench per joint body [N·m; N]
+    mutable Eigen::VectorXd tau;        ///< joint torques of model() [N·m]
+    /// Per axis: gear output torque [N·m], joint angle [rad] and speed [rad/s] of the driven joint, gear output angle
+    /// [rad] and speed [rad/s], spring, motor and friction torques [N·m], torque on a stuck motor [N·m], motor
+    /// acceleration [rad/s²], controller input u [rad/s] and reference [rad].
+    mutable Eigen::VectorXd tau_out, qa, qda, phi_out, phid_out, tau_s, tau_m, tau_f, stuck, wdot, u, ref;
+    /// Clamp displacement [m] and rotation vector [rad], force [N] and moment [N·m] (world).
+    mutable Eigen::Vector3d dp, theta, f_w, m_w;
+    void save(ByteWriter& out) const override;
+    void load(ByteReader& in) override;
+  };
+
   explicit ClampedRobot(ClampingSetup setup);
   const ClampingSetup& setup() const { return s_; }
   /// t_end = duration, outputs every log_interval (also the max step when the solver sets none).
@@ -106,31 +130,39 @@ class ClampedRobot : public sim::Plant {
   /// State index of axis k's motor angle (ω_m and the controller state x follow).
   int motorState(int k) const { return 2 * model_.nq + 3 * k; }
 
-  const std::vector<FrictionMode>& modes() const { return modes_; }
+  /// Friction modes of the run `state` (one per axis).
+  const std::vector<FrictionMode>& modes(const sim::PlantState& state) const;
   /// Indices of axis k's motor angle [rad] and motor torque [N·m] in signalNames().
   int motorAngleSignal(int k) const { return 10 * k; }
   int motorTorqueSignal(int k) const { return 10 * k + 2; }
 
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
   std::string name() const override;
   int stateSize() const override { return n_states_; }
   Eigen::VectorXd initialState() const override;
-  void start(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override { updateModes(t, y, {}); }
+  /// Initial friction modes: from all Stuck, the MSL event iteration at state y and time t.
+  void start(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const override;
   /// Sets the friction modes consistently with state y at time t (MSL event iteration).
-  void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+  void updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   const std::vector<int>& fired) const override;
+  void derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) const override;
   int rootCount() const override { return 2 * n_; }
-  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
+  void roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+             Eigen::Ref<Eigen::VectorXd> g) const override;
   /// Time events of the references (segment slots, phase switches) [s].
   std::vector<double> timeEvents(double t_end) const override;
   const std::vector<std::string>& signalNames() const override { return signals_; }
-  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override;
+  void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override;
 
-  /// Clamp displacement Δp [m] (world) and rotation vector θ [rad] (frame axes) at arm posture q.
-  void clampDeflection(const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Vector3d& dp, Eigen::Vector3d& theta) const;
+  /// Clamp displacement Δp [m] (world) and rotation vector θ [rad] (frame axes) at arm posture q (the kinematics
+  /// computed in the workspace of `state`).
+  void clampDeflection(const sim::PlantState& state, const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Vector3d& dp,
+                       Eigen::Vector3d& theta) const;
 
  private:
-  void solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  void solve(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
   ClampingSetup s_;
   multibody::Model model_;
   int n_ = 0, n_states_ = 0, clamp_frame_ = -1;
@@ -143,13 +175,7 @@ class ClampedRobot : public sim::Plant {
   Eigen::VectorXd phi_m0_;
   Eigen::Vector3d p0_;
   Eigen::Matrix3d R0_;
-  std::vector<FrictionMode> modes_;
   std::vector<std::string> signals_;
-  mutable multibody::Data data_;
-  mutable multibody::Matrix6Xd fext_;
-  mutable Eigen::VectorXd tau_, tau_out_, qa_, qda_, phi_out_, phid_out_, tau_s_, tau_m_, tau_f_, stuck_, wdot_, u_,
-      ref_;
-  mutable Eigen::Vector3d dp_, theta_, f_w_, m_w_;
 };
 
 }  // namespace jointsim::systems

@@ -74,48 +74,68 @@ struct DriveChainSetup {
   void validate() const;
 };
 
-/// The drive chain as a plant: modes of the friction elements as discrete state, two root functions per
-/// element (friction switching, elasto-backlash contact edges), the torque sources' and normal forces'
-/// breakpoints as time events.
+/// The drive chain as a plant: modes of the friction elements as discrete state (in its State), two root
+/// functions per element (friction switching, elasto-backlash contact edges), the torque sources' and normal
+/// forces' breakpoints as time events. Constant once built (sim::Plant): the run's modes and the workspace of the
+/// right-hand side live in DriveChain::State.
 class DriveChain : public sim::Plant {
  public:
+  /// The run's state: the friction modes (discrete state, saved) and the workspace of the right-hand side.
+  struct State : sim::PlantStateOf<State> {
+    /// Modes all Stuck (start() sets them from the initial speeds); the workspace sized for `chain`, so that
+    /// derivatives(), roots() and signals() allocate nothing.
+    explicit State(const DriveChain& chain);
+    /// MSL friction mode per element (meaningful for the friction elements only).
+    std::vector<FrictionMode> modes;
+    // Workspace (mutable: the right-hand side is const; not saved, holds nothing between calls).
+    mutable Eigen::VectorXd acc;     ///< angular accelerations of the inertias [rad/s²]
+    mutable Eigen::VectorXd tau_el;  ///< element torques [N·m]
+    mutable Eigen::VectorXd known;   ///< torque sums on the inertias [N·m]
+    mutable Eigen::MatrixXd A;       ///< constraint matrix of the stuck elements and gears
+    mutable Eigen::VectorXd rhs;     ///< its right-hand side, then the constraint torques [N·m]
+    mutable std::vector<int> stuck;  ///< elements of the active constraints (first n_stuck entries; sized once)
+    mutable int n_stuck = 0;
+    void save(ByteWriter& out) const override;
+    void load(ByteReader& in) override;
+  };
+
   explicit DriveChain(DriveChainSetup setup);
   const DriveChainSetup& setup() const { return s_; }
   /// t_end = duration, outputs at log_rate, its solver with max_step = one log interval when 0.
   sim::SimulateOptions simulateOptions() const;
-  const std::vector<FrictionMode>& modes() const { return modes_; }
+  /// Friction modes of the run `state` (one per element).
+  const std::vector<FrictionMode>& modes(const sim::PlantState& state) const;
 
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
   std::string name() const override;
   int stateSize() const override { return 2 * static_cast<int>(s_.inertias.size()); }
   Eigen::VectorXd initialState() const override;
   /// Initial modes (MSL initialization rules: sliding where the element moves, then the event iteration).
-  void start(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override;
+  void start(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const override;
   /// Event iteration at time t: `fired[k]` marks root functions that crossed.
-  void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
-  /// ẏ for the current modes (pure given the modes; no heap allocation).
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+  void updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   const std::vector<int>& fired) const override;
+  /// ẏ for the modes in `state` (pure given the modes; no heap allocation).
+  void derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) const override;
   int rootCount() const override { return 2 * static_cast<int>(s_.elements.size()); }
-  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
+  void roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+             Eigen::Ref<Eigen::VectorXd> g) const override;
   std::vector<double> timeEvents(double t_end) const override;
   const std::vector<std::string>& signalNames() const override { return signals_; }
-  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const override;
-  /// Friction/compliant torque of element e at the current modes [N·m].
-  double elementTorque(int e, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> row) const override;
+  /// Friction/compliant torque of element e at the modes in `state` [N·m].
+  double elementTorque(const sim::PlantState& state, int e, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
 
  private:
-  void solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // fills acc_, tau_el_
+  void solve(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // fills acc, tau_el
   double tau0(int e, double t) const;
   double slidingTorque(int e, double t, double w) const;  // signed: opposes w
   double relSpeed(int e, const Eigen::Ref<const Eigen::VectorXd>& y) const;
-  double relAccel(int e) const;
+  double relAccel(const State& st, int e) const;
   DriveChainSetup s_;
-  std::vector<FrictionMode> modes_;
   std::vector<std::string> signals_;
-  mutable Eigen::VectorXd acc_, tau_el_, known_;
-  mutable Eigen::MatrixXd A_;
-  mutable Eigen::VectorXd rhs_;
-  mutable std::vector<int> stuck_;
 };
 
 }  // namespace jointsim::systems

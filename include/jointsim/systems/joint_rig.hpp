@@ -83,39 +83,48 @@ class JointRig : public sim::Plant {
   /// break-away); one log interval at most prevents that.
   sim::SimulateOptions simulateOptions() const;
 
+  /// The run's inputs (sim::Simulator::plantState()): the held command and the load torque.
+  struct State : sim::PlantStateOf<State> {
+    using PlantStateOf::PlantStateOf;
+    bool held = false;         ///< the command holds the input in place of the profile
+    double command = 0.0;      ///< the held command [N·m, V or rad/s: the rig's input type]
+    double load_torque = 0.0;  ///< external torque on the output shaft [N·m]
+    void save(ByteWriter& out) const override;
+    void load(ByteReader& in) override;
+  };
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
+
   /// Command port (sim::Simulator): holds the input of the rig's configured type — motor torque [N·m], voltage
   /// [V] or velocity reference [rad/s] of the PI loop — at `value` in place of the profile, until changed or
   /// released. InputError for a non-finite value (nothing changed). A change restarts the integrator.
-  void setCommand(double value);
+  void setCommand(sim::PlantState& state, double value) const;
   /// Back to the input profile.
-  void releaseCommand();
+  void releaseCommand(sim::PlantState& state) const;
   /// External torque on the output shaft [N·m] (a load the user applies; ignored while clamped or for a rigid
   /// transmission, where it acts on the merged shaft as τ/N on the motor side).
-  void setLoadTorque(double tau);
-  long inputRevision() const override { return revision_; }
+  void setLoadTorque(sim::PlantState& state, double tau) const;
 
   std::string name() const override;
   int stateSize() const override { return n_; }
   Eigen::VectorXd initialState() const override;
   /// ẏ = f(t, y). Pure; no allocation.
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+  void derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) const override;
   std::vector<double> timeEvents(double t_end) const override;
   const std::vector<std::string>& signalNames() const override { return signals_; }
-  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override;
+  void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override;
 
  private:
   struct Eval;  // all algebraic signals at (t, y)
-  Eval evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* xdot_tr, double* zdot) const;
+  Eval evaluate(const State& s, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* xdot_tr,
+                double* zdot) const;
   JointRigSetup s_;
   double J_m_ = 0;
   int n_ = 0, i_idx_ = -1, x_idx_ = -1, z_idx_ = -1, l_idx_ = -1, e_idx_ = -1;
   int nx_ = 0, nz_ = 0;
   std::optional<drive::DcMotor> motor_;
   std::vector<std::string> signals_;
-  bool held_ = false;
-  double command_ = 0.0, load_torque_ = 0.0;
-  long revision_ = 0;
 };
 
 }  // namespace jointsim::systems

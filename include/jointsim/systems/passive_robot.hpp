@@ -4,7 +4,9 @@
 /// damping and end stops at the joint limits, systems/joint_limits.hpp). The main demo job ("the UR5 falling")
 /// and the energy-conservation check of the multibody core with CVODE. State y = [q, q̇];
 /// ẏ = [q̇, ABA(q, q̇, −b q̇ + τ_stop(q, q̇))].
+/// No discrete state: the plant's State (makeState()) holds only the workspace of the right-hand side.
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -36,6 +38,16 @@ class PassiveRobot : public sim::Plant {
  public:
   /// Validates `params` against `model` (InputError).
   PassiveRobot(multibody::Model model, PassiveRobotParams params);
+
+  /// The run's state: workspace only (mutable, holds nothing between calls, nothing to save), sized here so that
+  /// derivatives() and signals() do not allocate.
+  struct State : sim::PlantStateOf<State> {
+    explicit State(const PassiveRobot& robot);
+    mutable multibody::Data data, log_data;  // right-hand side; signals()
+    mutable Eigen::VectorXd tau, tau_stop;   // joint torques, end-stop torques [N·m or N]
+  };
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
+
   const multibody::Model& model() const { return model_; }
   const PassiveRobotParams& params() const { return p_; }
   /// t_end = duration, outputs at log_rate, the solver as given (no step limit: the right-hand side is smooth
@@ -45,17 +57,19 @@ class PassiveRobot : public sim::Plant {
   std::string name() const override;
   int stateSize() const override { return 2 * model_.nq; }
   Eigen::VectorXd initialState() const override;
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+  void derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) const override;
   /// End stops (mode stop): q − q_upper and q_lower − q per limited joint.
   int rootCount() const override { return stops_.rootCount(); }
-  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
+  void roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+             Eigen::Ref<Eigen::VectorXd> g) const override;
   const EndStops& endStops() const { return stops_; }
   /// q_i, qd_i per joint (joint names), kinetic, potential and total energy [J], tip frame position [m]; with
   /// end stops also the energy stored in them (end_stop_energy [J], included in total_energy) and the torque
   /// of each stop (end_stop_torque_<joint> [N·m or N]).
   const std::vector<std::string>& signalNames() const override { return signals_; }
-  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override;
+  void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override;
 
  private:
   multibody::Model model_;
@@ -64,8 +78,6 @@ class PassiveRobot : public sim::Plant {
   EndStops stops_;
   int tip_ = 0;
   std::vector<std::string> signals_;
-  mutable multibody::Data data_, log_data_;
-  mutable Eigen::VectorXd tau_, tau_stop_;
 };
 
 }  // namespace jointsim::systems

@@ -15,7 +15,9 @@
 
 #include <functional>
 #include <memory>
+#include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -110,7 +112,10 @@ class RobotSystem : public sim::Plant {
   RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, Eigen::MatrixXd coupling = {});
 
   const multibody::Model& model() const { return model_; }
+  /// The drives as configured (nominal: the faults that act during the run are applied to the state's copies).
   const std::vector<DriveSpec>& drives() const { return drives_; }
+  /// The drives as they are in `state`: with the parameter faults at their values at the state's last event.
+  const std::vector<DriveSpec>& drives(const sim::PlantState& state) const { return own<State>(state).drives; }
   int dof() const { return model_.nq; }
 
   /// Reference of every joint from a function (no time events: a reference whose q̈ jumps should come
@@ -124,34 +129,85 @@ class RobotSystem : public sim::Plant {
   /// appended; other modes leave the system unchanged (the monitor of warn lives in the experiment).
   void setJointLimits(const JointLimitSettings& settings);
   const EndStops& endStops() const { return stops_; }
+  // ----------------------------------------------------------------------------------- the run's state
+  /// Everything of one run that changes (sim::Simulator::plantState()): the inputs set between steps, sampled
+  /// control's controller states, held outputs and sensor memory, the sensor-noise generator, the faults' applied
+  /// values with the drives they make, and the workspace of the right-hand side. The robot itself is constant.
+  struct State : sim::PlantStateOf<State> {
+    explicit State(const RobotSystem& robot);
+    // Command ports (inputs between steps).
+    std::vector<CommandPort> port, applied_port;  ///< per joint: the port; the port last applied (applyInputs)
+    Eigen::VectorXd cmd, applied_cmd;  ///< per joint: the port's command [rad/s, A, V or N·m]; the one last applied
+    std::vector<char> ref_held;        ///< per joint: the reference is held (setSetpoint)
+    Eigen::VectorXd ref_q, ref_qd, ref_qdd;  ///< held references [rad, rad/s, rad/s²]
+    /// Joint angles at the start [rad] (start()): the reference of a robot without a trajectory or setpoint function.
+    Eigen::VectorXd q_start;
+    std::vector<std::pair<int, Eigen::Matrix<double, 6, 1>>> user_wrenches;  ///< frame index, world wrench [N; N·m]
+    // Sampled control: discrete controller states, held outputs [V or N·m; A], held measured joint angle [rad],
+    // the last quantised motor angle [rad] of the encoder-difference speed, the sample counters.
+    std::vector<double> ctrl_x;
+    Eigen::VectorXd held_u, held_i_ref, held_q_fb, prev_qm_meas;
+    bool first_sample = true;
+    long inner_count = 0;    ///< current-loop samples since the start (multi-rate)
+    std::mt19937_64 engine;  ///< sensor noise
+    std::normal_distribution<double> normal{0.0, 1.0};
+    // Faults during the run: per fault the parameter value applied now (parameter faults, bearing ripple), and for
+    // a stuck sensor the episode and the value it holds; the drives with the parameter faults applied now.
+    std::vector<double> fault_applied;
+    std::vector<long> stuck_episode;
+    std::vector<double> stuck_value;
+    std::vector<DriveSpec> drives;
+    std::vector<drive::DcMotor> motors;
+    // Workspace of the right-hand side (holds nothing between calls; not saved).
+    mutable multibody::Data data, id_data;
+    mutable RobotSignals sig;
+    mutable std::vector<char> out_is_voltage;
+    mutable Eigen::VectorXd phi, phid, tau_out, tau, tmp, zero;
+    mutable multibody::Matrix6Xd fext;
+    mutable Eigen::MatrixXd M;
+    mutable Eigen::LLT<Eigen::MatrixXd> llt;
+    mutable Eigen::VectorXd jac_y, jac_f, jac_tau0, jac_qdd0, jac_tau;
+    mutable Eigen::MatrixXd jac_P;
+    mutable sim::JacobianStructure jac_structure;
+    mutable std::vector<int> jac_block_drive;
+    double gauss(double sigma) { return sigma > 0.0 ? sigma * normal(engine) : 0.0; }
+    void save(ByteWriter& out) const override;
+    void load(ByteReader& in) override;
+  };
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
+
   // ----------------------------------------------------------------------------------- command ports
-  // Inputs a user's controller sets between steps of a sim::Simulator. Each call that changes a value
-  // increments inputRevision(), so the simulator restarts the integrator there (and only there). Bad input
-  // (unknown joint or frame, a port the drive lacks, a non-finite value): InputError, nothing changed.
+  // Inputs a user's controller sets between steps of a sim::Simulator, in the simulator's state
+  // (sim::Simulator::plantState()). Each call that changes a value counts as an input change, so the simulator
+  // restarts the integrator there (and only there). Bad input (unknown joint or frame, a port the drive lacks, a
+  // non-finite value): InputError, nothing changed.
   /// Port of joint `joint` (index in model().joint_names or its name).
-  void setCommandPort(int joint, CommandPort port);
-  void setCommandPort(const std::string& joint, CommandPort port) { setCommandPort(model_.jointIndex(joint), port); }
-  CommandPort commandPort(int joint) const;
+  void setCommandPort(sim::PlantState& state, int joint, CommandPort port) const;
+  void setCommandPort(sim::PlantState& state, const std::string& joint, CommandPort port) const {
+    setCommandPort(state, model_.jointIndex(joint), port);
+  }
+  CommandPort commandPort(const sim::PlantState& state, int joint) const;
   /// Value of the command of joint `joint` for its port MotorVelocity [rad/s], Current [A], Voltage [V] or
   /// MotorTorque [N·m] (held until changed; InputError under the Setpoint port: use setSetpoint).
-  void setCommand(int joint, double value);
+  void setCommand(sim::PlantState& state, int joint, double value) const;
   /// Values for every joint (size dof()); the entries of joints under the Setpoint port are ignored.
-  void setCommands(const Eigen::VectorXd& values);
-  double command(int joint) const;
+  void setCommands(sim::PlantState& state, const Eigen::VectorXd& values) const;
+  double command(const sim::PlantState& state, int joint) const;
   /// Holds the reference of joint `joint` at (q [rad], q̇ [rad/s], q̈ [rad/s²]) from now on, in place of the
   /// trajectory (the q̈ feed-forward enters the logged inverse-dynamics reference; the cascade uses q and q̇).
-  void setSetpoint(int joint, double q, double qd = 0.0, double qdd = 0.0);
+  void setSetpoint(sim::PlantState& state, int joint, double q, double qd = 0.0, double qdd = 0.0) const;
   /// Held references of every joint (sizes dof(); qd and qdd may be empty: zero).
-  void holdSetpoints(const Eigen::VectorXd& q, const Eigen::VectorXd& qd = {}, const Eigen::VectorXd& qdd = {});
+  void holdSetpoints(sim::PlantState& state, const Eigen::VectorXd& q, const Eigen::VectorXd& qd = {},
+                     const Eigen::VectorXd& qdd = {}) const;
   /// Back to the trajectory (or setpoint function) for every joint.
-  void releaseSetpoints();
+  void releaseSetpoints(sim::PlantState& state) const;
   /// An external wrench [f (N); n (N·m)], both in world coordinates, applied at the origin of frame `frame`,
   /// held until changed (zero removes it). Acts on the body that carries the frame.
-  void setExternalWrench(const std::string& frame, const Eigen::Matrix<double, 6, 1>& wrench);
-  void clearExternalWrenches();
-  long inputRevision() const override { return revision_; }
+  void setExternalWrench(sim::PlantState& state, const std::string& frame,
+                         const Eigen::Matrix<double, 6, 1>& wrench) const;
+  void clearExternalWrenches(sim::PlantState& state) const;
   /// Bumpless transfer for joints whose port changed since the last call (or the start).
-  void applyInputs(double t, Eigen::Ref<Eigen::VectorXd> y) override;
+  void applyInputs(sim::PlantState& state, double t, Eigen::Ref<Eigen::VectorXd> y) const override;
 
   /// Faults that act during the run (Fault::timeVarying(): a later onset, a progression, intermittent sensor
   /// faults, bearing ripple; systems/faults.hpp for their laws). Parameter faults are applied by rebuilding the
@@ -180,14 +236,15 @@ class RobotSystem : public sim::Plant {
   /// the discrete controllers by forward Euler and hold their outputs; with a faster current rate the position and
   /// velocity loops advance over 1/rate at every (currentRate()/rate)-th call, the current loops at every call. The
   /// held inputs jump: the simulators stop there (and restart or keep the history, CvodeOptions::input_jump).
-  void controlStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y);
+  void controlStep(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
 
   /// Initial state: joints at q0 (at rest), motors at N φ_out, gear internal states at static equilibrium,
   /// friction states at rest, controller states holding the gravity load.
   Eigen::VectorXd initialState(const Eigen::VectorXd& q0, double t0 = 0.0) const;
-  /// All drive signals at (t, y) (evaluates the right-hand side).
-  const RobotSignals& driveSignals(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
-  /// Mechanical energy: multibody kinetic + potential, motor rotor kinetic, stored transmission and end-stop
+  /// All drive signals at (t, y) (evaluates the right-hand side; the result lives in the state's workspace).
+  const RobotSignals& driveSignals(const sim::PlantState& state, double t,
+                                   const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  /// Mechanical energy (the nominal drives: no parameter faults): multibody kinetic + potential, motor rotor kinetic, stored transmission and end-stop
   /// energy [J].
   double mechanicalEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) const;
   /// Index of the first state of drive k's parts (-1 if absent).
@@ -215,20 +272,25 @@ class RobotSystem : public sim::Plant {
   /// initialState(q0) with the positions of setInitialPositions().
   Eigen::VectorXd initialState() const override;
   /// ẏ = f(t, y): pure apart from the workspace; no heap allocation.
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+  void derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) const override;
   /// End stops (mode stop): q − q_upper and q_lower − q per limited joint.
   int rootCount() const override { return stops_.rootCount(); }
-  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
+  void roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+             Eigen::Ref<Eigen::VectorXd> g) const override;
   /// The trajectory's breakpoints under continuous control (sampled control restarts at every sample), and the
   /// instants of the faults' schedules and episodes.
   std::vector<double> timeEvents(double t_end) const override;
-  /// The faults' state at t0; sampled control: the controllers' first sample at t0.
-  void start(double t0, const Eigen::Ref<const Eigen::VectorXd>& y) override;
+  /// The faults' state at t0; sampled control: the controller states holding the gravity load at the joint angles
+  /// of y (as initialState(q0) sets them under continuous control), then the controllers' first sample at t0.
+  void start(sim::PlantState& state, double t0, const Eigen::Ref<const Eigen::VectorXd>& y) const override;
   /// At time events: the faults' parameter schedule and the value a stuck sensor holds.
-  void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
+  void updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   const std::vector<int>& fired) const override;
   double samplePeriod() const override { return sampled() ? 1.0 / currentRate() : 0.0; }
-  void sample(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override { controlStep(t, y); }
+  void sample(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const override {
+    controlStep(state, t, y);
+  }
   /// Per joint: q_set, q, q_fb, qd, motor_velocity, current, current_ref, voltage, gear_torque,
   /// friction_torque and the inverse-dynamics reference id_torque = RNEA(q_set, q̇_set, q̈_set) + N² J_M q̈_set
   /// + friction steady state at q̇_set (the classic rigid model, [Raviola2023, Fig. 9]); then the TCP
@@ -242,48 +304,54 @@ class RobotSystem : public sim::Plant {
   /// affine in the joint torques). With the same increments the result equals plain difference quotients of every
   /// column to rounding (tested), at about a quarter of their evaluations on the UR5 twin.
   bool providesJacobian() const override { return true; }
-  void jacobian(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f,
-                const Eigen::Ref<const Eigen::VectorXd>& inc, Eigen::Ref<Eigen::MatrixXd> J) const override;
+  void jacobian(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
+                Eigen::Ref<Eigen::MatrixXd> J) const override;
   sim::JacobianStructure jacobianStructure() const override;
   /// The same, and for each block the index of its drive.
   sim::JacobianStructure jacobianStructure(std::vector<int>* drive_of_block) const;
-  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> out) const override;
+  void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override;
 
  private:
-  // The right-hand side, stage by stage as the signals flow (each fills sig_ and its part of ẏ).
-  void evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
-  void setpointStage(double t) const;
-  void measurementStage(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
-  // The faults at time t: rebuilds drives whose scheduled parameter values changed, captures stuck sensor values
-  // (`restart`: from the nominal drives, as at the start of a run).
-  void updateFaults(double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool restart);
+  // The right-hand side, stage by stage as the signals flow (each fills the state's signals and its part of ẏ).
+  void evaluate(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
+  void setpointStage(const State& st, double t) const;
+  void measurementStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  // The faults at time t: rebuilds the state's drives whose scheduled parameter values changed, captures stuck
+  // sensor values (`restart`: from the nominal drives, as at the start of a run).
+  void updateFaults(State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool restart) const;
+  // The state's drives from the nominal ones with the parameter faults at their applied values (`dirty`: the drives
+  // to rebuild; empty: all).
+  void rebuildDrives(State& st, const std::vector<char>& dirty) const;
   // Measured joint angle of drive k at t from the sensor's reading `q_meas` (true angle plus bias): the intermittent
   // sensor faults of the drive.
-  double faultySensor(int k, double t, double q_meas) const;
-  void controllerStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
-  void powerElectronicsStage() const;
-  void motorElectricsStage(double* ydot) const;
-  void transmissionStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
-  void frictionStage(const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
-  void jointTorqueStage() const;
-  void multibodyStage(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
-  void rotorReactionStage() const;
+  double faultySensor(const State& st, int k, double t, double q_meas) const;
+  void controllerStage(const State& st, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
+  void powerElectronicsStage(const State& st) const;
+  void motorElectricsStage(const State& st, double* ydot) const;
+  void transmissionStage(const State& st, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
+  void frictionStage(const State& st, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
+  void jointTorqueStage(const State& st) const;
+  void multibodyStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  void rotorReactionStage(const State& st) const;
   void checkJoint(int joint, const char* what) const;
-  void bumpless(int k, CommandPort from, double t, Eigen::Ref<Eigen::VectorXd> y);
-  void multiRateStep(double t, const Eigen::Ref<const Eigen::VectorXd>& y);
+  void bumpless(State& st, int k, CommandPort from, double t, Eigen::Ref<Eigen::VectorXd> y) const;
+  void multiRateStep(State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  // The full initial state (controller states included, also under sampled control) with the joints at q0.
+  Eigen::VectorXd initialFull(const Eigen::VectorXd& q0, double t0) const;
   // Sampled control's sensors of drive k (noise, quantisers): the joint and motor angles and the encoder speed
   // differenced over Ts (updates the encoder memory and the held joint feedback), and the current.
   struct MotionMeasurement {
     double q = 0.0, qm = 0.0, qdm = 0.0;
   };
-  MotionMeasurement measureMotion(int k, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double phi, double phid,
-                                  double Ts);
-  double measureCurrent(int k, const Eigen::Ref<const Eigen::VectorXd>& y);
-  control::ControllerInputs controllerInputs(int k) const;  // from sig_ (after the measurement stage)
+  MotionMeasurement measureMotion(State& st, int k, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double phi,
+                                  double phid, double Ts) const;
+  double measureCurrent(State& st, int k, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  control::ControllerInputs controllerInputs(const State& st, int k) const;  // after the measurement stage
 
   multibody::Model model_;
-  std::vector<DriveSpec> drives_;
-  std::vector<drive::DcMotor> motors_;
+  std::vector<DriveSpec> drives_;  // nominal (the faults apply to the state's copies)
   std::vector<control::JointController> controllers_;
   std::vector<DriveLayout> layout_;
   Eigen::MatrixXd G_, Ginv_;
@@ -296,48 +364,19 @@ class RobotSystem : public sim::Plant {
   WrenchFunction wrenches_;
   EndStops stops_;
   Eigen::VectorXd q0_;
-  // Sampled control: discrete controller states, held outputs and sensor memory (not ODE states).
+  // Sampled control (settings; its run-time part is in State).
   double sample_rate_ = 0.0;
   double current_rate_ = 0.0;  // multi-rate: the current loops' rate (0: single rate)
   long inner_per_outer_ = 1;   // current-loop samples per outer sample
-  long inner_count_ = 0;       // current-loop samples since the start
-  std::vector<double> ctrl_x_;
-  Eigen::VectorXd held_u_, held_i_ref_, held_q_fb_, prev_qm_meas_;
-  bool first_sample_ = true;
-  struct Rng;
-  std::shared_ptr<Rng> rng_;
-  // Command ports (inputs between steps).
-  std::vector<CommandPort> port_, applied_port_;
-  Eigen::VectorXd cmd_, applied_cmd_;  // per joint: the port's value; the value last applied
-  std::vector<char> ref_held_;         // per joint: the reference is held (setSetpoint)
-  Eigen::VectorXd ref_q_, ref_qd_, ref_qdd_;
-  std::vector<std::pair<int, Eigen::Matrix<double, 6, 1>>> user_wrenches_;  // frame index, world wrench
-  long revision_ = 0;
-  // Faults during the run (setFaults): per fault its drive, the parameter value applied now (parameter faults and
-  // bearing ripple) and, for a stuck sensor, the episode and the value it holds; the drives before these faults.
+  int n_ctrl_sampled_ = 0;     // controller states outside the ODE state (sampled control)
+  unsigned seed_ = 0;          // of the sensor noise
+  // Faults during the run (setFaults): per fault its drive.
   std::vector<Fault> faults_;
   std::vector<int> fault_drive_;
-  std::vector<double> fault_applied_;
-  std::vector<long> stuck_episode_;
-  std::vector<double> stuck_value_;
-  std::vector<DriveSpec> nominal_drives_;
   // Logged signals.
   std::vector<std::string> signal_names_;
   multibody::Model id_model_;  // rotor inertias of every drive as armature (inverse-dynamics reference)
   int tip_ = 0;
-  // Workspace (mutable: the right-hand side is logically const).
-  mutable multibody::Data data_, id_data_;
-  mutable RobotSignals sig_;
-  mutable std::vector<char> out_is_voltage_;
-  mutable Eigen::VectorXd phi_, phid_, tau_out_, tau_, tmp_, zero_;
-  mutable multibody::Matrix6Xd fext_;
-  mutable Eigen::MatrixXd M_;
-  mutable Eigen::LLT<Eigen::MatrixXd> llt_;
-  // Jacobian workspace (sized at the first call for the current state layout).
-  mutable Eigen::VectorXd jac_y_, jac_f_, jac_tau0_, jac_qdd0_, jac_tau_;
-  mutable Eigen::MatrixXd jac_P_;
-  mutable sim::JacobianStructure jac_structure_;
-  mutable std::vector<int> jac_block_drive_;
 };
 
 }  // namespace jointsim::systems

@@ -8,6 +8,8 @@
 /// four energy integrals for bookkeeping: W_el = ∫ −5 v_C i dt (work of the power amplifier on the
 /// armature circuit), E_R = ∫ Ra i² dt, E_d = ∫ d ω_rel² dt, E_f = ∫ τ_f ω_m dt [J].
 /// Only axis type 1 (elastic gear) is modelled so far.
+/// The plant is constant during a run; the bearing friction's mode (the discrete state) is in its State
+/// (makeState()).
 
 #include <functional>
 #include <memory>
@@ -18,6 +20,7 @@
 
 #include "jointsim/control/kinematic_ptp.hpp"
 #include "jointsim/drive/opamp_motor.hpp"
+#include "jointsim/sim/plant.hpp"
 #include "jointsim/systems/drive_chain.hpp"
 
 namespace jointsim::systems {
@@ -48,41 +51,59 @@ struct RobotR3AxisSetup {
 class RobotR3Axis : public sim::Plant {
  public:
   explicit RobotR3Axis(RobotR3AxisSetup setup);
+
+  /// The run's state: the mode of the motor-side bearing friction (discrete state, saved). No workspace: the
+  /// right-hand side works on scalars.
+  struct State : sim::PlantStateOf<State> {
+    explicit State(const RobotR3Axis& axis);
+    FrictionMode mode = FrictionMode::Stuck;
+    void save(ByteWriter& out) const override;
+    void load(ByteReader& in) override;
+  };
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
+
   const RobotR3AxisSetup& setup() const { return s_; }
   /// t_end = endTime(), outputs every log_interval (also the max step when the solver sets none).
   sim::SimulateOptions simulateOptions() const;
   static constexpr int kStates = 11;  // q, qd, phi_rel, w_rel, x, v_C, i, W_el, E_R, E_d, E_f
   /// Stored energy at y: ½ J_L q̇² + ½ J ω_m² + ½ c φ_rel² + ½ La i² [J].
   double storedEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) const;
-  FrictionMode mode() const { return mode_; }
+  /// The bearing friction's mode in `state` (a state of this plant).
+  FrictionMode mode(const sim::PlantState& state) const;
   double endTime() const;  ///< termination time: path end + swing, capped at the stop time
 
   std::string name() const override;
   int stateSize() const override { return kStates; }
   Eigen::VectorXd initialState() const override;
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+  void derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) const override;
   int rootCount() const override { return 2; }
-  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
+  void roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+             Eigen::Ref<Eigen::VectorXd> g) const override;
   /// The path's segment switches.
   std::vector<double> timeEvents(double t_end) const override;
-  void start(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override { updateModes(t, y, {}); }
+  /// The friction mode consistent with y at t (the event iteration with no flags).
+  void start(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const override {
+    updateModes(state, t, y, {});
+  }
   /// Event iteration after a located root (or at t = 0 with no flags).
-  void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
+  void updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   const std::vector<int>& fired) const override;
   const std::vector<std::string>& signalNames() const override { return signals_; }
-  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const override;
+  void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> row) const override;
 
-  /// Algebraic quantities at (t, y) for the current mode.
+  /// Algebraic quantities at (t, y) for the mode in `state`.
   struct Eval {
     double q_ref, qd_ref, e, i_ref, tau_s, tau_f, wm, wm_dot, qdd, stuck_torque;
   };
-  Eval evaluate(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  Eval evaluate(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
 
  private:
+  Eval evaluateIn(FrictionMode mode, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
   RobotR3AxisSetup s_;
   drive::OpAmpMotor motor_;
   control::KinematicPtpTrajectory path_;
-  FrictionMode mode_ = FrictionMode::Stuck;
   std::vector<std::string> signals_;
 };
 

@@ -7,8 +7,11 @@
 /// path end + swing time. Friction follows the exact MSL logic; the stuck torques of stuck type-2 joints are
 /// solved together with the arm dynamics (M̄ q̈ + h = τ with q̈_j = 0 for every stuck joint j).
 /// States (36 for the r3): q, q̇, then φ_rel, ω_rel of each type-1 axis, then x, v_C, i of each axis.
+/// The plant is constant during a run; the friction modes (the discrete state) and the workspace of the
+/// right-hand side are in its State (makeState()).
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -18,6 +21,7 @@
 #include "jointsim/drive/opamp_motor.hpp"
 #include "jointsim/multibody/data.hpp"
 #include "jointsim/multibody/model.hpp"
+#include "jointsim/sim/plant.hpp"
 #include "jointsim/systems/drive_chain.hpp"
 
 namespace jointsim::systems {
@@ -48,38 +52,56 @@ struct RobotR3FullSetup {
 class RobotR3Full : public sim::Plant {
  public:
   explicit RobotR3Full(RobotR3FullSetup setup);
+
+  /// The run's state: the friction mode of each axis (discrete state, saved) and the workspace of the right-hand
+  /// side (sized here: no allocation in derivatives(), roots() or signals()).
+  struct State : sim::PlantStateOf<State> {
+    explicit State(const RobotR3Full& robot);
+    std::vector<FrictionMode> modes;  ///< per axis, base to tip
+    // Workspace (holds nothing between calls; not saved).
+    mutable multibody::Data data;
+    mutable Eigen::VectorXd q_ref, qd_ref, qdd_ref, tau, qdd, wm, wm_dot, tau_f, stuck, e, iref;
+    mutable Eigen::MatrixXd Mbar;
+    void save(ByteWriter& out) const override;
+    void load(ByteReader& in) override;
+  };
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
+
   const RobotR3FullSetup& setup() const { return s_; }
   /// t_end = endTime(), outputs every log_interval (also the max step when the solver sets none).
   sim::SimulateOptions simulateOptions() const;
   double endTime() const;  ///< termination time: path end + swing, capped at the stop time
-  const std::vector<FrictionMode>& modes() const { return modes_; }
+  /// The friction mode of each axis in `state` (a state of this plant).
+  const std::vector<FrictionMode>& modes(const sim::PlantState& state) const;
 
   std::string name() const override;
   int stateSize() const override { return n_states_; }
   Eigen::VectorXd initialState() const override;
-  void derivatives(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+  void derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) const override;
   int rootCount() const override { return 2 * n_; }
-  void roots(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) const override;
+  void roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+             Eigen::Ref<Eigen::VectorXd> g) const override;
   /// The path's segment switches.
   std::vector<double> timeEvents(double t_end) const override;
-  void start(double t, const Eigen::Ref<const Eigen::VectorXd>& y) override { updateModes(t, y, {}); }
-  void updateModes(double t, const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<int>& fired) override;
+  /// The friction modes consistent with y at t (the event iteration with no flags).
+  void start(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const override {
+    updateModes(state, t, y, {});
+  }
+  void updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   const std::vector<int>& fired) const override;
   const std::vector<std::string>& signalNames() const override { return signals_; }
-  void signals(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> row) const override;
+  void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> row) const override;
 
  private:
-  void solve(double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // fills the workspace below
+  void solve(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // fills st's workspace
   RobotR3FullSetup s_;
   int n_ = 0, n_states_ = 0;
   std::vector<int> rel_;   // index of φ_rel per axis (−1 for type 2)
   std::vector<int> ctrl_;  // index of x per axis (v_C, i follow)
   control::KinematicPtpTrajectory path_;
-  std::vector<FrictionMode> modes_;
   std::vector<std::string> signals_;
-  mutable multibody::Data data_;
-  mutable Eigen::VectorXd q_ref_, qd_ref_, qdd_ref_, tau_, qdd_, wm_, wm_dot_, tau_f_, stuck_, e_, iref_;
-  mutable Eigen::MatrixXd Mbar_;
 };
 
 }  // namespace jointsim::systems
