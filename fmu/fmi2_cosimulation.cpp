@@ -23,6 +23,7 @@ struct Component {
   std::string name;
   fmi2CallbackFunctions callbacks{};
   bool logging = true;
+  std::set<std::string> categories{"logInfo", "logWarning", "logError"};  // fmi2SetDebugLogging's selection
   std::unique_ptr<Instance> instance;
 };
 
@@ -120,11 +121,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     comp->callbacks = cb;
     comp->logging = loggingOn != fmi2False;
     Component* raw = comp.get();
-    comp->instance = std::make_unique<Instance>(name, resources, fmuGUID != nullptr ? fmuGUID : "",
-                                                [raw](Status s, const char* category, const std::string& message) {
-                                                  if (raw->logging || s >= Status::Warning)
-                                                    emit(raw->callbacks, raw->name, toC(s), category, message);
-                                                });
+    comp->instance =
+        std::make_unique<Instance>(name, resources, fmuGUID != nullptr ? fmuGUID : "",
+                                   [raw](Status s, const char* category, const std::string& message) {
+                                     if ((raw->logging && raw->categories.count(category)) || s >= Status::Error)
+                                       emit(raw->callbacks, raw->name, toC(s), category, message);
+                                   });
     {
       const std::lock_guard<std::mutex> lock(g_live_mutex);
       g_live.insert(raw);
@@ -146,10 +148,27 @@ void fmi2FreeInstance(fmi2Component c) {
   delete static_cast<Component*>(c);
 }
 
-fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t, const fmi2String[]) {
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+                               const fmi2String categories[]) {
   Component* comp = live(c);
   if (comp == nullptr) return fmi2Error;
+  // No categories: all of them (on or off); else exactly those given, each one of <LogCategories>.
+  std::set<std::string> chosen{"logInfo", "logWarning", "logError"};
+  if (nCategories > 0) {
+    if (categories == nullptr) return fmi2Error;
+    chosen.clear();
+    for (size_t k = 0; k < nCategories; ++k) {
+      const std::string name = categories[k] != nullptr ? categories[k] : "";
+      if (name != "logInfo" && name != "logWarning" && name != "logError") {
+        emit(comp->callbacks, comp->name, fmi2Error, "logError",
+             "fmi2SetDebugLogging: unknown log category '" + name + "' (the FMU's are logInfo, logWarning, logError)");
+        return fmi2Error;
+      }
+      chosen.insert(name);
+    }
+  }
   comp->logging = loggingOn != fmi2False;
+  comp->categories = std::move(chosen);
   return fmi2OK;
 }
 
@@ -199,17 +218,45 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference[], size_t nvr
   return nvr == 0 ? fmi2OK : unsupported(c, "fmi2SetString (the FMU has no String variables)");
 }
 
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate*) { return unsupported(c, "fmi2GetFMUstate"); }
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate) { return unsupported(c, "fmi2SetFMUstate"); }
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate*) { return unsupported(c, "fmi2FreeFMUstate"); }
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate, size_t*) {
-  return unsupported(c, "fmi2SerializedFMUstateSize");
+// FMU states: Instance::State behind the opaque fmi2FMUstate pointer.
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state) {
+  return call(c, "fmi2GetFMUstate", [&](Instance& i) {
+    if (state == nullptr) return i.getState(nullptr);
+    auto* s = static_cast<Instance::State*>(*state);
+    const Status status = i.getState(&s);
+    *state = s;
+    return status;
+  });
 }
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate, fmi2Byte[], size_t) {
-  return unsupported(c, "fmi2SerializeFMUstate");
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
+  return call(c, "fmi2SetFMUstate",
+              [&](Instance& i) { return i.setState(static_cast<const Instance::State*>(state)); });
 }
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte[], size_t, fmi2FMUstate*) {
-  return unsupported(c, "fmi2DeSerializeFMUstate");
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state) {
+  return call(c, "fmi2FreeFMUstate", [&](Instance&) {
+    if (state != nullptr) {
+      Instance::freeState(static_cast<Instance::State*>(*state));
+      *state = nullptr;
+    }
+    return Status::OK;
+  });
+}
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t* size) {
+  return call(c, "fmi2SerializedFMUstateSize",
+              [&](Instance& i) { return i.serializedSize(static_cast<const Instance::State*>(state), size); });
+}
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size) {
+  return call(c, "fmi2SerializeFMUstate",
+              [&](Instance& i) { return i.serialize(static_cast<const Instance::State*>(state), bytes, size); });
+}
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate* state) {
+  return call(c, "fmi2DeSerializeFMUstate", [&](Instance& i) {
+    if (state == nullptr) return i.deserialize(bytes, size, nullptr);
+    Instance::State* s = nullptr;
+    const Status status = i.deserialize(bytes, size, &s);
+    if (status == Status::OK) *state = s;
+    return status;
+  });
 }
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2ValueReference[],
                                         size_t, const fmi2Real[], fmi2Real[]) {

@@ -39,8 +39,8 @@ void ByteWriter::flags(const std::vector<char>& v) {
 }
 
 void ByteReader::fail(const std::string& message) const {
-  throw InputError(what_ + ": " + message + " (at byte " + std::to_string(pos_) + " of " +
-                   std::to_string(in_.size()) + ")");
+  throw InputError(what_ + ": " + message + " (at byte " + std::to_string(pos_) + " of " + std::to_string(in_.size()) +
+                   ")");
 }
 
 void ByteReader::need(std::size_t n, const char* field) {

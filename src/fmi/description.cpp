@@ -364,7 +364,7 @@ std::string FmuDescription::modelDescriptionXml() const {
     << "  <CoSimulation modelIdentifier=\"" << xmlEscape(model_identifier)
     << "\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\""
        " maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\""
-       " canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"false\" canSerializeFMUstate=\"false\""
+       " canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\""
        " providesDirectionalDerivative=\"false\"/>\n";
   std::set<std::string> units;
   for (const Variable& v : variables)
@@ -388,6 +388,13 @@ std::string FmuDescription::modelDescriptionXml() const {
     }
     x << "  </UnitDefinitions>\n";
   }
+  // The categories of the instance's log messages (fmi::Instance; fmi2SetDebugLogging selects among them).
+  x << "  <LogCategories>\n"
+       "    <Category name=\"logInfo\" description=\"progress: loading the experiment, settings that apply\"/>\n"
+       "    <Category name=\"logWarning\" description=\"a setting ignored or changed\"/>\n"
+       "    <Category name=\"logError\" description=\"a call refused or failed (with the simulated time and "
+       "component of a solver failure)\"/>\n"
+       "  </LogCategories>\n";
   x << "  <DefaultExperiment startTime=\"0\" stopTime=\"" << number(stop_time) << "\" stepSize=\"" << number(step_size)
     << "\"/>\n  <ModelVariables>\n";
   for (size_t i = 0; i < variables.size(); ++i) {

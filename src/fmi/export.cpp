@@ -60,10 +60,17 @@ class ZipWriter {
   void add(const std::string& name, std::string bytes) {
     data_.push_back(std::make_unique<std::string>(std::move(bytes)));
     zip_source_t* src = zip_source_buffer(zip_, data_.back()->data(), data_.back()->size(), 0);
-    if (src == nullptr || zip_file_add(zip_, name.c_str(), src, ZIP_FL_OVERWRITE | ZIP_FL_ENC_UTF_8) < 0) {
+    const zip_int64_t index =
+        src == nullptr ? -1 : zip_file_add(zip_, name.c_str(), src, ZIP_FL_OVERWRITE | ZIP_FL_ENC_UTF_8);
+    if (index < 0) {
       if (src != nullptr) zip_source_free(src);
       throw Error("FMU export: cannot add " + name + " to " + path_ + ": " + zip_strerror(zip_));
     }
+    // Unix permissions of the entry: rw-r--r-- (rwxr-xr-x for the shared library), never writable by others.
+    const bool library = name.size() > 3 && name.compare(name.size() - 3, 3, ".so") == 0;
+    const zip_uint32_t mode = library ? 0100755U : 0100644U;
+    if (zip_file_set_external_attributes(zip_, static_cast<zip_uint64_t>(index), 0, ZIP_OPSYS_UNIX, mode << 16) < 0)
+      throw Error("FMU export: cannot set the permissions of " + name + " in " + path_ + ": " + zip_strerror(zip_));
   }
   void close() {
     if (zip_close(zip_) != 0) throw Error("FMU export: cannot write " + path_ + ": " + zip_strerror(zip_));

@@ -1,10 +1,13 @@
 // One FMI 2.0 Co-Simulation instance: the state machine of the standard over experiments::loadExperiment and
 // sim::Simulator. Nothing throws out of the public methods: errors become Status::Error and a log message.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include <nlohmann/json.hpp>
 
+#include "jointsim/common/bytes.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/experiments/experiment.hpp"
@@ -33,6 +36,8 @@ struct Instance::Impl {
   std::vector<double> values;  // inputs and parameters as set; outputs unused
   std::vector<int> qd_of;      // for a "q" (setpoint) input, the index of its joint's "qd" input (-1: none)
   double start_time = 0.0;
+  bool stop_defined = false;  // fmi2SetupExperiment: a step past stop_time is an error
+  double stop_time = 0.0;
   std::shared_ptr<experiments::Experiment> experiment;
   std::unique_ptr<sim::Simulator> sim;
   bool params_changed = true;  // the experiment must be (re)loaded before use
@@ -90,8 +95,6 @@ struct Instance::Impl {
     sim::AdvanceLimits limits;
     limits.max_steps = sim->integratorOptions().max_num_steps;
     sim->setLimits(limits);
-    // A reset makes a fresh plant state (inputs at their defaults): first the start time, then the ports.
-    if (start_time != 0.0) sim->reset(start_time, sim->plant().initialState());
     if (const auto* robot = dynamic_cast<const systems::RobotSystem*>(&sim->plant())) {
       for (const Variable& v : d.variables)
         if (v.causality == Causality::Input && v.port != "q" && v.port != "qd")
@@ -212,12 +215,22 @@ const FmuDescription& Instance::description() const { return impl_->d; }
 
 double Instance::time() const { return impl_->sim ? impl_->sim->time() : impl_->start_time; }
 
-Status Instance::setupExperiment(bool tolerance_defined, double tolerance, double start_time, bool /*stop_defined*/,
-                                 double /*stop_time*/) {
+Status Instance::setupExperiment(bool tolerance_defined, double tolerance, double start_time, bool stop_defined,
+                                 double stop_time) {
   Impl& m = *impl_;
   if (m.phase != Phase::Instantiated) return m.wrongPhase("fmi2SetupExperiment");
-  if (!std::isfinite(start_time)) return m.error("fmi2SetupExperiment: start time " + instanceNumber(start_time));
+  // The experiment's trajectory, fault schedules and initial state are defined from t = 0: a run starting elsewhere
+  // would start from a state that is not at rest on its reference.
+  if (start_time != 0.0)
+    return m.error("fmi2SetupExperiment: start time " + instanceNumber(start_time) +
+                   " s: this FMU's experiment starts at t = 0 s (its trajectory, faults and initial state are defined "
+                   "from there); use startTime 0 and step to where you need it");
+  if (stop_defined && !(stop_time > start_time))
+    return m.error("fmi2SetupExperiment: stop time " + instanceNumber(stop_time) +
+                   " s: expected a time after the start time " + instanceNumber(start_time) + " s");
   m.start_time = start_time;
+  m.stop_defined = stop_defined;
+  m.stop_time = stop_time;
   if (tolerance_defined)
     m.log(Status::Warning, "fmi2SetupExperiment: tolerance " + instanceNumber(tolerance) +
                                " ignored: the experiment file's solver settings (parameters solver.rtol, "
@@ -258,6 +271,7 @@ Status Instance::reset() {
   m.experiment.reset();
   for (size_t i = 0; i < m.values.size(); ++i) m.values[i] = m.d.variables[i].start;
   m.start_time = 0.0;
+  m.stop_defined = false;
   m.params_changed = true;
   m.phase = Phase::Instantiated;
   return Status::OK;
@@ -340,10 +354,136 @@ Status Instance::doStep(double t, double h) {
   if (std::abs(t - now) > 1e-9 * std::max(1.0, std::abs(now)))
     return m.error("fmi2DoStep: communication point " + instanceNumber(t) + " s, but the FMU is at " +
                    instanceNumber(now) + " s");
+  if (m.stop_defined && now + h > m.stop_time + 1e-12 * std::max(1.0, std::abs(m.stop_time)))
+    return m.error("fmi2DoStep: a step of " + instanceNumber(h) + " s from " + instanceNumber(now) +
+                   " s goes past the stop time " + instanceNumber(m.stop_time) + " s set by fmi2SetupExperiment");
   return m.guarded("fmi2DoStep", [&] {
     m.applyInputs();
     m.sim->advanceTo(now + h);
   });
+}
+
+// ------------------------------------------------------------------------------------------------ FMU states
+struct Instance::State {
+  Phase phase = Phase::StepComplete;
+  std::vector<double> values;                           // inputs and parameters
+  std::shared_ptr<experiments::Experiment> experiment;  // keeps the snapshot's plant alive (null: from bytes)
+  sim::Snapshot snapshot;                               // in memory (empty: from bytes)
+  std::string snapshot_bytes;                           // from bytes, or serialised on demand
+};
+
+namespace {
+constexpr const char* kFmuStateMagic = "jointsim FMU state";
+}  // namespace
+
+/// The serialised form of an FMU state: the FMU's GUID, the phase, the variables' values, the simulator's state.
+static std::string fmuStateBytes(const std::string& guid, const Instance::State& state) {
+  ByteWriter out;
+  out.tag(kFmuStateMagic);
+  out.text(guid);
+  out.u64(static_cast<std::uint64_t>(state.phase));
+  out.doubles(state.values);
+  out.text(state.snapshot.empty() ? state.snapshot_bytes : state.snapshot.toBytes());
+  return out.release();
+}
+
+Status Instance::getState(State** state) {
+  Impl& m = *impl_;
+  if (state == nullptr) return m.error("fmi2GetFMUstate: null pointer");
+  if ((m.phase != Phase::Initialization && m.phase != Phase::StepComplete) || !m.sim)
+    return m.wrongPhase("fmi2GetFMUstate");
+  return m.guarded(
+      "fmi2GetFMUstate",
+      [&] {
+        auto s = std::make_unique<State>();
+        s->phase = m.phase;
+        s->values = m.values;
+        s->experiment = m.experiment;
+        s->snapshot = m.sim->snapshot();
+        if (*state != nullptr)
+          **state = std::move(*s);
+        else
+          *state = s.release();
+      },
+      false);
+}
+
+Status Instance::setState(const State* state) {
+  Impl& m = *impl_;
+  if (state == nullptr) return m.error("fmi2SetFMUstate: null state");
+  if (m.phase == Phase::Terminated) return m.wrongPhase("fmi2SetFMUstate");
+  return m.guarded("fmi2SetFMUstate", [&] {
+    m.values = state->values;
+    if (state->experiment && !state->snapshot.empty()) {
+      // The same loaded experiment (its parameters) as when the state was taken: a simulator on it if the instance
+      // has moved on to another one (fmi2Reset, new parameters).
+      if (m.experiment != state->experiment || !m.sim) {
+        m.experiment = state->experiment;
+        m.sim = experiments::makeSimulator(m.experiment);
+        sim::AdvanceLimits limits;
+        limits.max_steps = m.sim->integratorOptions().max_num_steps;
+        m.sim->setLimits(limits);
+      }
+      m.sim->restore(state->snapshot);
+    } else {
+      m.build();  // the experiment with the state's parameter values
+      m.sim->loadState(state->snapshot_bytes);
+    }
+    m.params_changed = false;
+    m.phase = state->phase;
+  });
+}
+
+void Instance::freeState(State* state) { delete state; }
+
+Status Instance::serializedSize(const State* state, size_t* size) {
+  Impl& m = *impl_;
+  if (state == nullptr || size == nullptr) return m.error("fmi2SerializedFMUstateSize: null pointer");
+  return m.guarded(
+      "fmi2SerializedFMUstateSize", [&] { *size = fmuStateBytes(m.d.guid, *state).size(); }, false);
+}
+
+Status Instance::serialize(const State* state, char* bytes, size_t size) {
+  Impl& m = *impl_;
+  if (state == nullptr) return m.error("fmi2SerializeFMUstate: null state");
+  if (bytes == nullptr && size > 0) return m.error("fmi2SerializeFMUstate: null buffer");
+  return m.guarded(
+      "fmi2SerializeFMUstate",
+      [&] {
+        const std::string data = fmuStateBytes(m.d.guid, *state);
+        if (data.size() != size)
+          throw InputError("the buffer has " + std::to_string(size) + " bytes, the state " +
+                           std::to_string(data.size()) + " (fmi2SerializedFMUstateSize)");
+        std::copy(data.begin(), data.end(), bytes);
+      },
+      false);
+}
+
+Status Instance::deserialize(const char* bytes, size_t size, State** state) {
+  Impl& m = *impl_;
+  if ((bytes == nullptr && size > 0) || state == nullptr) return m.error("fmi2DeSerializeFMUstate: null pointer");
+  return m.guarded(
+      "fmi2DeSerializeFMUstate",
+      [&] {
+        const std::string data(bytes == nullptr ? "" : std::string(bytes, size));
+        ByteReader in(data, "an FMU state");
+        in.tag(kFmuStateMagic);
+        const std::string guid = in.text("GUID");
+        if (guid != m.d.guid) in.fail("the state of another FMU (GUID " + guid.substr(0, 80) + ")");
+        auto s = std::make_unique<State>();
+        const std::uint64_t phase = in.u64("phase");
+        if (phase != static_cast<std::uint64_t>(Phase::Initialization) &&
+            phase != static_cast<std::uint64_t>(Phase::StepComplete))
+          in.fail("bad phase " + std::to_string(phase));
+        s->phase = static_cast<Phase>(phase);
+        s->values = in.doubles("values", static_cast<long>(m.d.variables.size()));
+        for (double v : s->values)
+          if (!std::isfinite(v)) in.fail("a value that is not finite");
+        s->snapshot_bytes = in.text("simulator state");
+        in.finish();
+        *state = s.release();
+      },
+      false);
 }
 
 }  // namespace jointsim::fmi

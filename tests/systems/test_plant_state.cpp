@@ -35,9 +35,8 @@ std::shared_ptr<experiments::Experiment> noisyTwin(const test::TempDir& dir, dou
   drives.replace(drives.find("multibody: ur5.yaml"), 19, "multibody: " + test::sourcePath("config/robots/ur5.yaml"));
   for (size_t at = drives.find("    controller:"); at != std::string::npos;
        at = drives.find("    controller:", at + 200))
-    drives.insert(at,
-                  "    sensors: {motor_quantum: 4.79e-5, joint_quantum: 3.83e-4, joint_noise: 2e-5, "
-                  "current_noise: 0.01, current_quantum: 0.001}\n");
+    drives.insert(at, "    sensors: {motor_quantum: 4.79e-5, joint_quantum: 3.83e-4, joint_noise: 2e-5, "
+                      "current_noise: 0.01, current_quantum: 0.001}\n");
   std::ofstream(dir.path() / "drives.yaml") << drives;
   std::string exp = slurp(test::sourcePath("config/experiments/ur5_excitation.yaml"));
   exp.replace(exp.find("robot: ../robots/ur5_drives.yaml"), 32, "robot: drives.yaml\ncontrol: {rate: 20000, seed: 7}");

@@ -131,6 +131,23 @@ class Instance {
   /// Simulated time [s] (fmi2LastSuccessfulTime).
   double time() const;
 
+  /// An FMU state (fmi2GetFMUstate and the functions after it): the complete state of the instance (its phase,
+  /// the values of its inputs and parameters, the loaded experiment and the simulator's snapshot), or the bytes of a
+  /// deserialised one. Opaque to the importer.
+  struct State;
+  /// fmi2GetFMUstate: `*state` null: a new state; else the state `*state` (from this instance) is overwritten.
+  /// Allowed once the experiment is loaded (initialization mode, step complete).
+  Status getState(State** state);
+  /// fmi2SetFMUstate: back to `state` (of this FMU: checked); the run continues bit for bit as it did from there.
+  Status setState(const State* state);
+  /// fmi2FreeFMUstate.
+  static void freeState(State* state);
+  /// fmi2SerializedFMUstateSize, fmi2SerializeFMUstate (into `size` bytes), fmi2DeSerializeFMUstate (a new state
+  /// from bytes of this FMU's serialisation; the snapshot in it is checked by setState against the plant).
+  Status serializedSize(const State* state, size_t* size);
+  Status serialize(const State* state, char* bytes, size_t size);
+  Status deserialize(const char* bytes, size_t size, State** state);
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
