@@ -257,6 +257,7 @@ struct PySimulator {
 /// A snapshot of a simulator: in memory (restored without a copy to bytes), or the bytes of a pickled one.
 struct PySnapshot {
   std::shared_ptr<const sim::Snapshot> snapshot;  // null for one made from bytes
+  std::shared_ptr<const sim::Plant> plant;        // the snapshot's plant, kept alive (restore compares it)
   std::string bytes;                              // the pickled form (empty until asked for)
   double time = 0.0;
   const std::string& toBytes() {
@@ -692,6 +693,7 @@ PYBIND11_MODULE(_core, m) {
              const Use use(s.gate, "Simulator");
              PySnapshot p;
              p.snapshot = std::make_shared<const sim::Snapshot>(s.sim->snapshot());
+             p.plant = s.plant;
              p.time = p.snapshot->time();
              return p;
            })
@@ -699,7 +701,7 @@ PYBIND11_MODULE(_core, m) {
           "restore",
           [](PySimulator& s, PySnapshot& p) {
             const Use use(s.gate, "Simulator");
-            if (p.snapshot && &p.snapshot->plantState().owner() == s.plant.get())
+            if (p.snapshot && p.plant == s.plant)
               s.sim->restore(*p.snapshot);
             else
               s.sim->loadState(p.toBytes());  // another plant object of the same configuration, or unpickled

@@ -11,13 +11,13 @@ namespace jointsim::control {
 
 void JointControllerParams::validate(const std::string& where) const {
   auto nonneg = [&](double v, const char* name) { check::nonNegative(where, name, v, "(a gain)"); };
-  if (type == ControllerType::Cascade002) {
+  if (type == ControllerType::VoltageCascade) {
     nonneg(P_pos, "P_pos");
     nonneg(P_vel, "P_vel");
     nonneg(I_vel, "I_vel");
     nonneg(P_cur, "P_cur");
     nonneg(I_cur, "I_cur");
-  } else if (type == ControllerType::MotorPPI000) {
+  } else if (type == ControllerType::TorqueCascade) {
     nonneg(kp, "kp");
     nonneg(ks, "ks");
     check::positive(where, "Ts", Ts, "s");
@@ -26,16 +26,16 @@ void JointControllerParams::validate(const std::string& where) const {
 
 int JointController::stateSize() const {
   switch (p_.type) {
-    case ControllerType::Cascade002: return 2;
-    case ControllerType::MotorPPI000: return 1;
+    case ControllerType::VoltageCascade: return 2;
+    case ControllerType::TorqueCascade: return 1;
     default: return 0;
   }
 }
 
 void JointController::initialState(const ControllerInputs& in, double* x) const {
-  if (p_.type == ControllerType::Cascade002) {
+  if (p_.type == ControllerType::VoltageCascade) {
     x[0] = x[1] = 0.0;
-  } else if (p_.type == ControllerType::MotorPPI000) {
+  } else if (p_.type == ControllerType::TorqueCascade) {
     const double u = in.ratio * in.qd_set + p_.kp * (in.ratio * in.q_set - in.qm_fb) - in.qdm_fb;
     x[0] = -u;  // InitialOutput: y(0) = 0
   }
@@ -44,7 +44,7 @@ void JointController::initialState(const ControllerInputs& in, double* x) const 
 ControllerOutputs JointController::evaluate(const ControllerInputs& in, const double* x, double* xdot) const {
   ControllerOutputs out;
   switch (p_.type) {
-    case ControllerType::Cascade002: {
+    case ControllerType::VoltageCascade: {
       out.voltage = true;
       const bool velocity_loop = in.entry != ControlEntry::Current;
       double e_vel = 0.0;
@@ -64,7 +64,7 @@ ControllerOutputs JointController::evaluate(const ControllerInputs& in, const do
       xdot[1] = saturated ? 0.0 : e_cur;
       break;
     }
-    case ControllerType::MotorPPI000: {
+    case ControllerType::TorqueCascade: {
       out.qdm_ref = in.entry == ControlEntry::MotorVelocity
                         ? in.command
                         : in.ratio * in.qd_set + p_.kp * (in.ratio * in.q_set - in.qm_fb);
@@ -80,15 +80,15 @@ ControllerOutputs JointController::evaluate(const ControllerInputs& in, const do
 
 bool JointController::accepts(ControlEntry entry) const {
   switch (p_.type) {
-    case ControllerType::Cascade002: return true;
-    case ControllerType::MotorPPI000: return entry != ControlEntry::Current;
+    case ControllerType::VoltageCascade: return true;
+    case ControllerType::TorqueCascade: return entry != ControlEntry::Current;
     default: return false;
   }
 }
 
 void JointController::matchOutput(const ControllerInputs& in, double u, double i_ref, double* x) const {
   std::vector<double> xdot(2);
-  if (p_.type == ControllerType::Cascade002) {
+  if (p_.type == ControllerType::VoltageCascade) {
     // i_ref = P_vel e_vel + I_vel x0 (velocity loop in use), then V = P_cur (i_ref − i) + I_cur x1.
     if (in.entry != ControlEntry::Current && p_.I_vel > 0.0) {
       x[0] = 0.0;
@@ -100,7 +100,7 @@ void JointController::matchOutput(const ControllerInputs& in, double u, double i
       const ControllerOutputs o = evaluate(in, x, xdot.data());
       x[1] = (u - o.u) / p_.I_cur;
     }
-  } else if (p_.type == ControllerType::MotorPPI000 && p_.ks > 0.0) {
+  } else if (p_.type == ControllerType::TorqueCascade && p_.ks > 0.0) {
     x[0] = 0.0;
     const ControllerOutputs o = evaluate(in, x, xdot.data());
     x[0] = (u - o.u) / p_.ks;  // τ = ks (u + x)
@@ -108,7 +108,7 @@ void JointController::matchOutput(const ControllerInputs& in, double u, double i
 }
 
 double sampledCurrentLoopRadius(const JointControllerParams& params, double R, double L, double Ts) {
-  if (params.type != ControllerType::Cascade002 || !(R > 0.0) || !(L > 0.0) || !(Ts > 0.0)) return 0.0;
+  if (params.type != ControllerType::VoltageCascade || !(R > 0.0) || !(L > 0.0) || !(Ts > 0.0)) return 0.0;
   const double a = std::exp(-R * Ts / L), b = (1.0 - a) / R;
   // λ² − (m11 + m22) λ + (m11 m22 − m12 m21) = 0 for [[m11, m12], [m21, m22]] = [[a − b P, b I], [−Ts, 1]].
   const double m11 = a - b * params.P_cur, tr = m11 + 1.0, det = m11 + b * params.I_cur * Ts;

@@ -183,9 +183,10 @@ Snapshot Simulator::snapshot() {
 
 void Simulator::checkSnapshot(const Snapshot& snapshot, const char* what) const {
   if (snapshot.empty()) throw InputError(plant_->name() + ": " + what + ": the snapshot is empty");
-  if (&snapshot.plant_state_->owner() != plant_.get())
-    throw InputError(plant_->name() + ": " + what + ": the snapshot is of another plant (" +
-                     snapshot.plant_state_->owner().name() + ")");
+  if (&snapshot.plant_state_->owner() != plant_.get())  // (that plant may be gone: it is not asked for its name)
+    throw InputError(plant_->name() + ": " + what +
+                     ": the snapshot is of another plant object (restore bytes of it, loadState, to move a state "
+                     "between plant objects of the same configuration)");
   if (snapshot.y_.size() != plant_->stateSize() || !snapshot.y_.allFinite() || !std::isfinite(snapshot.t_) ||
       !std::isfinite(snapshot.t0_) || snapshot.sample_k_ < 1 || !(snapshot.t_sample_ >= snapshot.t_ - 1e-9) ||
       (Ts_ > 0.0 && !std::isfinite(snapshot.t_sample_)))

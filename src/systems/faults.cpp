@@ -301,8 +301,8 @@ void applyFault(DriveSpec& d, const Fault& f, double value) {
     case FaultType::SensorDropout:
     case FaultType::SensorStuck:
     case FaultType::SensorSpike:
-      if (d.controller.type != control::ControllerType::Cascade002)
-        notApplicable(f, "a drive whose controller does not read the joint angle (only cascade_002 does)");
+      if (d.controller.type != control::ControllerType::VoltageCascade)
+        notApplicable(f, "a drive whose controller does not read the joint angle (only voltage_cascade does)");
       if (f.type == FaultType::SensorBias) d.sensors.joint_bias += value;
       break;
     case FaultType::BearingRipple: break;  // acts in the right-hand side (RobotSystem::setFaults)

@@ -66,8 +66,9 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
     drive::DcMotor{d.motor};  // validates
     d.controller.validate(where + ".controller");
     controllers_.emplace_back(d.controller);
-    const bool voltage_out = d.controller.type == control::ControllerType::Cascade002;
-    if (voltage_out && !d.electrics) throw InputError(where + ": the cascade_002 controller needs the motor electrics");
+    const bool voltage_out = d.controller.type == control::ControllerType::VoltageCascade;
+    if (voltage_out && !d.electrics)
+      throw InputError(where + ": the voltage_cascade controller needs the motor electrics");
     if (voltage_out) {
       // The continuous current loop L di/dt = V − R i, V = P_cur e + I_cur ∫e has the poles of
       // L s² + (R + P_cur) s + I_cur = 0, of magnitude at most (R + P_cur)/L + √(I_cur/L). Real current loops are
@@ -84,7 +85,7 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
                          "√(I_cur/L) ≤ 1e8 rad/s");
     }
     if (!voltage_out && d.controller.type != control::ControllerType::None && d.electrics)
-      throw InputError(where + ": the motor_ppi_000 controller commands torque; set electrics: false");
+      throw InputError(where + ": the torque_cascade controller commands torque; set electrics: false");
     DriveLayout& L = layout_[static_cast<size_t>(k)];
     L.rigid = d.transmission->isRigid();
     L.ratio = d.transmission->ratio();
@@ -329,7 +330,8 @@ void RobotSystem::setCommandPort(sim::PlantState& state, int joint, CommandPort 
       break;
     case CommandPort::Current:
       if (!electrics || !controllers_[k].accepts(control::ControlEntry::Current))
-        throw InputError(where + "needs motor electrics and a current loop (controller cascade_002); this drive has " +
+        throw InputError(where +
+                         "needs motor electrics and a current loop (controller voltage_cascade); this drive has " +
                          (electrics ? "no current loop" : "electrics: false"));
       break;
     case CommandPort::Voltage:
@@ -488,7 +490,7 @@ void RobotSystem::bumpless(State& st, int k, CommandPort from, double t, Eigen::
   setpointStage(st, t);
   measurementStage(st, t, y);
   double* x = sampled() ? st.ctrl_x.data() + L.controller : y.data() + L.controller;
-  const bool cascade = d.controller.type == control::ControllerType::Cascade002;
+  const bool cascade = d.controller.type == control::ControllerType::VoltageCascade;
   // The actuator value applied just before the switch: the output of the controller under its old entry (held
   // output under sampled control), the voltage or torque command, or for a cascade leaving the torque port the
   // voltage that holds the present current (V = R i + k_e q̇_m).
@@ -800,11 +802,11 @@ Eigen::VectorXd RobotSystem::initialFull(const Eigen::VectorXd& q0, double t0) c
       const int c = sampled() ? n_states_ + L.controller : L.controller;
       control::ControllerInputs in{st.sig.q_set[k], st.sig.qd_set[k], q0[k], q_in, 0.0, i, L.ratio, d.motor.V_supply};
       controllers_[static_cast<size_t>(k)].initialState(in, y.data() + c);
-      if (holds && d.controller.type == control::ControllerType::Cascade002) {
+      if (holds && d.controller.type == control::ControllerType::VoltageCascade) {
         // Integrators holding the static current and voltage: i_ref = I_vel ∫e_vel, V = I_cur ∫e_cur = R i.
         if (d.controller.I_vel > 0) y[c] = i / d.controller.I_vel;
         if (d.controller.I_cur > 0) y[c + 1] = d.motor.R * i / d.controller.I_cur;
-      } else if (holds && d.controller.type == control::ControllerType::MotorPPI000 && d.controller.ks > 0) {
+      } else if (holds && d.controller.type == control::ControllerType::TorqueCascade && d.controller.ks > 0) {
         y[c] += tau_M / d.controller.ks;
       }
     }
@@ -882,7 +884,7 @@ void RobotSystem::multiRateStep(State& st, double t, const Eigen::Ref<const Eige
     const DriveSpec& d = st.drives[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
     const CommandPort port = st.port[static_cast<size_t>(k)];
-    const bool cascade = d.controller.type == control::ControllerType::Cascade002;
+    const bool cascade = d.controller.type == control::ControllerType::VoltageCascade;
     double* x = L.controller >= 0 ? st.ctrl_x.data() + L.controller : nullptr;
     const double i_meas = measureCurrent(st, k, y);
     if (outer) {  // measure the joint and the motor, advance the outer loops over Ts_out
@@ -968,7 +970,7 @@ void RobotSystem::controllerStage(const State& st, const Eigen::Ref<const Eigen:
       if (!sampled())
         for (int j = 0; j < L.n_controller; ++j) ydot[L.controller + j] = 0.0;
     } else if (sampled()) {  // zero-order hold of the last sample's outputs
-      out.voltage = d.controller.type == control::ControllerType::Cascade002;
+      out.voltage = d.controller.type == control::ControllerType::VoltageCascade;
       out.u = st.held_u[k];
       out.i_ref = st.held_i_ref[k];
     } else {

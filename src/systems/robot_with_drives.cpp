@@ -16,25 +16,29 @@ control::JointControllerParams readController(const YamlValue& node) {
   control::JointControllerParams p;
   if (!node.defined()) return p;
   node.expectMap("a controller mapping {type, gains...}");
-  const YamlValue type = node.required("type", "cascade_002, motor_ppi_000 or none");
+  const YamlValue type = node.required("type", "voltage_cascade, torque_cascade or none");
   const std::string t = type.asString("a controller type");
+  // The names of earlier versions, numbered after the internal list of the source papers' models.
+  if (t == "cascade_002" || t == "motor_ppi_000")
+    type.fail("controller type '" + t + "' was renamed: use '" +
+              (t == "cascade_002" ? "voltage_cascade" : "torque_cascade") + "' (the same controller and gains)");
   auto gain = [&](const char* key, const std::string& unit) {
     const YamlValue g = node.required(key, std::string("gain in ") + unit);
     const double v = g.asDouble("a gain in " + unit);
     if (!(v >= 0.0)) g.failExpected("a gain >= 0 " + unit + " (negative gains destabilise the loop)");
     return v;
   };
-  if (t == "cascade_002") {
+  if (t == "voltage_cascade") {
     node.allowKeys({"type", "P_pos", "P_vel", "I_vel", "P_cur", "I_cur"});
-    p.type = control::ControllerType::Cascade002;
+    p.type = control::ControllerType::VoltageCascade;
     p.P_pos = gain("P_pos", "1/s");
     p.P_vel = gain("P_vel", "A·s/rad");
     p.I_vel = gain("I_vel", "A/rad");
     p.P_cur = gain("P_cur", "V/A");
     p.I_cur = gain("I_cur", "V/(A·s)");
-  } else if (t == "motor_ppi_000") {
+  } else if (t == "torque_cascade") {
     node.allowKeys({"type", "kp", "ks", "Ts"});
-    p.type = control::ControllerType::MotorPPI000;
+    p.type = control::ControllerType::TorqueCascade;
     p.kp = gain("kp", "1/s");
     p.ks = gain("ks", "N·m·s/rad");
     const YamlValue ts = node.required("Ts", "PI time constant in s");
@@ -43,7 +47,7 @@ control::JointControllerParams readController(const YamlValue& node) {
   } else if (t == "none") {
     node.allowKeys({"type"});
   } else {
-    type.failExpected("cascade_002, motor_ppi_000 or none");
+    type.failExpected("voltage_cascade, torque_cascade or none");
   }
   return p;
 }
@@ -104,7 +108,7 @@ RobotSystem loadRobotWithDrives(const std::string& path, const std::vector<Fault
       s.sensors.current_noise = nonneg("current_noise", "A");
     }
     s.electrics = d.has("electrics") ? d["electrics"].asBool("true or false")
-                                     : s.controller.type == control::ControllerType::Cascade002;
+                                     : s.controller.type == control::ControllerType::VoltageCascade;
     specs.push_back(std::move(s));
   }
   for (const auto& jn : model.joint_names) {

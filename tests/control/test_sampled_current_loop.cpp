@@ -20,7 +20,7 @@ namespace {
 
 control::JointControllerParams cascade(double P_cur, double I_cur) {
   control::JointControllerParams p;
-  p.type = control::ControllerType::Cascade002;
+  p.type = control::ControllerType::VoltageCascade;
   p.P_cur = P_cur;
   p.I_cur = I_cur;
   return p;

@@ -141,7 +141,7 @@ TEST(NoAllocation, RobotSystemCoupledRigidWithExternalWrenches) {
     d.motor.J_M = 0.014;
     d.electrics = false;
     d.transmission = std::make_shared<drive::RigidGear>(k < 3 ? 100.0 : 1.0);
-    d.controller.type = control::ControllerType::MotorPPI000;
+    d.controller.type = control::ControllerType::TorqueCascade;
     d.controller.kp = 0.008;
     d.controller.ks = 0.01;
     d.controller.Ts = 0.1;

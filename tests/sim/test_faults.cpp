@@ -94,7 +94,7 @@ TEST(Faults, EachTypeChangesTheParameterItNames) {
   systems::applyFault(d, {FaultType::TorqueConstantScale, "j", 0.9});
   EXPECT_DOUBLE_EQ(d.motor.kt, 0.9 * kt);
   EXPECT_DOUBLE_EQ(d.motor.ke, 0.9 * ke);
-  d.controller.type = control::ControllerType::Cascade002;
+  d.controller.type = control::ControllerType::VoltageCascade;
   systems::applyFault(d, {FaultType::SensorBias, "j", -2e-3});
   EXPECT_DOUBLE_EQ(d.sensors.joint_bias, -2e-3);
 
@@ -136,7 +136,7 @@ TEST(Faults, InapplicableOrOutOfRangeFaultsAreInputErrors) {
   // Faults that would leave the dynamics unchanged are refused rather than silently ignored.
   systems::DriveSpec ppi = elasticDrive();
   ppi.electrics = false;
-  ppi.controller.type = control::ControllerType::MotorPPI000;
+  ppi.controller.type = control::ControllerType::TorqueCascade;
   EXPECT_THROW(systems::applyFault(ppi, {FaultType::TorqueConstantScale, "j", 0.8}), InputError);
   EXPECT_THROW(systems::applyFault(ppi, {FaultType::SensorBias, "j", 1e-3}), InputError);
   for (const auto& n : systems::faultTypeNames()) EXPECT_EQ(systems::toString(systems::faultTypeFromString(n)), n);

@@ -31,7 +31,7 @@ std::vector<systems::DriveSpec> ur5Drives(const multibody::Model& m,
     d.motor = drive::DcMotorParams::ur5(k + 1);
     d.transmission = gear(k);
     if (controlled) {
-      d.controller.type = control::ControllerType::Cascade002;
+      d.controller.type = control::ControllerType::VoltageCascade;
       d.controller.P_pos = kGains[k][0];
       d.controller.P_vel = kGains[k][1];
       d.controller.I_vel = kGains[k][2];
@@ -215,7 +215,7 @@ TEST(RobotSystem, Irb140CoupledWristWith000ControllersHoldsAndBalancesTorques) {
     d.motor.J_M = 0.014;
     d.electrics = false;
     d.transmission = std::make_shared<drive::RigidGear>(ratio[k]);
-    d.controller.type = control::ControllerType::MotorPPI000;
+    d.controller.type = control::ControllerType::TorqueCascade;
     d.controller.kp = kp[k];
     d.controller.ks = ks[k];
     d.controller.Ts = Ts[k];

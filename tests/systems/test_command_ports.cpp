@@ -41,14 +41,14 @@ systems::RobotSystem singleJoint(bool electrics = true) {
   d.electrics = electrics;
   d.transmission = std::make_shared<drive::RigidGear>(kN);
   if (electrics) {
-    d.controller.type = control::ControllerType::Cascade002;
+    d.controller.type = control::ControllerType::VoltageCascade;
     d.controller.P_pos = 50;
     d.controller.P_vel = 0.2;
     d.controller.I_vel = 2.0;
     d.controller.P_cur = 10;
     d.controller.I_cur = 5000;
   } else {
-    d.controller.type = control::ControllerType::MotorPPI000;
+    d.controller.type = control::ControllerType::TorqueCascade;
     d.controller.kp = 20;
     d.controller.ks = 0.05;
     d.controller.Ts = 0.02;

@@ -115,7 +115,7 @@ TEST(StructuredJacobian, SampledControlAndCoupledRigidDrivesEqualPlainDifference
         d.transmission = std::make_shared<drive::ElasticGear>(
             drive::ElasticGearParams{101.0, 2e4, 5.0, drive::ComplianceSide::Output});
       d.friction = std::make_shared<drive::CoulombViscousFriction>(drive::CoulombViscousParams{0.5, 0.3, 1e-2});
-      d.controller.type = control::ControllerType::Cascade002;
+      d.controller.type = control::ControllerType::VoltageCascade;
       d.controller.P_pos = 3000;
       d.controller.P_vel = 1.0;
       d.controller.I_vel = 0.2;

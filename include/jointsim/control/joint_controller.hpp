@@ -1,12 +1,12 @@
 #pragma once
 /// \file
 /// Per-joint drive controllers (continuous-time):
-/// - `Cascade002` — [Raviola2023, §2.1, Table 1, App. A]: position P with motor-speed
+/// - `VoltageCascade` — [Raviola2023, §2.1, Table 1, App. A]: position P with motor-speed
 ///   feed-forward N q̇_set, motor-velocity PI giving the current reference, current PI giving the voltage
 ///   reference. Output: voltage [V] (saturated by the PWM stage). The current integrator stops while the
 ///   voltage is saturated and the error drives further into saturation (conditional-integration
 ///   anti-windup; [Raviola2023] states none — without it a saturated start winds up and overshoots).
-/// - `MotorPPI000` — [Olsson2017, §2.8, §3.10, Table 3.7, A.12]: u = N q̇_ref + kp (N q_ref − φ_m) − ω_m,
+/// - `TorqueCascade` — [Olsson2017, §2.8, §3.10, Table 3.7, A.12]: u = N q̇_ref + kp (N q_ref − φ_m) − ω_m,
 ///   τ_m = ks (u + x), ẋ = u/Ts, x(0) = −u(0). Output: motor torque [N·m] (no current loop).
 /// - `None` — zero motor torque (uncontrolled).
 /// Each controller is a pure function of its inputs and its internal state slice.
@@ -15,24 +15,24 @@
 
 namespace jointsim::control {
 
-enum class ControllerType { None, Cascade002, MotorPPI000 };
+enum class ControllerType { None, VoltageCascade, TorqueCascade };
 
 /// Where a command enters a controller (the command ports of systems::RobotSystem):
 /// - `Position`: the joint reference (q_set, q̇_set) through every loop;
 /// - `MotorVelocity`: a motor speed reference [rad/s] replaces the position loop's output;
-/// - `Current`: a current reference [A] replaces the velocity loop's output (Cascade002 only).
+/// - `Current`: a current reference [A] replaces the velocity loop's output (VoltageCascade only).
 /// Integrators of loops that a command bypasses are frozen (their derivative is zero).
 enum class ControlEntry { Position, MotorVelocity, Current };
 
 struct JointControllerParams {
   ControllerType type = ControllerType::None;
-  // Cascade002 ([Raviola2023, Table 1])
+  // VoltageCascade ([Raviola2023, Table 1])
   double P_pos = 0.0;  ///< position P: joint error [rad] → motor speed [rad/s] [1/s], >= 0
   double P_vel = 0.0;  ///< velocity P [A·s/rad], >= 0
   double I_vel = 0.0;  ///< velocity I [A/rad], >= 0
   double P_cur = 0.0;  ///< current P [V/A], >= 0
   double I_cur = 0.0;  ///< current I [V/(A·s)], >= 0
-  // MotorPPI000 ([Olsson2017, A.12])
+  // TorqueCascade ([Olsson2017, A.12])
   double kp = 0.0;   ///< position gain [1/s], >= 0
   double ks = 0.0;   ///< speed PI gain [N·m·s/rad], >= 0
   double Ts = 0.01;  ///< PI integrator time constant [s], > 0
@@ -47,7 +47,7 @@ struct ControllerInputs {
   double qm_fb = 0, qdm_fb = 0;                 ///< measured motor angle [rad] and speed [rad/s]
   double i_fb = 0;                              ///< measured motor current [A]
   double ratio = 1;                             ///< gear ratio N used to scale references
-  double v_limit = 0;                           ///< supply voltage [V] (Cascade002 anti-windup)
+  double v_limit = 0;                           ///< supply voltage [V] (VoltageCascade anti-windup)
   ControlEntry entry = ControlEntry::Position;  ///< where the command enters
   double command = 0;  ///< motor speed reference [rad/s] (MotorVelocity) or current reference [A] (Current)
 };
@@ -55,7 +55,7 @@ struct ControllerInputs {
 struct ControllerOutputs {
   bool voltage = false;  ///< true: `u` is a voltage command [V]; false: a motor torque [N·m]
   double u = 0.0;
-  double i_ref = 0.0;    ///< current reference [A] (Cascade002), else 0
+  double i_ref = 0.0;    ///< current reference [A] (VoltageCascade), else 0
   double qdm_ref = 0.0;  ///< motor speed reference [rad/s]
 };
 
@@ -69,10 +69,10 @@ class JointController {
   void initialState(const ControllerInputs& in, double* x) const;
   /// Outputs and state derivatives.
   ControllerOutputs evaluate(const ControllerInputs& in, const double* x, double* xdot) const;
-  /// Whether commands may enter at `entry` (Current needs a current loop: Cascade002).
+  /// Whether commands may enter at `entry` (Current needs a current loop: VoltageCascade).
   bool accepts(ControlEntry entry) const;
   /// Bumpless transfer: sets the integrator states x so that evaluate(in, x) gives the output `u` [V or N·m]
-  /// (and, for Cascade002 with a velocity loop in use, the current reference `i_ref` [A]) at this instant.
+  /// (and, for VoltageCascade with a velocity loop in use, the current reference `i_ref` [A]) at this instant.
   /// Integrators with a zero gain are left as they are.
   void matchOutput(const ControllerInputs& in, double u, double i_ref, double* x) const;
 

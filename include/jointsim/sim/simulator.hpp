@@ -62,7 +62,9 @@ struct AdvanceLimits {
 
 /// A complete snapshot of a simulator (Simulator::snapshot): the time, the continuous state, the plant's state
 /// (inputs, controllers, sensor memory, random generator, modes, faults) and the sample phase. Copyable (a deep
-/// copy); restore() it into the simulator it came from or into any simulator of the same plant.
+/// copy); restore() it into the simulator it came from or into any simulator of the same plant object, which must
+/// outlive the snapshot's use (toBytes() and loadState() carry a state to another plant object of the same
+/// configuration, in this process or another).
 class Snapshot {
  public:
   Snapshot() = default;

@@ -11,7 +11,7 @@
 /// | `coulomb_friction_scale`  | factor s, 0 < s <= 100 [-]    | Coulomb level × s: f_c, α0 (both directions), table torques |
 /// | `sigma0_scale`            | factor s, 0 < s <= 100 [-]    | bristle stiffness σ0 (LuGre, UR5 LuGre) or Dahl σ × s      |
 /// | `torque_constant_scale`   | factor s, 0 < s <= 100 [-]    | motor k_t and k_e × s (demagnetised motor); needs electrics |
-/// | `sensor_bias`             | bias, abs <= π [rad]          | offset of the measured joint angle; needs a controller that reads it (cascade_002) |
+/// | `sensor_bias`             | bias, abs <= π [rad]          | offset of the measured joint angle; needs a controller that reads it (voltage_cascade) |
 /// | `sensor_dropout`          | episode length w > 0 [s]      | the measured joint angle reads 0 rad during each episode   |
 /// | `sensor_stuck`            | episode length w > 0 [s]      | the measured joint angle holds its value from the episode's start |
 /// | `sensor_spike`            | amplitude A, abs <= π [rad]   | A added to the measured joint angle during each episode (of `width`) |

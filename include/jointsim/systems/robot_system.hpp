@@ -66,7 +66,7 @@ struct DriveSpec {
 /// - `Setpoint`: the joint reference (q, q̇, q̈) through the drive's controller (the default; the trajectory of
 ///   setTrajectory/setSetpoints, or values held from setSetpoint);
 /// - `MotorVelocity`: a motor speed reference [rad/s] into the velocity loop (the position loop bypassed);
-/// - `Current`: a current reference [A] into the current loop (a drive with electrics and cascade_002);
+/// - `Current`: a current reference [A] into the current loop (a drive with electrics and voltage_cascade);
 /// - `Voltage`: the motor voltage command [V] (a drive with electrics; the PWM saturation at ±V_supply applies);
 /// - `MotorTorque`: the electromagnetic motor torque [N·m] (electrics bypassed: the current state then relaxes
 ///   to τ/k_t with the electrical time constant L/R, so that it is consistent when the port switches back).

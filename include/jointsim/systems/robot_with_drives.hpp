@@ -9,10 +9,10 @@
 /// drives:
 ///   - joint: shoulder_pan_joint
 ///     motor: {preset: ur5_joint1}      # or R, L, kt, ke, J_M, V_supply
-///     electrics: true                  # default: true for cascade_002, false otherwise
+///     electrics: true                  # default: true for voltage_cascade, false otherwise
 ///     transmission: {type: strain_wave_gear, size: A}   # any joint-rig transmission
 ///     friction: {type: lugre_ur5, f_c: 7, f_v: 4, k_q: 1}   # on the gear output shaft (optional)
-///     controller: {type: cascade_002, P_pos: 7400, P_vel: 1, I_vel: 0.1, P_cur: 10, I_cur: 10000}
+///     controller: {type: voltage_cascade, P_pos: 7400, P_vel: 1, I_vel: 0.1, P_cur: 10, I_cur: 10000}
 /// coupling: [[...], ...]               # optional n×n matrix G: q_joint = G φ_gear_out
 /// ```
 
