@@ -65,17 +65,32 @@ struct BaseUnit {
 };
 bool baseUnit(const std::string& unit, BaseUnit& b) {
   static const std::map<std::string, BaseUnit> units = {
-      {"rad", {0, 0, 0, 0, 1}},        {"rad/s", {0, 0, -1, 0, 1}}, {"rad/s²", {0, 0, -2, 0, 1}},
-      {"m", {0, 1, 0, 0, 0}},          {"m/s", {0, 1, -1, 0, 0}},   {"s", {0, 0, 1, 0, 0}},
-      {"A", {0, 0, 0, 1, 0}},          {"V", {1, 2, -3, -1, 0}},    {"N·m", {1, 2, -2, 0, 0}},
-      {"N", {1, 1, -2, 0, 0}},         {"W", {1, 2, -3, 0, 0}},     {"J", {1, 2, -2, 0, 0}},
-      {"kg·m²", {1, 2, 0, 0, 0}},      {"Hz", {0, 0, -1, 0, 0}},    {"N·m/rad", {1, 2, -2, 0, -1}},
-      {"N·m·s/rad", {1, 2, -1, 0, -1}}};
+      {"rad", {0, 0, 0, 0, 1}},         {"rad/s", {0, 0, -1, 0, 1}}, {"rad/s2", {0, 0, -2, 0, 1}},
+      {"m", {0, 1, 0, 0, 0}},           {"m/s", {0, 1, -1, 0, 0}},   {"s", {0, 0, 1, 0, 0}},
+      {"A", {0, 0, 0, 1, 0}},           {"V", {1, 2, -3, -1, 0}},    {"N.m", {1, 2, -2, 0, 0}},
+      {"N", {1, 1, -2, 0, 0}},          {"W", {1, 2, -3, 0, 0}},     {"J", {1, 2, -2, 0, 0}},
+      {"kg.m2", {1, 2, 0, 0, 0}},       {"Hz", {0, 0, -1, 0, 0}},    {"N.m/rad", {1, 2, -2, 0, -1}},
+      {"N.m.s/rad", {1, 2, -1, 0, -1}}, {"Ohm", {1, 2, -3, -2, 0}}};
   auto it = units.find(unit);
   if (it == units.end()) return false;
   b = it->second;
   return true;
 }
+
+}  // namespace
+
+std::string fmuUnit(const std::string& unit) {
+  static const std::pair<const char*, const char*> ascii[] = {{"·", "."},   {"²", "2"}, {"³", "3"},
+                                                              {"Ω", "Ohm"}, {"µ", "u"}, {"°", "deg"}};
+  std::string out = unit;
+  for (const auto& [from, to] : ascii)
+    for (size_t at = out.find(from); at != std::string::npos;
+         at = out.find(from, at + std::char_traits<char>::length(to)))
+      out.replace(at, std::char_traits<char>::length(from), to);
+  return out;
+}
+
+namespace {
 
 // Every number of the document with its key path (a.b, a[0], a[0][1]) and its FMI name under the structured
 // naming convention (a.b, a[0], a[0,1]).
@@ -185,7 +200,7 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
           Variable v;
           v.name = std::string("cmd_") + systems::portName(port) + "_" + joint;
           v.causality = Causality::Input;
-          v.unit = info.unit;
+          v.unit = fmuUnit(info.unit);
           v.description = std::string(info.what) + " of " + joint + " (" + systems::portName(port) + " port)";
           v.joint = k;
           v.port = systems::portName(port);
@@ -203,7 +218,7 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
       v.port = "input";
       switch (rig->setup().input) {
         case systems::RigInput::MotorTorque:
-          v.unit = "N·m";
+          v.unit = "N.m";
           v.description = "motor torque";
           break;
         case systems::RigInput::Voltage:
@@ -233,6 +248,7 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
   for (int i : chosen) {
     Variable v;
     std::tie(v.name, v.unit) = splitColumn(signals[static_cast<size_t>(i)]);
+    v.unit = fmuUnit(v.unit);
     v.causality = Causality::Output;
     v.signal = i;
     v.description = "signal " + signals[static_cast<size_t>(i)];
@@ -271,10 +287,12 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
     }
   }
 
-  // Parameters.
+  // Parameters: the experiment file's numbers, but for `duration` (the importer sets the stop time; the DefaultExperiment
+  // carries it).
   std::vector<Variable> params;
   collectNumbers(experiment.config(), "", "", params);
-  for (auto& p : params) add(std::move(p));
+  for (auto& p : params)
+    if (p.key != "duration") add(std::move(p));
   return d;
 }
 

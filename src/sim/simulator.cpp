@@ -187,9 +187,17 @@ void Simulator::checkSnapshot(const Snapshot& snapshot, const char* what) const 
     throw InputError(plant_->name() + ": " + what +
                      ": the snapshot is of another plant object (restore bytes of it, loadState, to move a state "
                      "between plant objects of the same configuration)");
-  if (snapshot.y_.size() != plant_->stateSize() || !snapshot.y_.allFinite() || !std::isfinite(snapshot.t_) ||
-      !std::isfinite(snapshot.t0_) || snapshot.sample_k_ < 1 || !(snapshot.t_sample_ >= snapshot.t_ - 1e-9) ||
-      (Ts_ > 0.0 && !std::isfinite(snapshot.t_sample_)))
+  // The sample phase as reset() and takeSample() make it: the next sample at t0 + k·T_s, not before the time and at
+  // most one period after it (none without a sampled part).
+  const Snapshot& s = snapshot;
+  const double tol = 1e-9 * std::max(1.0, std::abs(s.t_));
+  const bool phase_ok = Ts_ > 0.0
+                            ? s.sample_k_ >= 1 && s.sample_k_ < (1L << 52) && std::isfinite(s.t_sample_) &&
+                                  s.t_sample_ == s.t0_ + static_cast<double>(s.sample_k_) * Ts_ &&
+                                  s.t_sample_ >= s.t_ - tol && s.t_sample_ <= s.t_ + Ts_ + tol && s.t0_ <= s.t_ + tol
+                            : s.t_sample_ == kInf;
+  if (s.y_.size() != plant_->stateSize() || !s.y_.allFinite() || !std::isfinite(s.t_) || !std::isfinite(s.t0_) ||
+      !phase_ok)
     throw InputError(plant_->name() + ": " + what + ": an inconsistent snapshot (time " + formatNumber(snapshot.t_) +
                      " s, " + std::to_string(snapshot.y_.size()) + " states, next sample at " +
                      formatNumber(snapshot.t_sample_) + " s)");
@@ -225,7 +233,7 @@ std::string Snapshot::toBytes() const {
   out.vector(y_);
   out.i64(sample_k_);
   out.f64(t_sample_);
-  out.i64(seen_revision_ - plant_state_->inputRevision());  // an input change not yet applied: != 0
+  out.boolean(seen_revision_ != plant_state_->inputRevision());  // an input change not yet applied
   out.tag("plant state");
   plant_state_->save(out);
   out.tag("end");
@@ -247,13 +255,13 @@ Snapshot Snapshot::fromBytes(const Plant& plant, const std::string& bytes) {
   s.y_ = in.vector("continuous state", plant.stateSize());
   s.sample_k_ = in.i64("sample index");
   s.t_sample_ = in.f64("next sample time");
-  const std::int64_t pending = in.i64("input revision");
+  const bool pending = in.boolean("input change pending");
   in.tag("plant state");
   s.plant_state_ = plant.makeState();
   s.plant_state_->load(in);
   in.tag("end");
   in.finish();
-  s.seen_revision_ = s.plant_state_->inputRevision() + pending;
+  s.seen_revision_ = s.plant_state_->inputRevision() - (pending ? 1 : 0);
   return s;
 }
 

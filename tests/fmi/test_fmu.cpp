@@ -214,7 +214,16 @@ TEST(FmuDescription, JsonRoundTripAndModelDescription) {
   EXPECT_NEAR(d.variables[0].start, 0.0, 1e-12);  // the trajectory's offset of joint 1
   EXPECT_NEAR(d.variables[2].start, -1.2, 1e-12);
   const std::string xml = d.modelDescriptionXml();
-  EXPECT_NE(xml.find("<Unit name=\"N·m\"><BaseUnit kg=\"1\" m=\"2\" s=\"-2\"/></Unit>"), std::string::npos);
+  EXPECT_NE(xml.find("<Unit name=\"N.m\"><BaseUnit kg=\"1\" m=\"2\" s=\"-2\"/></Unit>"), std::string::npos);
+  for (const fmi::Variable& v : d.variables) {  // ASCII unit names (N.m, rad/s2); no parameter without effect
+    for (const char c : v.unit) EXPECT_GE(static_cast<unsigned char>(c), 0x20) << v.name << " [" << v.unit << "]";
+    for (const char c : v.unit) EXPECT_LT(static_cast<unsigned char>(c), 0x80) << v.name << " [" << v.unit << "]";
+    EXPECT_NE(v.key, "duration");
+  }
+  EXPECT_NE(xml.find("unit=\"N.m\""), std::string::npos);
+  EXPECT_EQ(fmi::fmuUnit("kg·m²"), "kg.m2");
+  EXPECT_EQ(fmi::fmuUnit("N·m·s/rad"), "N.m.s/rad");
+  EXPECT_EQ(fmi::fmuUnit("Ω"), "Ohm");
   EXPECT_NE(xml.find("name=\"trajectory.a[0,1]\""), std::string::npos);  // key trajectory.a[0][1]
   EXPECT_NE(xml.find("stopTime=\"10\""), std::string::npos);
   nlohmann::ordered_json bad = d.toJson();

@@ -60,6 +60,10 @@ struct Variable {
   std::string fault;
 };
 
+/// A unit in the ASCII notation of FMI unit names and Modelica: N·m → N.m, kg·m² → kg.m2, Ω → Ohm (jointsim's own
+/// files and CSV headers keep N·m).
+std::string fmuUnit(const std::string& unit);
+
 /// What the FMU binary needs to rebuild the experiment: written to resources/jointsim_fmu.json by the exporter.
 struct FmuDescription {
   std::string model_identifier;        ///< the binary's name (NAME.so) and the model name
