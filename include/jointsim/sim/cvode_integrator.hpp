@@ -96,7 +96,7 @@ struct CvodeOptions {
   /// creep towards that time until max_num_steps is spent. 0 = every non-finite result is fatal.
   int max_nonfinite_retries = 100;
   /// How sim::simulate and sim::Simulator go on where a held input jumps: at the samples of a sampled (zero-order
-  /// hold) controller and where an input set between steps changes (Plant::inputRevision). The state is continuous
+  /// hold) controller and where an input set between steps changes (PlantState::inputRevision). The state is continuous
   /// there; only its derivative jumps.
   /// - `KeepHistory` (default): where the jump is small, h‖Δẏ‖_w ≤ 1 (CvodeIntegrator::jumpError: the next step
   ///   then passes the error test), the integrator stops exactly at the jump (a stop time) and continues with its
