@@ -412,26 +412,43 @@ Status Instance::setState(const State* state) {
   Impl& m = *impl_;
   if (state == nullptr) return m.error("fmi2SetFMUstate: null state");
   if (m.phase == Phase::Terminated) return m.wrongPhase("fmi2SetFMUstate");
-  return m.guarded("fmi2SetFMUstate", [&] {
-    m.values = state->values;
-    if (state->experiment && !state->snapshot.empty()) {
-      // The same loaded experiment (its parameters) as when the state was taken: a simulator on it if the instance
-      // has moved on to another one (fmi2Reset, new parameters).
-      if (m.experiment != state->experiment || !m.sim) {
-        m.experiment = state->experiment;
-        m.sim = experiments::makeSimulator(m.experiment);
-        sim::AdvanceLimits limits;
-        limits.max_steps = m.sim->integratorOptions().max_num_steps;
-        m.sim->setLimits(limits);
-      }
-      m.sim->restore(state->snapshot);
-    } else {
-      m.build();  // the experiment with the state's parameter values
-      m.sim->loadState(state->snapshot_bytes);
-    }
-    m.params_changed = false;
-    m.phase = state->phase;
-  });
+  // All or nothing: the instance's experiment, simulator and values change only once the state has been applied.
+  auto values = m.values;
+  auto experiment = m.experiment;
+  std::unique_ptr<sim::Simulator> simulator = std::move(m.sim);
+  const bool params_changed = m.params_changed;
+  const Status s = m.guarded(
+      "fmi2SetFMUstate",
+      [&] {
+        m.values = state->values;
+        if (state->experiment && !state->snapshot.empty()) {
+          // The loaded experiment (its parameters) of when the state was taken, with a simulator of its own.
+          if (experiment == state->experiment && simulator) {
+            m.sim = std::make_unique<sim::Simulator>(*simulator);
+          } else {
+            m.experiment = state->experiment;
+            m.sim = experiments::makeSimulator(m.experiment);
+            sim::AdvanceLimits limits;
+            limits.max_steps = m.sim->integratorOptions().max_num_steps;
+            m.sim->setLimits(limits);
+          }
+          m.sim->restore(state->snapshot);
+        } else {
+          m.build();  // the experiment with the state's parameter values
+          m.sim->loadState(state->snapshot_bytes);
+        }
+      },
+      false);
+  if (s != Status::OK) {
+    m.values = std::move(values);
+    m.experiment = std::move(experiment);
+    m.sim = std::move(simulator);
+    m.params_changed = params_changed;
+    return s;
+  }
+  m.params_changed = false;
+  m.phase = state->phase;
+  return s;
 }
 
 void Instance::freeState(State* state) { delete state; }

@@ -1,6 +1,7 @@
 #include "jointsim/sim/simulate.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -52,9 +53,34 @@ SimulateOptions SimulateOptions::everyInterval(double t_end, double interval, co
   return o;
 }
 
-void Plant::foreignState(const PlantState& state) const {
-  throw InputError(name() + ": given a state made by another plant (" + state.owner().name() +
-                   "); make it with this plant's makeState()");
+namespace {
+std::uint64_t nextPlantId() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
+}
+}  // namespace
+
+Plant::Plant() : id_(nextPlantId()) {}
+Plant::Plant(const Plant&) : id_(nextPlantId()) {}
+Plant& Plant::operator=(const Plant&) {
+  id_ = nextPlantId();  // the states made so far belong to the plant as it was
+  frozen_.store(false, std::memory_order_relaxed);
+  return *this;
+}
+
+PlantState::PlantState(const Plant& owner) : owner_(&owner), owner_id_(owner.id()) {}
+
+void Plant::foreignState() const {
+  // (That plant may be gone: it is not asked for its name.)
+  throw InputError(name() + ": given a state made by another plant object; make it with this plant's makeState()");
+}
+
+void Plant::checkConfigurable(const char* setter) const {
+  if (frozen())
+    throw InputError(
+        name() + ": " + setter +
+        ": the plant is in use by a simulator (it is shared by the simulators made on it, and their states "
+        "are sized for its configuration): configure it before simulating it");
 }
 
 int signalIndex(const Plant& plant, const std::string& name) {
@@ -99,8 +125,9 @@ SimulationResult simulate(const Plant& plant, const SimulateOptions& options, co
 SimulationResult simulate(const Plant& plant, PlantState& state, const SimulateOptions& options,
                           const OutputSink& sink) {
   options.validate();
-  if (&state.owner() != &plant)
-    throw InputError(plant.name() + ": simulate: given a state made by another plant (" + state.owner().name() + ")");
+  if (state.ownerId() != plant.id())
+    throw InputError(plant.name() + ": simulate: given a state made by another plant object");
+  plant.freeze();
   CvodeOptions solver = options.solver;
   if (solver.component.empty()) solver.component = plant.name();
   if (!solver.state_name) solver.state_name = [&plant](int i) { return plant.stateName(i); };

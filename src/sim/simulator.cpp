@@ -22,6 +22,9 @@ bool near(double a, double b) { return std::abs(a - b) <= kSnap * std::max(1.0, 
 double clockSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
+/// Largest magnitude of a simulator's time [s] (31 years): beyond it the sample and event arithmetic loses its
+/// resolution (a sample period below the spacing of doubles would never advance).
+constexpr double kMaxTime = 1e9;
 /// Thrown through CVODE by the right-hand side's guard: the call ends (Simulator::stopped).
 struct StopAdvance {};
 /// Largest step limit of a call (far beyond any run; keeps the step arithmetic of the limit far from overflow).
@@ -77,9 +80,9 @@ Simulator::Simulator(std::shared_ptr<const Plant> plant, const CvodeOptions& sol
   reset();
 }
 
-Simulator::Simulator(const Simulator& other) : plant_(other.plant_), limits_(other.limits_) {
+Simulator::Simulator(Simulator& other) : plant_(other.plant_), limits_(other.limits_) {
   build(other.integ_->options());
-  restore(const_cast<Simulator&>(other).snapshot());
+  restore(other.snapshot());
 }
 
 void Simulator::build(const CvodeOptions& solver) {
@@ -90,6 +93,7 @@ void Simulator::build(const CvodeOptions& solver) {
     options.state_name = [p](int i) { return p->stateName(i); };
   }
   component_ = options.component;
+  plant_->freeze();  // shared from now on: its configuration must not change under its simulators' states
   keep_history_ = options.input_jump == CvodeOptions::InputJump::KeepHistory;
   const int n = plant_->stateSize();
   state_ = plant_->makeState();
@@ -133,8 +137,12 @@ void Simulator::reset() {
 
 void Simulator::reset(double t0, const Eigen::VectorXd& y0) {
   const int n = plant_->stateSize();
-  if (!std::isfinite(t0))
-    throw InputError(plant_->name() + ": reset: the time must be finite, got " + formatNumber(t0));
+  if (!(std::abs(t0) <= kMaxTime))
+    throw InputError(plant_->name() + ": reset: expected a time within ±" + formatNumber(kMaxTime) + " s, got " +
+                     formatNumber(t0));
+  if (Ts_ > 0.0 && !(t0 + 2.0 * Ts_ > t0 + Ts_))
+    throw InputError(plant_->name() + ": reset: at t = " + formatNumber(t0) + " s the sample period " +
+                     formatNumber(Ts_) + " s is below the time resolution");
   if (y0.size() != n)
     throw InputError(plant_->name() + ": reset: the state has " + std::to_string(y0.size()) + " entries, expected " +
                      std::to_string(n));
@@ -183,7 +191,7 @@ Snapshot Simulator::snapshot() {
 
 void Simulator::checkSnapshot(const Snapshot& snapshot, const char* what) const {
   if (snapshot.empty()) throw InputError(plant_->name() + ": " + what + ": the snapshot is empty");
-  if (&snapshot.plant_state_->owner() != plant_.get())  // (that plant may be gone: it is not asked for its name)
+  if (snapshot.plant_state_->ownerId() != plant_->id())  // (that plant may be gone: it is not asked for its name)
     throw InputError(plant_->name() + ": " + what +
                      ": the snapshot is of another plant object (restore bytes of it, loadState, to move a state "
                      "between plant objects of the same configuration)");
@@ -191,13 +199,13 @@ void Simulator::checkSnapshot(const Snapshot& snapshot, const char* what) const 
   // most one period after it (none without a sampled part).
   const Snapshot& s = snapshot;
   const double tol = 1e-9 * std::max(1.0, std::abs(s.t_));
-  const bool phase_ok = Ts_ > 0.0
-                            ? s.sample_k_ >= 1 && s.sample_k_ < (1L << 52) && std::isfinite(s.t_sample_) &&
-                                  s.t_sample_ == s.t0_ + static_cast<double>(s.sample_k_) * Ts_ &&
-                                  s.t_sample_ >= s.t_ - tol && s.t_sample_ <= s.t_ + Ts_ + tol && s.t0_ <= s.t_ + tol
-                            : s.t_sample_ == kInf;
-  if (s.y_.size() != plant_->stateSize() || !s.y_.allFinite() || !std::isfinite(s.t_) || !std::isfinite(s.t0_) ||
-      !phase_ok)
+  const bool phase_ok = Ts_ > 0.0 ? s.sample_k_ >= 1 && s.sample_k_ < (1L << 52) && std::isfinite(s.t_sample_) &&
+                                        s.t_sample_ == s.t0_ + static_cast<double>(s.sample_k_) * Ts_ &&
+                                        s.t_sample_ >= s.t_ - tol && s.t_sample_ <= s.t_ + Ts_ + tol &&
+                                        s.t_sample_ + Ts_ > s.t_sample_
+                                  : s.t_sample_ == kInf;
+  if (s.y_.size() != plant_->stateSize() || !s.y_.allFinite() || !(std::abs(s.t_) <= kMaxTime) ||
+      !(std::abs(s.t0_) <= kMaxTime) || !(s.t0_ <= s.t_) || !phase_ok)
     throw InputError(plant_->name() + ": " + what + ": an inconsistent snapshot (time " + formatNumber(snapshot.t_) +
                      " s, " + std::to_string(snapshot.y_.size()) + " states, next sample at " +
                      formatNumber(snapshot.t_sample_) + " s)");

@@ -99,6 +99,9 @@ void JointRig::State::load(ByteReader& in) {
   held = in.boolean("held");
   command = in.f64("command");
   load_torque = in.f64("load torque");
+  if (!std::isfinite(command) || !std::isfinite(load_torque)) in.fail("a command or load torque that is not finite");
+  if (load_torque != 0.0 && static_cast<const JointRig&>(owner()).s_.clamped)
+    in.fail("a load torque on a clamped output");
 }
 
 void JointRig::setCommand(sim::PlantState& state, double value) const {

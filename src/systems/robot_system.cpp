@@ -173,6 +173,14 @@ RobotSystem::State::State(const RobotSystem& robot)
   M.setZero(n, n);
   llt = Eigen::LLT<Eigen::MatrixXd>(n);
   llt.compute(Eigen::MatrixXd::Identity(n, n));  // a defined status before the first use (the object is copied)
+  // The Jacobian's workspace, sized here: jacobian() does not allocate.
+  jac_structure = robot.jacobianStructure(&jac_block_drive);
+  jac_y.setZero(robot.n_states_);
+  jac_f.setZero(robot.n_states_);
+  jac_tau0.setZero(n);
+  jac_qdd0.setZero(n);
+  jac_tau.setZero(n);
+  jac_P.setZero(n, n);
   // The faults as they are at t = 0 (start() sets them for its start time and state).
   if (!robot.faults_.empty()) robot.updateFaults(*this, 0.0, Eigen::VectorXd::Zero(robot.n_states_), true);
 }
@@ -239,41 +247,71 @@ void RobotSystem::State::load(ByteReader& in) {
     if (v > static_cast<std::uint64_t>(CommandPort::MotorTorque)) in.fail(std::string("bad ") + field);
     return static_cast<CommandPort>(v);
   };
+  // Everything the setters would refuse is refused here too: a state of bytes is no less checked than one of calls.
+  auto finite = [&in](const Eigen::VectorXd& v, const char* what) {
+    if (!v.allFinite()) in.fail(std::string(what) + ": a value that is not finite");
+    return v;
+  };
   in.tag("robot inputs");
   for (int k = 0; k < n; ++k) {
-    port[static_cast<size_t>(k)] = portOf("command port");
-    applied_port[static_cast<size_t>(k)] = portOf("applied command port");
+    for (CommandPort* p : {&port[static_cast<size_t>(k)], &applied_port[static_cast<size_t>(k)]}) {
+      *p = portOf("command port");
+      const std::string why = robot.portRefusal(k, *p);
+      if (!why.empty()) in.fail(std::string("joint ") + std::to_string(k) + ": the " + portName(*p) + " port " + why);
+    }
   }
-  cmd = in.vector("commands", n);
-  applied_cmd = in.vector("applied commands", n);
+  cmd = finite(in.vector("commands", n), "commands");
+  applied_cmd = finite(in.vector("applied commands", n), "applied commands");
   ref_held = in.flags("held references", n);
-  ref_q = in.vector("held q", n);
-  ref_qd = in.vector("held qd", n);
-  ref_qdd = in.vector("held qdd", n);
-  q_start = in.vector("start angles", n);
+  for (char h : ref_held)
+    if (h != 0 && h != 1) in.fail("held references: expected 0 or 1");
+  ref_q = finite(in.vector("held q", n), "held q");
+  ref_qd = finite(in.vector("held qd", n), "held qd");
+  ref_qdd = finite(in.vector("held qdd", n), "held qdd");
+  q_start = finite(in.vector("start angles", n), "start angles");
   const std::uint64_t wrenches = in.u64("external wrenches");
   if (wrenches > robot.model_.frames.size()) in.fail("more external wrenches than frames");
   user_wrenches.clear();
   for (std::uint64_t i = 0; i < wrenches; ++i) {
     const std::int64_t f = in.i64("wrench frame");
-    if (f < 0 || f >= static_cast<std::int64_t>(robot.model_.frames.size())) in.fail("bad wrench frame");
-    user_wrenches.emplace_back(static_cast<int>(f), in.vector("wrench", 6));
+    if (f < 0 || f >= static_cast<std::int64_t>(robot.model_.frames.size()) ||
+        robot.model_.frames[static_cast<size_t>(f)].joint < 0)
+      in.fail("wrench frame " + std::to_string(f) + ": not a frame on a moving body");
+    for (const auto& w : user_wrenches)
+      if (w.first == f) in.fail("two wrenches on frame " + std::to_string(f));
+    const Eigen::VectorXd w = finite(in.vector("wrench", 6), "wrench");
+    if (w.isZero(0.0)) in.fail("a zero wrench (setExternalWrench removes those)");
+    user_wrenches.emplace_back(static_cast<int>(f), w);
   }
   in.tag("sampled control");
   ctrl_x = in.doubles("controller states", static_cast<long>(ctrl_x.size()));
-  held_u = in.vector("held outputs", n);
-  held_i_ref = in.vector("held current references", n);
-  held_q_fb = in.vector("held joint feedback", n);
-  prev_qm_meas = in.vector("encoder memory", n);
+  for (double x : ctrl_x)
+    if (!std::isfinite(x)) in.fail("controller states: a value that is not finite");
+  held_u = finite(in.vector("held outputs", n), "held outputs");
+  held_i_ref = finite(in.vector("held current references", n), "held current references");
+  held_q_fb = finite(in.vector("held joint feedback", n), "held joint feedback");
+  prev_qm_meas = finite(in.vector("encoder memory", n), "encoder memory");
   first_sample = in.boolean("first sample");
   inner_count = in.i64("current-loop samples");
-  if (!unstreamed(in.text("noise generator"), engine)) in.fail("bad noise generator state");
-  if (!unstreamed(in.text("noise distribution"), normal)) in.fail("bad noise distribution state");
+  if (inner_count < 0 || inner_count > (1L << 60)) in.fail("current-loop samples: out of range");
+  std::mt19937_64 engine_read;
+  std::normal_distribution<double> normal_read;
+  if (!unstreamed(in.text("noise generator"), engine_read)) in.fail("bad noise generator state");
+  if (!unstreamed(in.text("noise distribution"), normal_read) || normal_read.mean() != 0.0 ||
+      normal_read.stddev() != 1.0)
+    in.fail("bad noise distribution state (expected the standard normal distribution)");
+  engine = engine_read;
+  normal = normal_read;
   in.tag("faults");
   fault_applied = in.doubles("applied fault values", static_cast<long>(fault_applied.size()));
+  for (size_t i = 0; i < fault_applied.size(); ++i)  // NaN: a parameter fault before its onset
+    if (std::isinf(fault_applied[i]) || (std::isnan(fault_applied[i]) && !robot.faults_[i].parameterFault()))
+      in.fail("applied fault values: a value that is not finite");
   if (in.u64("stuck episodes") != stuck_episode.size()) in.fail("another number of faults");
   for (long& e : stuck_episode) e = in.i64("stuck episode");
   stuck_value = in.doubles("stuck values", static_cast<long>(stuck_value.size()));
+  for (double v : stuck_value)
+    if (!std::isfinite(v)) in.fail("stuck values: a value that is not finite");
   robot.rebuildDrives(*this, {});
 }
 
@@ -319,31 +357,36 @@ void RobotSystem::setCommandPort(sim::PlantState& state, int joint, CommandPort 
   State& st = own<State>(state);
   checkJoint(joint, "setCommandPort");
   const size_t k = static_cast<size_t>(joint);
-  const DriveSpec& d = st.drives[k];
-  const std::string where = name() + ": joint '" + d.joint + "': the " + portName(port) + " port ";
-  const bool electrics = layout_[k].current >= 0;
-  switch (port) {
-    case CommandPort::Setpoint: break;
-    case CommandPort::MotorVelocity:
-      if (!controllers_[k].accepts(control::ControlEntry::MotorVelocity))
-        throw InputError(where + "needs a controller with a velocity loop (the drive has controller type none)");
-      break;
-    case CommandPort::Current:
-      if (!electrics || !controllers_[k].accepts(control::ControlEntry::Current))
-        throw InputError(where +
-                         "needs motor electrics and a current loop (controller voltage_cascade); this drive has " +
-                         (electrics ? "no current loop" : "electrics: false"));
-      break;
-    case CommandPort::Voltage:
-      if (!electrics) throw InputError(where + "needs motor electrics (the drive has electrics: false)");
-      break;
-    case CommandPort::MotorTorque: break;
-  }
+  const std::string why = portRefusal(joint, port);
+  if (!why.empty())
+    throw InputError(name() + ": joint '" + drives_[k].joint + "': the " + portName(port) + " port " + why);
   if (st.port[k] != port) {
     st.port[k] = port;
     st.cmd[joint] = 0.0;  // a new port starts from a zero command unless set
     st.inputsChanged();
   }
+}
+
+std::string RobotSystem::portRefusal(int joint, CommandPort port) const {
+  const size_t k = static_cast<size_t>(joint);
+  const bool electrics = layout_[k].current >= 0;
+  switch (port) {
+    case CommandPort::Setpoint: break;
+    case CommandPort::MotorVelocity:
+      if (!controllers_[k].accepts(control::ControlEntry::MotorVelocity))
+        return "needs a controller with a velocity loop (the drive has controller type none)";
+      break;
+    case CommandPort::Current:
+      if (!electrics || !controllers_[k].accepts(control::ControlEntry::Current))
+        return std::string("needs motor electrics and a current loop (controller voltage_cascade); this drive has ") +
+               (electrics ? "no current loop" : "electrics: false");
+      break;
+    case CommandPort::Voltage:
+      if (!electrics) return "needs motor electrics (the drive has electrics: false)";
+      break;
+    case CommandPort::MotorTorque: break;
+  }
+  return {};
 }
 
 CommandPort RobotSystem::commandPort(const sim::PlantState& state, int joint) const {
@@ -525,6 +568,7 @@ void RobotSystem::bumpless(State& st, int k, CommandPort from, double t, Eigen::
 }
 
 void RobotSystem::setJointLimits(const JointLimitSettings& settings) {
+  checkConfigurable("setJointLimits");
   signal_names_.resize(signal_names_.size() - stops_.joints().size());  // the signals of earlier stops
   stops_ = EndStops(model_, settings);
   for (int i : stops_.joints())
@@ -537,11 +581,13 @@ void RobotSystem::roots(const sim::PlantState&, double, const Eigen::Ref<const E
 }
 
 void RobotSystem::setSetpoints(SetpointFunction f) {
+  checkConfigurable("setSetpoints");
   setpoints_ = std::move(f);
   setpoint_breaks_.clear();
 }
 
 void RobotSystem::setTrajectory(std::shared_ptr<const control::JointTrajectory> trajectory) {
+  checkConfigurable("setTrajectory");
   if (!trajectory) throw InputError(name() + ": no trajectory given");
   if (trajectory->dof() != model_.nq)
     throw InputError(name() + ": the trajectory has " + std::to_string(trajectory->dof()) + " joints, the robot " +
@@ -552,6 +598,7 @@ void RobotSystem::setTrajectory(std::shared_ptr<const control::JointTrajectory> 
 }
 
 void RobotSystem::setInitialPositions(const Eigen::VectorXd& q0) {
+  checkConfigurable("setInitialPositions");
   if (q0.size() != model_.nq)
     throw InputError(name() + ": initial joint positions: expected " + std::to_string(model_.nq) + " values");
   q0_ = q0;
@@ -606,6 +653,7 @@ std::vector<double> RobotSystem::timeEvents(double t_end) const {
 }
 
 void RobotSystem::setFaults(std::vector<Fault> faults) {
+  checkConfigurable("setFaults");
   std::vector<int> drive;
   for (const Fault& f : faults) {
     const int k = model_.jointIndex(f.joint);  // InputError for an unknown joint
@@ -687,7 +735,13 @@ void RobotSystem::start(sim::PlantState& state, double t0, const Eigen::Ref<cons
   }
 }
 
+void RobotSystem::setExternalWrenches(WrenchFunction f) {
+  checkConfigurable("setExternalWrenches");
+  wrenches_ = std::move(f);
+}
+
 void RobotSystem::setSampledControl(double rate, unsigned seed, double current_rate) {
+  checkConfigurable("setSampledControl");
   if (!(rate > 0.0) || !std::isfinite(rate)) throw InputError("control rate: expected a sampling rate > 0 Hz");
   if (sample_rate_ > 0.0) throw InputError("sampled control already set");
   long per_outer = 1;
@@ -1163,15 +1217,6 @@ void RobotSystem::jacobian(const sim::PlantState& state, double t, const Eigen::
                            Eigen::Ref<Eigen::MatrixXd> J) const {
   const State& st = own<State>(state);
   const int n = model_.nq;
-  if (st.jac_y.size() != n_states_) {  // first call for this state layout
-    st.jac_structure = jacobianStructure(&st.jac_block_drive);
-    st.jac_y.resize(n_states_);
-    st.jac_f.resize(n_states_);
-    st.jac_tau0.resize(n);
-    st.jac_qdd0.resize(n);
-    st.jac_tau.resize(n);
-    st.jac_P.resize(n, n);
-  }
   Eigen::VectorXd& yp = st.jac_y;
   Eigen::VectorXd& fp = st.jac_f;
   yp = y;

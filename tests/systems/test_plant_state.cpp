@@ -7,10 +7,12 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "jointsim/common/bytes.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/sim/simulate.hpp"
@@ -198,6 +200,77 @@ TEST(PlantState, ResetStartsAFreshRunAndBadSnapshotsAreRefused) {
   EXPECT_THROW(e->plant().derivatives(*foreign, 0.0, y, yd), InputError);
   sim::Simulator s2(e2->plant());
   EXPECT_THROW(s->restore(s2.snapshot()), InputError);
+}
+
+}  // namespace
+}  // namespace jointsim
+
+namespace jointsim {
+namespace {
+
+/// `bytes` with the first occurrence of `from` replaced by `to` (both the same length); fails the test if absent.
+std::string replaced(std::string bytes, const std::string& from, const std::string& to) {
+  const size_t at = bytes.find(from);
+  EXPECT_NE(at, std::string::npos);
+  if (at != std::string::npos) bytes.replace(at, from.size(), to);
+  return bytes;
+}
+
+std::string u64(std::uint64_t v) {
+  ByteWriter w;
+  w.u64(v);
+  return w.bytes();
+}
+
+std::string f64(double v) {
+  ByteWriter w;
+  w.f64(v);
+  return w.bytes();
+}
+
+static_assert(!std::is_constructible_v<sim::Simulator, systems::RobotSystem&&>,
+              "a simulator of a temporary plant would outlive it");
+static_assert(!std::is_constructible_v<sim::Simulator, const sim::Simulator&>,
+              "copying a simulator takes a snapshot of it: not of a const one");
+
+TEST(PlantState, SavedStatesThatTheSettersWouldRefuseAreRefused) {
+  const auto e = std::shared_ptr<experiments::Experiment>(
+      experiments::loadExperiment(test::sourcePath("config/experiments/ur5_excitation.yaml"), {"duration=0.1"}));
+  const auto s = experiments::makeSimulator(e);
+  const auto& robot = dynamic_cast<const systems::RobotSystem&>(s->plant());
+  const int tip = robot.model().frameIndex(robot.model().tip_frame);
+  Eigen::Matrix<double, 6, 1> w;
+  w << 1.25, -2.5, 3.75, 0.0, 0.0, 0.0;
+  robot.setExternalWrench(s->plantState(), robot.model().tip_frame, w);
+  s->advance(2e-3);
+  const std::string good = s->saveState();
+  const double t = s->time();
+  const Eigen::VectorXd y = s->state();
+  // A wrench on the base frame (which setExternalWrench refuses: nothing moves it).
+  const std::string wrench = u64(1) + u64(static_cast<std::uint64_t>(tip)) + u64(6) + f64(1.25);
+  EXPECT_THROW(s->loadState(replaced(good, wrench, u64(1) + u64(0) + u64(6) + f64(1.25))), InputError);
+  // A non-finite wrench.
+  EXPECT_THROW(s->loadState(replaced(good, f64(1.25), f64(std::nan("")))), InputError);
+  // A time far beyond the simulator's range (the sample and event arithmetic would lose its resolution).
+  EXPECT_THROW(s->loadState(replaced(good, f64(t), f64(1e20))), InputError);
+  EXPECT_EQ(s->time(), t);
+  expectIdentical(s->state(), y, "after refused loads");
+  s->loadState(good);  // the good bytes still load
+  EXPECT_THROW(s->reset(1e20, y), InputError);
+
+  // The robot is in use by a simulator: its configuration is fixed.
+  EXPECT_TRUE(robot.frozen());
+  auto& mutable_robot = const_cast<systems::RobotSystem&>(robot);  // as a user holding the robot itself could
+  EXPECT_THROW(mutable_robot.setSampledControl(20000.0, 1), InputError);
+  EXPECT_THROW(mutable_robot.setFaults({}), InputError);
+  EXPECT_THROW(mutable_robot.setJointLimits(systems::JointLimitSettings{}), InputError);
+  // A copy of the robot is another plant: configurable, and a state of one is refused by the other.
+  systems::RobotSystem copy = robot;
+  EXPECT_FALSE(copy.frozen());
+  EXPECT_NE(copy.id(), robot.id());
+  EXPECT_NO_THROW(copy.setSampledControl(20000.0, 1));
+  Eigen::VectorXd yd(copy.stateSize());
+  EXPECT_THROW(copy.derivatives(s->plantState(), 0.0, copy.initialState(), yd), InputError);
 }
 
 }  // namespace

@@ -25,6 +25,8 @@
 /// and difference them freely. The discrete state changes only in start(), updateModes(), sample() and by a
 /// plant's input setters, which the simulators follow by a restart (or a kept history, at an input jump).
 
+#include <atomic>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -44,10 +46,12 @@ class Plant;
 /// (mutable; not saved: it holds nothing between calls).
 class PlantState {
  public:
-  explicit PlantState(const Plant& owner) : owner_(&owner) {}
+  explicit PlantState(const Plant& owner);
   virtual ~PlantState() = default;
-  /// The plant that made this state; a plant refuses a state of another plant.
+  /// The plant that made this state (it must outlive the state's use); a plant refuses a state of another plant.
   const Plant& owner() const { return *owner_; }
+  /// The identity of that plant (Plant::id): unique in the process, also after the plant is gone.
+  std::uint64_t ownerId() const { return owner_id_; }
   /// A deep copy: an independent state with the same values.
   virtual std::unique_ptr<PlantState> clone() const = 0;
   /// The discrete state as bytes (ByteWriter, common/bytes.hpp).
@@ -67,6 +71,7 @@ class PlantState {
 
  private:
   const Plant* owner_;
+  std::uint64_t owner_id_;
   long revision_ = 0;
 };
 
@@ -88,7 +93,19 @@ class EmptyPlantState final : public PlantStateOf<EmptyPlantState> {
 
 class Plant {
  public:
+  Plant();
+  /// A copy is another plant: a new id, not frozen (its states are not the original's).
+  Plant(const Plant& other);
+  Plant& operator=(const Plant& other);
   virtual ~Plant() = default;
+
+  /// Unique among the plants of the process (a copy gets a new one): a state belongs to the plant of its id, which a
+  /// plant made later at the same address does not have.
+  std::uint64_t id() const { return id_; }
+  /// Called by the simulators when they start using the plant: from then on it is shared by them, and a plant's
+  /// configuration setters (e.g. systems::RobotSystem::setTrajectory) refuse to change it (checkConfigurable).
+  void freeze() const { frozen_.store(true, std::memory_order_relaxed); }
+  bool frozen() const { return frozen_.load(std::memory_order_relaxed); }
 
   /// Name of the simulated system for messages, e.g. "joint rig 'kr300'" (the component of a SolverError).
   virtual std::string name() const = 0;
@@ -151,17 +168,21 @@ class Plant {
   /// `state` as this plant's own state type S (InputError when it was made by another plant).
   template <class S>
   const S& own(const PlantState& state) const {
-    if (&state.owner() != this) foreignState(state);
+    if (state.ownerId() != id_) foreignState();
     return static_cast<const S&>(state);
   }
   template <class S>
   S& own(PlantState& state) const {
-    if (&state.owner() != this) foreignState(state);
+    if (state.ownerId() != id_) foreignState();
     return static_cast<S&>(state);
   }
+  /// InputError naming `setter` once the plant is frozen (in use by a simulator).
+  void checkConfigurable(const char* setter) const;
 
  private:
-  [[noreturn]] void foreignState(const PlantState& state) const;
+  [[noreturn]] void foreignState() const;
+  std::uint64_t id_;
+  mutable std::atomic<bool> frozen_{false};
 };
 
 /// Index of the signal called `name` (without or with its `[unit]`) in plant.signalNames(); throws InputError

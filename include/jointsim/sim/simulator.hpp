@@ -84,6 +84,7 @@ class Snapshot {
   /// A snapshot of `plant` from toBytes(); InputError naming what did not match for bytes of another plant or
   /// configuration, of another format version, or truncated ones.
   static Snapshot fromBytes(const Plant& plant, const std::string& bytes);
+  static Snapshot fromBytes(const Plant&& plant, const std::string& bytes) = delete;
 
  private:
   friend class Simulator;
@@ -100,11 +101,15 @@ class Simulator {
   /// Steps `plant`, which must outlive the simulator; reset() to the plant's initial state at t = 0. The plant is
   /// only read: any number of simulators (in any threads) may step one plant, each with its own state.
   explicit Simulator(const Plant& plant, const CvodeOptions& solver = {});
+  /// A temporary plant would be gone after the statement: refused at compile time.
+  explicit Simulator(const Plant&& plant, const CvodeOptions& solver = {}) = delete;
   /// Shares ownership of the plant (e.g. an aliasing pointer that keeps an experiment alive).
   explicit Simulator(std::shared_ptr<const Plant> plant, const CvodeOptions& solver = {});
   /// An independent copy: the same plant, settings and limits, a copy of the complete state (as snapshot() and
-  /// restore()); both then continue alike, bit for bit, and neither sees the other's inputs.
-  Simulator(const Simulator& other);
+  /// restore()); both then continue alike, bit for bit, and neither sees the other's inputs. Copying takes a
+  /// snapshot of `other` (its integrator restarts at its next step), so it is a change of `other`: not const, and not
+  /// while another thread uses it.
+  Simulator(Simulator& other);
   Simulator& operator=(const Simulator&) = delete;
   ~Simulator();
 
@@ -114,14 +119,16 @@ class Simulator {
   const Plant& plant() const { return *plant_; }
   std::shared_ptr<const Plant> sharedPlant() const { return plant_; }
   /// The plant's state of this run: give it to the plant's input setters (e.g. RobotSystem::setCommand) between
-  /// steps. A change of inputs is picked up at the next advance (Plant::applyInputs, then a restart).
+  /// steps. A change of inputs is picked up at the next advance (Plant::applyInputs, then a restart). reset(),
+  /// restore() and loadState() replace the state: take the reference anew after them.
   PlantState& plantState() { return *state_; }
   const PlantState& plantState() const { return *state_; }
 
   /// Back to the plant's initialState() at t = 0 with a fresh plant state (inputs at their defaults: command
   /// ports, commands and wrenches cleared); the plant's start() is called (first controller sample).
   void reset();
-  /// To state `y0` (size stateSize()) at time `t0` [s], with a fresh plant state; samples continue at t0 + k·T_s.
+  /// To state `y0` (size stateSize()) at time `t0` [s] (|t0| <= 1e9 s), with a fresh plant state; samples continue
+  /// at t0 + k·T_s.
   void reset(double t0, const Eigen::VectorXd& y0);
   /// Integrates over `dt` [s] (> 0, finite); returns the time reached [s]. A target within 1e-12 s (relative)
   /// of a sample or time event is moved onto it, so steps of 1e-3 s meet samples at k·1e-3 s.

@@ -78,12 +78,13 @@ const char* portName(CommandPort port);
 /// Inverse of portName(); InputError listing the ports for another text.
 CommandPort parsePort(const std::string& text);
 
-/// Joint-space reference at time t (writes q_set, q̇_set, q̈_set of size n).
+/// Joint-space reference at time t (writes q_set, q̇_set, q̈_set of size n). Part of the constant robot: a pure
+/// function of t (no state of its own, safe to call from several threads at once), or snapshots and threads break.
 using SetpointFunction = std::function<void(double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
                                             Eigen::Ref<Eigen::VectorXd> qdd)>;
 
 /// External wrenches on the bodies at (t, kinematics in `data`): fills `fext` (6 × n, body frames, as in
-/// multibody::rnea). Used for clamps and contacts.
+/// multibody::rnea). Used for clamps and contacts. Pure and thread-safe like SetpointFunction.
 using WrenchFunction = std::function<void(double t, const multibody::Model& model, const multibody::Data& data,
                                           const Eigen::Ref<const Eigen::VectorXd>& q,
                                           const Eigen::Ref<const Eigen::VectorXd>& qd, multibody::Matrix6Xd& fext)>;
@@ -107,6 +108,8 @@ struct RobotSignals {
 
 class RobotSystem : public sim::Plant {
  public:
+  /// Configuration (setTrajectory, setFaults, setSampledControl, ...) happens before the robot is simulated: once a
+  /// simulator uses it (Plant::freeze) the setters refuse with an InputError, since the simulators share it.
   /// `drives` must name every movable joint of `model` exactly once. `coupling` (n × n, optional, empty =
   /// identity) maps gear output angles to joint angles. Throws InputError on inconsistencies.
   RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, Eigen::MatrixXd coupling = {});
@@ -123,7 +126,7 @@ class RobotSystem : public sim::Plant {
   void setSetpoints(SetpointFunction f);
   /// Reference from a trajectory (its breakpoints become time events under continuous control).
   void setTrajectory(std::shared_ptr<const control::JointTrajectory> trajectory);
-  void setExternalWrenches(WrenchFunction f) { wrenches_ = std::move(f); }
+  void setExternalWrenches(WrenchFunction f);
   /// Joint limits: with mode stop, an end stop at every finite joint limit (systems/joint_limits.hpp) acts on
   /// the joint, its instants of contact become root functions and end_stop_torque_<joint> [N·m] signals are
   /// appended; other modes leave the system unchanged (the monitor of warn lives in the experiment).
@@ -336,6 +339,8 @@ class RobotSystem : public sim::Plant {
   void multibodyStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
   void rotorReactionStage(const State& st) const;
   void checkJoint(int joint, const char* what) const;
+  // Why joint `joint`'s drive cannot take commands at `port` (empty: it can).
+  std::string portRefusal(int joint, CommandPort port) const;
   void bumpless(State& st, int k, CommandPort from, double t, Eigen::Ref<Eigen::VectorXd> y) const;
   void multiRateStep(State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
   // The full initial state (controller states included, also under sampled control) with the joints at q0.
