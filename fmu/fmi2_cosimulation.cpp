@@ -25,6 +25,15 @@ struct Component {
   bool logging = true;
   std::set<std::string> categories{"logInfo", "logWarning", "logError"};  // fmi2SetDebugLogging's selection
   std::unique_ptr<Instance> instance;
+  // The FMU states made by this instance and not yet freed: a pointer not among them is refused (not dereferenced),
+  // and those left are freed with the instance.
+  std::set<Instance::State*> states;
+  Component() = default;
+  Component(const Component&) = delete;
+  Component& operator=(const Component&) = delete;
+  ~Component() {
+    for (Instance::State* s : states) Instance::freeState(s);
+  }
 };
 
 /// The instances made by fmi2Instantiate and not yet freed: a handle that is not among them (freed twice, used after
@@ -41,6 +50,11 @@ void emit(const fmi2CallbackFunctions& cb, const std::string& name, fmi2Status s
           const std::string& message) {
   if (cb.logger != nullptr) cb.logger(cb.componentEnvironment, name.c_str(), status, category, "%s", message.c_str());
 }
+
+/// The state `state` of instance `c` (null if it is not one of its live states: the call is refused, the pointer is
+/// not dereferenced).
+Instance::State* ownState(fmi2Component c, fmi2FMUstate state);
+fmi2Status refuseState(fmi2Component c, const char* call);
 
 fmi2Status toC(Status s) { return static_cast<fmi2Status>(static_cast<int>(s)); }
 
@@ -88,6 +102,20 @@ fmi2Status unsupported(fmi2Component c, const char* what) {
   Component* comp = live(c);
   if (comp != nullptr)
     emit(comp->callbacks, comp->name, fmi2Error, "logError", std::string(what) + " is not supported by this FMU");
+  return fmi2Error;
+}
+
+Instance::State* ownState(fmi2Component c, fmi2FMUstate state) {
+  Component* comp = live(c);
+  if (comp == nullptr || state == nullptr) return nullptr;
+  auto* s = static_cast<Instance::State*>(state);
+  return comp->states.count(s) ? s : nullptr;
+}
+
+fmi2Status refuseState(fmi2Component c, const char* call) {
+  if (Component* comp = live(c))
+    emit(comp->callbacks, comp->name, fmi2Error, "logError",
+         std::string(call) + ": not an FMU state of this instance (freed, or never made by it)");
   return fmi2Error;
 }
 
@@ -218,43 +246,59 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference[], size_t nvr
   return nvr == 0 ? fmi2OK : unsupported(c, "fmi2SetString (the FMU has no String variables)");
 }
 
-// FMU states: Instance::State behind the opaque fmi2FMUstate pointer.
+// FMU states: Instance::State behind the opaque fmi2FMUstate pointer, owned by the instance's Component.
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state) {
+  Component* comp = live(c);
+  if (comp == nullptr) return fmi2Error;
+  if (state != nullptr && *state != nullptr && ownState(c, *state) == nullptr) return refuseState(c, "fmi2GetFMUstate");
   return call(c, "fmi2GetFMUstate", [&](Instance& i) {
     if (state == nullptr) return i.getState(nullptr);
     auto* s = static_cast<Instance::State*>(*state);
     const Status status = i.getState(&s);
-    *state = s;
+    if (status == Status::OK) {
+      comp->states.insert(s);
+      *state = s;
+    }
     return status;
   });
 }
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
-  return call(c, "fmi2SetFMUstate",
-              [&](Instance& i) { return i.setState(static_cast<const Instance::State*>(state)); });
+  Instance::State* s = ownState(c, state);
+  if (s == nullptr) return refuseState(c, "fmi2SetFMUstate");
+  return call(c, "fmi2SetFMUstate", [&](Instance& i) { return i.setState(s); });
 }
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state) {
-  return call(c, "fmi2FreeFMUstate", [&](Instance&) {
-    if (state != nullptr) {
-      Instance::freeState(static_cast<Instance::State*>(*state));
-      *state = nullptr;
-    }
-    return Status::OK;
-  });
+  Component* comp = live(c);
+  if (comp == nullptr) return fmi2Error;
+  if (state == nullptr || *state == nullptr) return fmi2OK;
+  Instance::State* s = ownState(c, *state);
+  if (s == nullptr) return refuseState(c, "fmi2FreeFMUstate");
+  comp->states.erase(s);
+  Instance::freeState(s);
+  *state = nullptr;
+  return fmi2OK;
 }
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t* size) {
-  return call(c, "fmi2SerializedFMUstateSize",
-              [&](Instance& i) { return i.serializedSize(static_cast<const Instance::State*>(state), size); });
+  Instance::State* s = ownState(c, state);
+  if (s == nullptr) return refuseState(c, "fmi2SerializedFMUstateSize");
+  return call(c, "fmi2SerializedFMUstateSize", [&](Instance& i) { return i.serializedSize(s, size); });
 }
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size) {
-  return call(c, "fmi2SerializeFMUstate",
-              [&](Instance& i) { return i.serialize(static_cast<const Instance::State*>(state), bytes, size); });
+  Instance::State* s = ownState(c, state);
+  if (s == nullptr) return refuseState(c, "fmi2SerializeFMUstate");
+  return call(c, "fmi2SerializeFMUstate", [&](Instance& i) { return i.serialize(s, bytes, size); });
 }
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate* state) {
+  Component* comp = live(c);
+  if (comp == nullptr) return fmi2Error;
   return call(c, "fmi2DeSerializeFMUstate", [&](Instance& i) {
     if (state == nullptr) return i.deserialize(bytes, size, nullptr);
     Instance::State* s = nullptr;
     const Status status = i.deserialize(bytes, size, &s);
-    if (status == Status::OK) *state = s;
+    if (status == Status::OK) {
+      comp->states.insert(s);
+      *state = s;
+    }
     return status;
   });
 }

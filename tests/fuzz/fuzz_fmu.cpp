@@ -297,9 +297,20 @@ struct CApi {
       case 1: check(fmi2SetBoolean(c, vr, n, bools)); break;
       case 2: check(fmi2GetString(c, vr, n, strings)); break;
       case 3: check(fmi2SetDebugLogging(c, in.flag(), 0, nullptr)); break;
-      case 4: {
-        fmi2FMUstate state = nullptr;
+      case 4: {  // FMU states: get, serialise, edit the bytes, deserialise, set (or not), free every one made
+        fmi2FMUstate state = nullptr, back = nullptr;
         check(fmi2GetFMUstate(c, &state));
+        size_t size = 0;
+        if (state != nullptr && fmi2SerializedFMUstateSize(c, state, &size) == fmi2OK && size < (1U << 24)) {
+          std::vector<char> bytes(size);
+          check(fmi2SerializeFMUstate(c, state, bytes.data(), bytes.size()));
+          if (!bytes.empty() && in.flag()) bytes[in.u32() % bytes.size()] = static_cast<char>(in.byte());
+          if (in.flag()) bytes.resize(in.u32() % (bytes.size() + 1));
+          check(fmi2DeSerializeFMUstate(c, bytes.data(), bytes.size(), &back));
+        }
+        if (in.flag()) check(fmi2SetFMUstate(c, back != nullptr ? back : state));
+        check(fmi2FreeFMUstate(c, &back));
+        check(fmi2FreeFMUstate(c, &state));
         break;
       }
       case 5: {
