@@ -203,6 +203,8 @@ def test_fmu_state_get_set_and_serialize_continue_bit_for_bit(root, tmp_path):
     b_state = b.deSerializeFMUstate(data)
     b.setFMUstate(b_state)
     np.testing.assert_array_equal(run(b, 0.5, 1.0), end)
+    with pytest.raises(FMICallException):  # a state of another instance is refused (not dereferenced)
+        b.setFMUstate(state)
     b.freeFMUstate(b_state)
     a.freeFMUstate(state)
     with pytest.raises(FMICallException):  # truncated bytes
