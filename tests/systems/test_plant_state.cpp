@@ -4,10 +4,10 @@
 // integrators, held outputs, encoder memory, the noise generator).
 #include <fstream>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -23,28 +23,39 @@
 namespace jointsim {
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 /// The UR5 excitation with sampled control at 20 kHz and noisy, quantised sensors on every drive, from copies of its
 /// files in `dir`.
 std::shared_ptr<experiments::Experiment> noisyTwin(const test::TempDir& dir, double duration) {
-  std::string drives = slurp(test::sourcePath("config/robots/ur5_drives.yaml"));
+  std::string drives = test::readText(test::sourcePath("config/robots/ur5_drives.yaml"));
   drives.replace(drives.find("multibody: ur5.yaml"), 19, "multibody: " + test::sourcePath("config/robots/ur5.yaml"));
   for (size_t at = drives.find("    controller:"); at != std::string::npos;
        at = drives.find("    controller:", at + 200))
     drives.insert(at, "    sensors: {motor_quantum: 4.79e-5, joint_quantum: 3.83e-4, joint_noise: 2e-5, "
                       "current_noise: 0.01, current_quantum: 0.001}\n");
   std::ofstream(dir.path() / "drives.yaml") << drives;
-  std::string exp = slurp(test::sourcePath("config/experiments/ur5_excitation.yaml"));
+  std::string exp = test::readText(test::sourcePath("config/experiments/ur5_excitation.yaml"));
   exp.replace(exp.find("robot: ../robots/ur5_drives.yaml"), 32, "robot: drives.yaml\ncontrol: {rate: 20000, seed: 7}");
   std::ofstream(dir.path() / "exp.yaml") << exp;
   return experiments::loadExperiment((dir.path() / "exp.yaml").string(),
                                      {"duration=" + std::to_string(duration), "solver.rtol=1e-4"});
+}
+
+/// Every entry equal, bit for bit (EXPECT_EQ on doubles), naming the first that differs.
+void expectIdentical(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const std::string& what);
+
+/// `run(arg_a)` and `run(arg_b)` one after the other, then at once in two threads: each thread's result equals its
+/// sequential twin bit for bit. Returns the sequential results.
+template <class Run, class Arg>
+std::pair<Eigen::VectorXd, Eigen::VectorXd> expectThreadsAsSequential(const Run& run, Arg arg_a, Arg arg_b) {
+  const Eigen::VectorXd a = run(arg_a), b = run(arg_b);
+  Eigen::VectorXd pa, pb;
+  std::thread ta([&] { pa = run(arg_a); });
+  std::thread tb([&] { pb = run(arg_b); });
+  ta.join();
+  tb.join();
+  expectIdentical(pa, a, "thread A");
+  expectIdentical(pb, b, "thread B");
+  return {a, b};
 }
 
 /// Every entry equal, bit for bit (EXPECT_EQ on doubles), naming the first that differs.
@@ -116,14 +127,7 @@ TEST(PlantState, TwoSimulatorsOfOneExperimentInTwoThreadsEqualTheSequentialRuns)
     for (int k = 0; k < 100; ++k) s->advance(1e-3);
     return Eigen::VectorXd(s->state());
   };
-  const Eigen::VectorXd a = runOne(0.0), b = runOne(2.0);
-  Eigen::VectorXd pa, pb;
-  std::thread ta([&] { pa = runOne(0.0); });
-  std::thread tb([&] { pb = runOne(2.0); });
-  ta.join();
-  tb.join();
-  expectIdentical(pa, a, "thread A");
-  expectIdentical(pb, b, "thread B");
+  const auto [a, b] = expectThreadsAsSequential(runOne, 0.0, 2.0);
   EXPECT_NE(a, b) << "the two runs differ (the voltage port of one did not reach the other)";
   // The experiment's own run is untouched by the simulators' inputs.
   const experiments::ExperimentResult r1 = experiments::runInMemory(*e);
@@ -155,14 +159,7 @@ TEST(PlantState, OneConstantModelWithTwoStatesInTwoThreadsEvaluatesAsSequentiall
     }
     return sum;
   };
-  const Eigen::VectorXd a = evaluate(1), b = evaluate(2);
-  Eigen::VectorXd pa, pb;
-  std::thread ta([&] { pa = evaluate(1); });
-  std::thread tb([&] { pb = evaluate(2); });
-  ta.join();
-  tb.join();
-  expectIdentical(pa, a, "thread A");
-  expectIdentical(pb, b, "thread B");
+  expectThreadsAsSequential(evaluate, 1U, 2U);
 }
 
 TEST(PlantState, ResetStartsAFreshRunAndBadSnapshotsAreRefused) {
