@@ -19,6 +19,7 @@
 #include "jointsim/drive/friction_models.hpp"
 #include "jointsim/drive/msl_friction.hpp"
 #include "jointsim/drive/opamp_motor.hpp"
+#include "jointsim/drive/parameters.hpp"
 #include "jointsim/drive/strain_wave_gear.hpp"
 #include "jointsim/drive/transmission.hpp"
 #include "jointsim/drive/transmissions.hpp"

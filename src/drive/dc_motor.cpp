@@ -42,3 +42,30 @@ double DcMotor::currentDerivative(double i, double V_ref, double omega) const {
 double DcMotor::steadySpeed(double V, double T_load) const { return (V - p_.R * T_load / p_.kt) / p_.ke; }
 
 }  // namespace jointsim::drive
+
+namespace jointsim::drive {
+namespace {
+std::vector<ParameterRef> motorRefs(DcMotorParams& p) {
+  const auto R = ParameterRange::positive();
+  const auto none = ParameterRole::None;
+  return {{{"R", "Ω", 0.0, R, none, "armature resistance R"}, &p.R},
+          {{"L", "H", 0.0, R, none, "armature inductance L"}, &p.L},
+          {{"kt", "N·m/A", 0.0, R, ParameterRole::TorqueConstant, "torque constant k_t"}, &p.kt},
+          {{"ke", "V·s/rad", 0.0, R, ParameterRole::TorqueConstant, "back-EMF constant k_e"}, &p.ke},
+          {{"J_M", "kg·m²", 0.0, R, none, "rotor inertia J_M"}, &p.J_M},
+          {{"V_supply", "V", 0.0, R, none, "supply voltage (the PWM output saturates at ±V_supply)"}, &p.V_supply}};
+}
+}  // namespace
+
+std::vector<ParameterInfo> parameterTable(const DcMotorParams& params) {
+  DcMotorParams p = params;
+  return describeParameters(motorRefs(p));
+}
+
+DcMotorParams withParameters(DcMotorParams params, const ParameterChanges& changes) {
+  assignParameters(motorRefs(params), changes, "motor");
+  params.validate();
+  return params;
+}
+
+}  // namespace jointsim::drive

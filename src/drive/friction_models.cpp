@@ -221,3 +221,128 @@ double LuGreUr5Friction::evaluate(const FrictionInput& in, const double* z, doub
 double LuGreUr5Friction::steadyState(double v) const { return sgn(v) * g(v); }
 
 }  // namespace jointsim::drive
+
+// ------------------------------------------------------------------------------ parameter tables
+
+namespace jointsim::drive {
+namespace {
+using R = ParameterRange;
+constexpr ParameterRole kNone = ParameterRole::None;
+
+// The static set of one direction (`side` "positive" or "negative"); α0 > 0 for LuGre (g ≥ α0 > 0).
+void branchRefs(std::vector<ParameterRef>& out, const std::string& side, StribeckBranch& b, bool lugre) {
+  const std::string dir = side == "positive" ? " (v > 0)" : " (v < 0)";
+  out.push_back({{side + ".alpha0", "N·m", 0.0, lugre ? R::positive() : R::nonNegative(), ParameterRole::Coulomb,
+                  "Coulomb friction α0 = F_C" + dir},
+                 &b.alpha0});
+  out.push_back(
+      {{side + ".alpha1", "N·m", 0.0, R::nonNegative(), kNone, "stiction excess α1 = F_S − F_C" + dir}, &b.alpha1});
+  out.push_back(
+      {{side + ".alpha2", "N·m·s/rad", 0.0, R::nonNegative(), kNone, "viscous coefficient α2" + dir}, &b.alpha2});
+  out.push_back({{side + ".v_s", "rad/s", 0.0, R::positive(), kNone, "Stribeck velocity v_S" + dir}, &b.v_s});
+}
+
+std::vector<ParameterRef> refs(CoulombViscousParams& p) {
+  return {{{"f_c", "N·m", 0.0, R::nonNegative(), ParameterRole::Coulomb, "Coulomb friction F_C"}, &p.f_c},
+          {{"f_v", "N·m·s/rad", 0.0, R::nonNegative(), kNone, "viscous coefficient F_v"}, &p.f_v},
+          {{"v_reg", "rad/s", 0.0, R::positive(), kNone, "regularisation velocity of sgn(v)"}, &p.v_reg}};
+}
+
+std::vector<ParameterRef> refs(TableFrictionParams& p) {
+  std::vector<ParameterRef> out;
+  for (size_t i = 0; i < p.tau_pos.size(); ++i) {
+    const std::string row = "tau_pos[" + std::to_string(i) + "]";
+    out.push_back({{row + "[0]", "rad/s", 0.0, R::nonNegative(), kNone, "speed of table row " + std::to_string(i)},
+                   &p.tau_pos[i][0]});
+    out.push_back({{row + "[1]", "N·m", 0.0, R::nonNegative(), ParameterRole::Coulomb,
+                    "sliding friction torque of table row " + std::to_string(i)},
+                   &p.tau_pos[i][1]});
+  }
+  out.push_back(
+      {{"peak", "1", 0.0, R::atLeast(1.0), kNone, "stiction factor (stiction torque peak·τ_pos(0))"}, &p.peak});
+  out.push_back({{"v_stick", "rad/s", 0.0, R::positive(), kNone, "half-width of the sticking band"}, &p.v_stick});
+  out.push_back({{"d_stick", "N·m·s/rad", 0.0, R::nonNegative(), kNone,
+                  "damping inside the sticking band (0: peak·τ_pos(0)/v_stick)"},
+                 &p.d_stick});
+  return out;
+}
+
+std::vector<ParameterRef> refs(StribeckParams& p) {
+  std::vector<ParameterRef> out;
+  branchRefs(out, "positive", p.positive, false);
+  branchRefs(out, "negative", p.negative, false);
+  out.push_back({{"delta", "1", 0.0, R::positive(), kNone, "form factor δ of the Stribeck exponential"}, &p.delta});
+  out.push_back({{"k_s", "s/rad", 0.0, R::positive(), kNone, "slope-limiter factor k_S"}, &p.k_s});
+  return out;
+}
+
+std::vector<ParameterRef> refs(DahlParams& p) {
+  return {{{"sigma", "N·m/rad", 0.0, R::positive(), ParameterRole::BristleStiffness, "rest stiffness σ"}, &p.sigma},
+          {{"f_c", "N·m", 0.0, R::positive(), ParameterRole::Coulomb, "Coulomb friction F_C"}, &p.f_c},
+          {{"alpha", "1", 0.0, R::atLeast(1.0), kNone, "shape exponent α"}, &p.alpha}};
+}
+
+std::vector<ParameterRef> refs(LuGreParams& p) {
+  std::vector<ParameterRef> out{
+      {{"sigma0", "N·m/rad", 0.0, R::positive(), ParameterRole::BristleStiffness, "bristle stiffness σ0"}, &p.sigma0},
+      {{"sigma1", "N·m·s/rad", 0.0, R::positive(), kNone, "bristle damping σ1"}, &p.sigma1}};
+  branchRefs(out, "positive", p.positive, true);
+  branchRefs(out, "negative", p.negative, true);
+  return out;
+}
+
+std::vector<ParameterRef> refs(LuGreUr5Params& p) {
+  return {{{"f_c", "N·m", 0.0, R::positive(), ParameterRole::Coulomb, "Coulomb coefficient f_c"}, &p.f_c},
+          {{"f_v", "N·m·(s/rad)^" + formatNumber(p.viscous_exponent, 6), 0.0, R::nonNegative(), kNone,
+            "viscous coefficient f_v (on |q̇| to the viscous exponent)"},
+           &p.f_v},
+          {{"k_q", "1", 0.0, R::nonNegative(), kNone, "Stribeck shape factor k_q"}, &p.k_q},
+          {{"sigma0", "N·m/rad", 0.0, R::positive(), ParameterRole::BristleStiffness, "bristle stiffness σ0"},
+           &p.sigma0},
+          {{"sigma1", "N·m·s/rad", 0.0, R::positive(), kNone, "bristle damping σ1"}, &p.sigma1},
+          {{"qd_s", "rad/s", 0.0, R::positive(), kNone, "Stribeck speed q̇_s"}, &p.qd_s},
+          {{"k_static", "1", 0.0, R::nonNegative(), kNone, "static increment K_static over Coulomb"}, &p.k_static},
+          {{"viscous_exponent", "1", 0.0, R::positive(), kNone, "exponent on |q̇| of the viscous term"},
+           &p.viscous_exponent}};
+}
+
+template <class Model>
+std::vector<ParameterInfo> tableOf(const Model& m) {
+  auto p = m.params();
+  return describeParameters(refs(p));
+}
+
+template <class Model>
+std::shared_ptr<const Friction> changed(const Model& m, const ParameterChanges& changes) {
+  auto p = m.params();
+  assignParameters(refs(p), changes, m.type());
+  return std::make_shared<Model>(p);
+}
+}  // namespace
+
+std::vector<ParameterInfo> CoulombViscousFriction::parameters() const { return tableOf(*this); }
+std::shared_ptr<const Friction> CoulombViscousFriction::withParameters(const ParameterChanges& c) const {
+  return changed(*this, c);
+}
+std::vector<ParameterInfo> TableFriction::parameters() const { return tableOf(*this); }
+std::shared_ptr<const Friction> TableFriction::withParameters(const ParameterChanges& c) const {
+  return changed(*this, c);
+}
+std::vector<ParameterInfo> StribeckFriction::parameters() const { return tableOf(*this); }
+std::shared_ptr<const Friction> StribeckFriction::withParameters(const ParameterChanges& c) const {
+  return changed(*this, c);
+}
+std::vector<ParameterInfo> DahlFriction::parameters() const { return tableOf(*this); }
+std::shared_ptr<const Friction> DahlFriction::withParameters(const ParameterChanges& c) const {
+  return changed(*this, c);
+}
+std::vector<ParameterInfo> LuGreFriction::parameters() const { return tableOf(*this); }
+std::shared_ptr<const Friction> LuGreFriction::withParameters(const ParameterChanges& c) const {
+  return changed(*this, c);
+}
+std::vector<ParameterInfo> LuGreUr5Friction::parameters() const { return tableOf(*this); }
+std::shared_ptr<const Friction> LuGreUr5Friction::withParameters(const ParameterChanges& c) const {
+  return changed(*this, c);
+}
+
+}  // namespace jointsim::drive

@@ -265,3 +265,50 @@ Eigen::VectorXd StrainWaveGear::linearisedModes(double J_in, double J_out) const
 }
 
 }  // namespace jointsim::drive
+
+// ------------------------------------------------------------------------------------------ parameter table
+
+namespace jointsim::drive {
+namespace {
+std::vector<ParameterRef> swgRefs(StrainWaveGearParams& p) {
+  using R = ParameterRange;
+  const auto none = ParameterRole::None;
+  const auto stiff = ParameterRole::Stiffness;
+  const bool zeta = p.damping_mode == DampingMode::DampingRatio;
+  auto damping = [&](const char* key, const char* unit, const std::string& what, double* target) {
+    return ParameterRef{{key, zeta ? "1" : unit, 0.0, R::nonNegative(), none,
+                         what + (zeta ? " as a damping ratio ζ" : " (coefficient)")},
+                        target};
+  };
+  return {
+      {{"r_g", "m", 0.0, R::positive(), none, "primitive radius r_g of the flexspline"}, &p.r_g},
+      {{"alpha_t", "rad", 0.0, {0.0, 0.5 * kPi, true, true}, none, "tooth pressure angle α_t"}, &p.alpha_t},
+      {{"tau", "1", 0.0, R::above(1.0), none, "reduction ratio τ = Z_CS/(Z_CS − Z_FS) [Raviola2023, eq. 2]"}, &p.tau},
+      {{"K_WG", "N·m/rad", 0.0, R::positive(), stiff, "motor shaft – wave generator torsional stiffness"}, &p.K_WG},
+      {{"K_b", "N/m", 0.0, R::positive(), stiff, "wave generator bearing – flexspline radial stiffness"}, &p.K_b},
+      {{"K_FS", "N·m/rad", 0.0, R::positive(), stiff, "flexspline torsional stiffness to the case"}, &p.K_FS},
+      {{"K_m", "N/m", 0.0, R::positive(), stiff, "flexspline – circular spline mesh stiffness"}, &p.K_m},
+      {{"K_CS", "N·m/rad", 0.0, R::positive(), stiff, "circular spline – output flange torsional stiffness"}, &p.K_CS},
+      {{"J_WG", "kg·m²", 0.0, R::positive(), none, "wave generator inertia"}, &p.J_WG},
+      {{"J_FS", "kg·m²", 0.0, R::positive(), none, "flexspline inertia"}, &p.J_FS},
+      {{"J_CS", "kg·m²", 0.0, R::positive(), none, "circular spline inertia"}, &p.J_CS},
+      damping("c_WG", "N·m·s/rad", "motor shaft – wave generator damping", &p.c_WG),
+      damping("c_b", "N·s/m", "bearing – flexspline radial damping", &p.c_b),
+      damping("c_m", "N·s/m", "mesh contact damping", &p.c_m),
+      damping("c_FS", "N·m·s/rad", "flexspline – case damping", &p.c_FS),
+      damping("c_CS", "N·m·s/rad", "circular spline – output flange damping", &p.c_CS)};
+}
+}  // namespace
+
+std::vector<ParameterInfo> StrainWaveGear::parameters() const {
+  StrainWaveGearParams p = p_;
+  return describeParameters(swgRefs(p));
+}
+
+std::shared_ptr<const Transmission> StrainWaveGear::withParameters(const ParameterChanges& changes) const {
+  StrainWaveGearParams p = p_;
+  assignParameters(swgRefs(p), changes, kComponent);
+  return std::make_shared<StrainWaveGear>(p);
+}
+
+}  // namespace jointsim::drive

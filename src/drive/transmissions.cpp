@@ -122,3 +122,74 @@ Eigen::Matrix3d CouplingMatrix::irb140Wrist() {
 }
 
 }  // namespace jointsim::drive
+
+// ------------------------------------------------------------------------------------------ parameter tables
+
+namespace jointsim::drive {
+namespace {
+const char* sideText(ComplianceSide side) { return side == ComplianceSide::Motor ? "motor side" : "output side"; }
+ParameterRef ratioRef(double* ratio) {
+  return {{"ratio", "1", 0.0, ParameterRange::positive(), ParameterRole::None, "reduction ratio N = q_in/q_out"},
+          ratio};
+}
+// The spring–damper (and backlash) rows shared by the elastic and the elasto-backlash gear.
+std::vector<ParameterRef> complianceRefs(double* ratio, double* stiffness, double* damping, double* backlash,
+                                         ComplianceSide side) {
+  const std::string s = sideText(side);
+  return {ratioRef(ratio),
+          {{"stiffness", "N·m/rad", 0.0, ParameterRange::positive(), ParameterRole::Stiffness,
+            "gear stiffness c (" + s + ")"},
+           stiffness},
+          {{"damping", "N·m·s/rad", 0.0, ParameterRange::nonNegative(), ParameterRole::None,
+            "gear damping d (" + s + ")"},
+           damping},
+          {{"backlash", "rad", 0.0, ParameterRange::nonNegative(), ParameterRole::Backlash,
+            "total backlash b (" + s + "), gap ±b/2"},
+           backlash}};
+}
+}  // namespace
+
+std::vector<ParameterInfo> RigidGear::parameters() const {
+  double n = N_;
+  return describeParameters({ratioRef(&n)});
+}
+
+std::shared_ptr<const Transmission> RigidGear::withParameters(const ParameterChanges& changes) const {
+  double n = N_;
+  assignParameters({ratioRef(&n)}, changes, "transmission");
+  return std::make_shared<RigidGear>(n);
+}
+
+std::vector<ParameterInfo> ElasticGear::parameters() const {
+  ElasticGearParams p = p_;
+  double backlash = 0.0;  // none: a change to > 0 makes an elasto-backlash gear (withParameters)
+  return describeParameters(complianceRefs(&p.ratio, &p.stiffness, &p.damping, &backlash, p.side));
+}
+
+std::shared_ptr<const Transmission> ElasticGear::withParameters(const ParameterChanges& changes) const {
+  ElasticGearParams p = p_;
+  double backlash = 0.0;
+  assignParameters(complianceRefs(&p.ratio, &p.stiffness, &p.damping, &backlash, p.side), changes, "transmission");
+  if (backlash == 0.0) return std::make_shared<ElasticGear>(p);
+  // ElastoBacklash with b > 0 and the same spring–damper: no states either, the same ratio; continuous at b → 0.
+  ElastoBacklashParams q;
+  q.ratio = p.ratio;
+  q.stiffness = p.stiffness;
+  q.damping = p.damping;
+  q.side = p.side;
+  q.backlash = backlash;
+  return std::make_shared<ElastoBacklash>(q);
+}
+
+std::vector<ParameterInfo> ElastoBacklash::parameters() const {
+  ElastoBacklashParams p = p_;
+  return describeParameters(complianceRefs(&p.ratio, &p.stiffness, &p.damping, &p.backlash, p.side));
+}
+
+std::shared_ptr<const Transmission> ElastoBacklash::withParameters(const ParameterChanges& changes) const {
+  ElastoBacklashParams p = p_;
+  assignParameters(complianceRefs(&p.ratio, &p.stiffness, &p.damping, &p.backlash, p.side), changes, "transmission");
+  return std::make_shared<ElastoBacklash>(p);
+}
+
+}  // namespace jointsim::drive

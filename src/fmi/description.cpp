@@ -70,7 +70,11 @@ bool baseUnit(const std::string& unit, BaseUnit& b) {
       {"A", {0, 0, 0, 1, 0}},           {"V", {1, 2, -3, -1, 0}},    {"N.m", {1, 2, -2, 0, 0}},
       {"N", {1, 1, -2, 0, 0}},          {"W", {1, 2, -3, 0, 0}},     {"J", {1, 2, -2, 0, 0}},
       {"kg.m2", {1, 2, 0, 0, 0}},       {"Hz", {0, 0, -1, 0, 0}},    {"N.m/rad", {1, 2, -2, 0, -1}},
-      {"N.m.s/rad", {1, 2, -1, 0, -1}}, {"Ohm", {1, 2, -3, -2, 0}}};
+      {"N.m.s/rad", {1, 2, -1, 0, -1}}, {"Ohm", {1, 2, -3, -2, 0}},  {"1", {0, 0, 0, 0, 0}},
+      {"1/s", {0, 0, -1, 0, 0}},        {"kg", {1, 0, 0, 0, 0}},     {"N/m", {1, 0, -2, 0, 0}},
+      {"N.s/m", {1, 0, -1, 0, 0}},      {"H", {1, 2, -2, -2, 0}},    {"N.m/A", {1, 2, -2, -1, 0}},
+      {"V.s/rad", {1, 2, -2, -1, -1}},  {"s/rad", {0, 0, 1, 0, -1}}, {"A.s/rad", {0, 0, 1, 1, -1}},
+      {"A/rad", {0, 0, 0, 1, -1}},      {"V/A", {1, 2, -3, -2, 0}},  {"V/(A.s)", {1, 2, -4, -2, 0}}};
   auto it = units.find(unit);
   if (it == units.end()) return false;
   b = it->second;
@@ -265,18 +269,12 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
         f.joint = drive.joint;
         if (!f.parameterFault())
           continue;  // intermittent sensor faults and bearing ripple have time laws, no neutral value
+        if (!systems::faultApplies(drive, f.type)) continue;
         const bool offset = f.type == systems::FaultType::BacklashAdd || f.type == systems::FaultType::SensorBias;
-        f.value = offset ? 1e-4 : 1.1;  // a non-neutral value: does the fault apply to this drive?
-        systems::DriveSpec copy = drive;
-        try {
-          systems::applyFault(copy, f);
-        } catch (const InputError&) {
-          continue;
-        }
         Variable v;
         v.name = "drives." + drive.joint + "." + type_name;
         v.causality = Causality::Parameter;
-        v.unit = offset ? "rad" : "";
+        v.unit = offset ? "rad" : "1";
         v.start = offset ? 0.0 : 1.0;
         v.joint = k;
         v.fault = type_name;

@@ -7,9 +7,10 @@
 
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
-#include "jointsim/drive/friction_models.hpp"
-#include "jointsim/drive/strain_wave_gear.hpp"
-#include "jointsim/drive/transmissions.hpp"
+#include "jointsim/drive/dc_motor.hpp"
+#include "jointsim/drive/friction.hpp"
+#include "jointsim/drive/parameters.hpp"
+#include "jointsim/drive/transmission.hpp"
 #include "jointsim/systems/robot_system.hpp"
 
 namespace jointsim::systems {
@@ -33,98 +34,50 @@ bool factorType(FaultType t) {
   throw InputError("fault " + describe(f) + ": does not apply to " + component);
 }
 
-void transmissionFault(DriveSpec& d, const Fault& f, double value) {
-  const drive::Transmission* t = d.transmission.get();
-  const std::string type = t ? t->type() : "no transmission";
-  if (f.type == FaultType::GearStiffnessScale) {
-    if (auto* e = dynamic_cast<const drive::ElasticGear*>(t)) {
-      auto p = e->params();
-      p.stiffness *= value;
-      d.transmission = std::make_shared<drive::ElasticGear>(p);
-    } else if (auto* b = dynamic_cast<const drive::ElastoBacklash*>(t)) {
-      auto p = b->params();
-      p.stiffness *= value;
-      d.transmission = std::make_shared<drive::ElastoBacklash>(p);
-    } else if (auto* s = dynamic_cast<const drive::StrainWaveGear*>(t)) {
-      auto p = s->params();
-      for (double* k : {&p.K_WG, &p.K_b, &p.K_FS, &p.K_m, &p.K_CS}) *k *= value;
-      d.transmission = std::make_shared<drive::StrainWaveGear>(p);
-    } else {
-      notApplicable(f, "a " + type + " transmission (no stiffness)");
-    }
-    return;
-  }
-  // BacklashAdd
-  if (auto* e = dynamic_cast<const drive::ElasticGear*>(t)) {
-    const auto& q = e->params();
-    drive::ElastoBacklashParams p;
-    p.ratio = q.ratio;
-    p.stiffness = q.stiffness;
-    p.damping = q.damping;
-    p.side = q.side;
-    p.backlash = value;
-    d.transmission = std::make_shared<drive::ElastoBacklash>(p);
-  } else if (auto* b = dynamic_cast<const drive::ElastoBacklash*>(t)) {
-    auto p = b->params();
-    p.backlash += value;
-    d.transmission = std::make_shared<drive::ElastoBacklash>(p);
-  } else {
-    notApplicable(f, "a " + type + " transmission (backlash needs an elastic or elasto_backlash gear)");
+// The parameter role a fault acts on, and whether it adds (an offset) or multiplies (a factor).
+drive::ParameterRole roleOf(FaultType t) {
+  switch (t) {
+    case FaultType::GearStiffnessScale: return drive::ParameterRole::Stiffness;
+    case FaultType::BacklashAdd: return drive::ParameterRole::Backlash;
+    case FaultType::CoulombFrictionScale: return drive::ParameterRole::Coulomb;
+    case FaultType::Sigma0Scale: return drive::ParameterRole::BristleStiffness;
+    case FaultType::TorqueConstantScale: return drive::ParameterRole::TorqueConstant;
+    default: return drive::ParameterRole::None;
   }
 }
 
-void frictionFault(DriveSpec& d, const Fault& f, double value) {
-  const drive::Friction* fr = d.friction.get();
-  if (!fr) notApplicable(f, "a drive without friction");
-  const double s = value;
-  if (f.type == FaultType::CoulombFrictionScale) {
-    if (auto* m = dynamic_cast<const drive::CoulombViscousFriction*>(fr)) {
-      auto p = m->params();
-      p.f_c *= s;
-      d.friction = std::make_shared<drive::CoulombViscousFriction>(p);
-    } else if (auto* m = dynamic_cast<const drive::TableFriction*>(fr)) {
-      auto p = m->params();
-      for (auto& row : p.tau_pos) row[1] *= s;
-      d.friction = std::make_shared<drive::TableFriction>(p);
-    } else if (auto* m = dynamic_cast<const drive::StribeckFriction*>(fr)) {
-      auto p = m->params();
-      p.positive.alpha0 *= s;
-      p.negative.alpha0 *= s;
-      d.friction = std::make_shared<drive::StribeckFriction>(p);
-    } else if (auto* m = dynamic_cast<const drive::DahlFriction*>(fr)) {
-      auto p = m->params();
-      p.f_c *= s;
-      d.friction = std::make_shared<drive::DahlFriction>(p);
-    } else if (auto* m = dynamic_cast<const drive::LuGreFriction*>(fr)) {
-      auto p = m->params();
-      p.positive.alpha0 *= s;
-      p.negative.alpha0 *= s;
-      d.friction = std::make_shared<drive::LuGreFriction>(p);
-    } else if (auto* m = dynamic_cast<const drive::LuGreUr5Friction*>(fr)) {
-      auto p = m->params();
-      p.f_c *= s;
-      d.friction = std::make_shared<drive::LuGreUr5Friction>(p);
-    } else {
-      notApplicable(f, fr->type() + " friction");
+// Why a fault of type `t` does not apply to drive `d` (empty: it applies), from the components' parameter tables.
+std::string refusal(const DriveSpec& d, FaultType t) {
+  const drive::ParameterRole role = roleOf(t);
+  switch (t) {
+    case FaultType::GearStiffnessScale:
+    case FaultType::BacklashAdd: {
+      const drive::Transmission* tr = d.transmission.get();
+      if (tr != nullptr && drive::hasRole(tr->parameters(), role)) return {};
+      const std::string what = tr ? "a " + tr->type() + " transmission" : "a drive without transmission";
+      return what + (t == FaultType::GearStiffnessScale ? " (no stiffness)"
+                                                        : " (backlash needs an elastic or elasto_backlash gear)");
     }
-    return;
+    case FaultType::CoulombFrictionScale:
+    case FaultType::Sigma0Scale: {
+      const drive::Friction* fr = d.friction.get();
+      if (fr == nullptr) return "a drive without friction";
+      if (drive::hasRole(fr->parameters(), role)) return {};
+      return fr->type() + " friction" +
+             (t == FaultType::Sigma0Scale ? " (no bristle stiffness)" : " (no Coulomb level)");
+    }
+    case FaultType::TorqueConstantScale:
+      return d.electrics ? std::string() : "a torque-controlled motor without electrics (k_t and k_e are not used)";
+    case FaultType::SensorBias:
+    case FaultType::SensorDropout:
+    case FaultType::SensorStuck:
+    case FaultType::SensorSpike:
+      return d.controller.type == control::ControllerType::VoltageCascade
+                 ? std::string()
+                 : "a drive whose controller does not read the joint angle (only voltage_cascade does)";
+    case FaultType::BearingRipple: return {};
   }
-  // Sigma0Scale
-  if (auto* m = dynamic_cast<const drive::LuGreFriction*>(fr)) {
-    auto p = m->params();
-    p.sigma0 *= s;
-    d.friction = std::make_shared<drive::LuGreFriction>(p);
-  } else if (auto* m = dynamic_cast<const drive::LuGreUr5Friction*>(fr)) {
-    auto p = m->params();
-    p.sigma0 *= s;
-    d.friction = std::make_shared<drive::LuGreUr5Friction>(p);
-  } else if (auto* m = dynamic_cast<const drive::DahlFriction*>(fr)) {
-    auto p = m->params();
-    p.sigma *= s;
-    d.friction = std::make_shared<drive::DahlFriction>(p);
-  } else {
-    notApplicable(f, fr->type() + " friction (no bristle stiffness)");
-  }
+  return {};
 }
 
 }  // namespace
@@ -284,28 +237,34 @@ bool faultEpisode(const Fault& f, double t, long* episode) {
   return true;
 }
 
+bool faultApplies(const DriveSpec& drive, FaultType type) { return refusal(drive, type).empty(); }
+
 void applyFault(DriveSpec& d, const Fault& f, double value) {
   checkFault(f);
   if (std::isnan(value)) value = f.value;
+  const std::string why = refusal(d, f.type);
+  if (!why.empty()) notApplicable(f, why);
+  // The parameter faults act on every parameter of their role in the components' tables (a new, validated component).
+  const drive::ParameterRole role = roleOf(f.type);
+  const bool add = f.type == FaultType::BacklashAdd;
   switch (f.type) {
     case FaultType::GearStiffnessScale:
-    case FaultType::BacklashAdd: transmissionFault(d, f, value); break;
-    case FaultType::CoulombFrictionScale:
-    case FaultType::Sigma0Scale: frictionFault(d, f, value); break;
-    case FaultType::TorqueConstantScale:
-      if (!d.electrics) notApplicable(f, "a torque-controlled motor without electrics (k_t and k_e are not used)");
-      d.motor.kt *= value;
-      d.motor.ke *= value;
+    case FaultType::BacklashAdd:
+      d.transmission =
+          d.transmission->withParameters(drive::roleChanges(d.transmission->parameters(), role, value, add));
       break;
-    case FaultType::SensorBias:
+    case FaultType::CoulombFrictionScale:
+    case FaultType::Sigma0Scale:
+      d.friction = d.friction->withParameters(drive::roleChanges(d.friction->parameters(), role, value, add));
+      break;
+    case FaultType::TorqueConstantScale:
+      d.motor = drive::withParameters(d.motor, drive::roleChanges(drive::parameterTable(d.motor), role, value, add));
+      break;
+    case FaultType::SensorBias: d.sensors.joint_bias += value; break;
     case FaultType::SensorDropout:
     case FaultType::SensorStuck:
     case FaultType::SensorSpike:
-      if (d.controller.type != control::ControllerType::VoltageCascade)
-        notApplicable(f, "a drive whose controller does not read the joint angle (only voltage_cascade does)");
-      if (f.type == FaultType::SensorBias) d.sensors.joint_bias += value;
-      break;
-    case FaultType::BearingRipple: break;  // acts in the right-hand side (RobotSystem::setFaults)
+    case FaultType::BearingRipple: break;  // act in the right-hand side (RobotSystem::setFaults)
   }
 }
 

@@ -142,6 +142,58 @@ TEST(Faults, InapplicableOrOutOfRangeFaultsAreInputErrors) {
   for (const auto& n : systems::faultTypeNames()) EXPECT_EQ(systems::toString(systems::faultTypeFromString(n)), n);
 }
 
+// faultApplies (what the FMU offers per drive) says yes exactly where applyFault accepts the fault, for drives with
+// every transmission and friction type, with and without electrics and a joint-angle controller.
+TEST(Faults, FaultAppliesAgreesWithApplyFaultOnEveryComponentType) {
+  std::vector<std::shared_ptr<const drive::Transmission>> gears{
+      std::make_shared<drive::RigidGear>(50.0), std::make_shared<drive::ElasticGear>(drive::ElasticGearParams{}),
+      std::make_shared<drive::ElastoBacklash>(drive::ElastoBacklashParams{}),
+      std::make_shared<drive::StrainWaveGear>(drive::StrainWaveGearParams{}), nullptr};
+  drive::LuGreUr5Params u;
+  u.f_c = 3.0;
+  u.f_v = 1.0;
+  u.k_q = 1.0;
+  std::vector<std::shared_ptr<const drive::Friction>> frictions{
+      std::make_shared<drive::CoulombViscousFriction>(drive::CoulombViscousParams{}),
+      std::make_shared<drive::TableFriction>(drive::TableFrictionParams{}),
+      std::make_shared<drive::StribeckFriction>(drive::StribeckParams{}),
+      std::make_shared<drive::DahlFriction>(drive::DahlParams{}),
+      std::make_shared<drive::LuGreFriction>(drive::LuGreParams{}),
+      std::make_shared<drive::LuGreUr5Friction>(u),
+      nullptr};
+  int applied = 0, refused = 0;
+  for (const auto& g : gears)
+    for (const auto& f : frictions)
+      for (const bool electrics : {false, true}) {
+        systems::DriveSpec d;
+        d.joint = "j";
+        d.transmission = g;
+        d.friction = f;
+        d.electrics = electrics;
+        d.controller.type =
+            electrics ? control::ControllerType::VoltageCascade : control::ControllerType::TorqueCascade;
+        for (const auto& name : systems::faultTypeNames()) {
+          Fault fault;
+          fault.type = systems::faultTypeFromString(name);
+          fault.joint = "j";
+          fault.value = fault.type == FaultType::BacklashAdd || fault.type == FaultType::SensorBias ? 1e-3 : 1.1;
+          if (fault.type == FaultType::SensorDropout || fault.type == FaultType::SensorStuck) fault.value = 1e-2;
+          systems::DriveSpec copy = d;
+          bool ok = true;
+          try {
+            systems::applyFault(copy, fault);
+          } catch (const InputError&) {
+            ok = false;
+          }
+          EXPECT_EQ(systems::faultApplies(d, fault.type), ok)
+              << name << " on " << (g ? g->type() : "none") << " / " << (f ? f->type() : "none");
+          (ok ? applied : refused)++;
+        }
+      }
+  EXPECT_GT(applied, 100);
+  EXPECT_GT(refused, 50);
+}
+
 TEST(Faults, ClosedLoopSensorBiasShiftsThePostureAndWeakMotorDrawsMoreCurrent) {
   const auto [q_nom, i_nom] = hold({});
   Eigen::VectorXd q0(6);

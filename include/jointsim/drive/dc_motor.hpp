@@ -6,6 +6,9 @@
 /// The rotor inertia J_M is a parameter here, but its dynamics belong to the shaft the motor drives.
 
 #include <string>
+#include <vector>
+
+#include "jointsim/drive/parameters.hpp"
 
 namespace jointsim::drive {
 
@@ -22,6 +25,11 @@ struct DcMotorParams {
   /// UR5 motor of joint `joint` (1..6), [Raviola2023, Table 2].
   static DcMotorParams ur5(int joint);
 };
+
+/// The parameter table of a DC motor (parameters.hpp): R, L, kt and ke (role torque_constant), J_M, V_supply.
+std::vector<ParameterInfo> parameterTable(const DcMotorParams& params);
+/// `params` with `changes` (keys of parameterTable()) applied, validated. \throws InputError as assignParameters.
+DcMotorParams withParameters(DcMotorParams params, const ParameterChanges& changes);
 
 class DcMotor {
  public:

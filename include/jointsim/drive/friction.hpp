@@ -7,8 +7,11 @@
 /// `driving_torque` is the sum of all other torques on that shaft (used by models with true sticking,
 /// e.g. the Modelica BearingFriction semantics; others ignore it). evaluate() is pure and allocation-free.
 
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "jointsim/drive/parameters.hpp"
 
 namespace jointsim::drive {
 
@@ -34,6 +37,12 @@ class Friction {
   virtual double steadyState(double v) const = 0;
   /// Names with units of the internal states, e.g. "z[rad]".
   virtual std::vector<std::string> stateNames() const { return {}; }
+  /// The parameter table (parameters.hpp): every scalar parameter with its key, unit, range, value and role.
+  virtual std::vector<ParameterInfo> parameters() const { return {}; }
+  /// A new, validated friction model of the same type and stateSize() with `changes` (keys of parameters()) applied
+  /// and every other parameter kept. \throws InputError for an unknown key or a value the model refuses. The
+  /// default (a model without a table) refuses every change.
+  virtual std::shared_ptr<const Friction> withParameters(const ParameterChanges& changes) const;
 };
 
 }  // namespace jointsim::drive

@@ -91,6 +91,9 @@ class CoulombViscousFriction : public Friction {
   double steadyState(double v) const override;
   const CoulombViscousParams& params() const { return p_; }
 
+  std::vector<ParameterInfo> parameters() const override;
+  std::shared_ptr<const Friction> withParameters(const ParameterChanges& changes) const override;
+
  private:
   CoulombViscousParams p_;
 };
@@ -146,6 +149,9 @@ class TableFriction : public Friction {
   double stickDamping() const { return d_stick_; }
   const TableFrictionParams& params() const { return p_; }
 
+  std::vector<ParameterInfo> parameters() const override;
+  std::shared_ptr<const Friction> withParameters(const ParameterChanges& changes) const override;
+
  private:
   TableFrictionParams p_;
   double tau0_ = 0.0;
@@ -190,6 +196,9 @@ class StribeckFriction : public Friction {
   double steadyState(double v) const override;
   const StribeckParams& params() const { return p_; }
 
+  std::vector<ParameterInfo> parameters() const override;
+  std::shared_ptr<const Friction> withParameters(const ParameterChanges& changes) const override;
+
  private:
   StribeckParams p_;
 };
@@ -223,6 +232,9 @@ class DahlFriction : public Friction {
   double steadyState(double v) const override;
   std::vector<std::string> stateNames() const override { return {"z[rad]"}; }
   const DahlParams& params() const { return p_; }
+
+  std::vector<ParameterInfo> parameters() const override;
+  std::shared_ptr<const Friction> withParameters(const ParameterChanges& changes) const override;
 
  private:
   DahlParams p_;
@@ -262,6 +274,9 @@ class LuGreFriction : public Friction {
   /// g(v) of eq. 4.17 with the α-set of the direction of v [N·m].
   double g(double v) const;
   const LuGreParams& params() const { return p_; }
+
+  std::vector<ParameterInfo> parameters() const override;
+  std::shared_ptr<const Friction> withParameters(const ParameterChanges& changes) const override;
 
  private:
   LuGreParams p_;
@@ -306,6 +321,9 @@ class LuGreUr5Friction : public Friction {
   /// g(q̇) of eq. 7 [N·m].
   double g(double v) const;
   const LuGreUr5Params& params() const { return p_; }
+
+  std::vector<ParameterInfo> parameters() const override;
+  std::shared_ptr<const Friction> withParameters(const ParameterChanges& changes) const override;
 
  private:
   LuGreUr5Params p_;

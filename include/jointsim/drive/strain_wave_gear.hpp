@@ -221,6 +221,9 @@ class StrainWaveGear : public Transmission {
   /// not symmetric, EigenSolver on M⁻¹K, real parts). Throws InputError if J_in or J_out is not > 0.
   Eigen::VectorXd linearisedModes(double J_in, double J_out) const;
 
+  std::vector<ParameterInfo> parameters() const override;
+  std::shared_ptr<const Transmission> withParameters(const ParameterChanges& changes) const override;
+
  private:
   double meshDeflection(const ShaftPorts& ports, const double* x) const;
   double meshRate(const double* x) const;

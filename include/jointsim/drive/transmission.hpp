@@ -13,8 +13,11 @@
 /// - Components are constant after construction; evaluate() is pure (no I/O, no hidden state, no heap
 ///   allocation) so CVODE may call it at any time and difference it.
 
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "jointsim/drive/parameters.hpp"
 
 namespace jointsim::drive {
 
@@ -57,6 +60,13 @@ class Transmission {
   virtual double storedEnergy(const ShaftPorts& ports, const double* x) const = 0;
   /// Names with units of the internal states, e.g. "q_WG[rad]" (size stateSize()).
   virtual std::vector<std::string> stateNames() const { return {}; }
+  /// The parameter table (parameters.hpp): every scalar parameter with its key, unit, range, value and role.
+  virtual std::vector<ParameterInfo> parameters() const { return {}; }
+  /// A new, validated transmission with `changes` (keys of parameters()) applied and every other parameter kept. It
+  /// has the same stateSize() and isRigid(), and the same ratio() unless `ratio` is changed; its type() may differ
+  /// (an elastic gear given a backlash > 0 becomes an elasto_backlash gear). \throws InputError for an unknown key
+  /// or a value the component refuses. The default (a component without a table) refuses every change.
+  virtual std::shared_ptr<const Transmission> withParameters(const ParameterChanges& changes) const;
 };
 
 }  // namespace jointsim::drive

@@ -29,6 +29,9 @@ class RigidGear : public Transmission {
   PortTorques evaluate(const ShaftPorts&, const double*, double*) const override { return {}; }
   double storedEnergy(const ShaftPorts&, const double*) const override { return 0.0; }
 
+  std::vector<ParameterInfo> parameters() const override;
+  std::shared_ptr<const Transmission> withParameters(const ParameterChanges& changes) const override;
+
  private:
   double N_;
 };
@@ -51,6 +54,9 @@ class ElasticGear : public Transmission {
   PortTorques evaluate(const ShaftPorts& ports, const double* x, double* xdot) const override;
   double storedEnergy(const ShaftPorts& ports, const double* x) const override;
   const ElasticGearParams& params() const { return p_; }
+
+  std::vector<ParameterInfo> parameters() const override;
+  std::shared_ptr<const Transmission> withParameters(const ParameterChanges& changes) const override;
 
  private:
   ElasticGearParams p_;
@@ -79,6 +85,9 @@ class ElastoBacklash : public Transmission {
   const ElastoBacklashParams& params() const { return p_; }
   /// The contact law itself: torque for deflection δ [rad] and deflection rate δ̇ [rad/s] on `side`.
   double contactTorque(double delta, double delta_dot) const;
+
+  std::vector<ParameterInfo> parameters() const override;
+  std::shared_ptr<const Transmission> withParameters(const ParameterChanges& changes) const override;
 
  private:
   ElastoBacklashParams p_;

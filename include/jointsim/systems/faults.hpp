@@ -107,6 +107,10 @@ std::vector<double> faultEvents(const Fault& fault, double t_end);
 /// Intermittent faults: whether t lies in an episode [start, start + length), and its index.
 bool faultEpisode(const Fault& fault, double t, long* episode = nullptr);
 
+/// Whether a fault of `type` applies to `drive`: its components have a parameter of the fault's role (parameters.hpp:
+/// stiffness, backlash, Coulomb level, bristle stiffness; the motor's torque constant needs electrics), or its
+/// controller reads the joint angle (the sensor faults). Bearing ripple applies to every drive.
+bool faultApplies(const DriveSpec& drive, FaultType type);
 /// Applies a parameter fault to `drive` (whose joint must be fault.joint) with `value` (NaN: its severity). Throws
 /// InputError when the fault does not apply to the drive's components or its value is out of range. The other
 /// types act during the run (RobotSystem::setFaults) and are only checked against the drive here.
