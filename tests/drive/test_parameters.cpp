@@ -29,8 +29,8 @@ std::vector<double> response(const Transmission& t) {
   std::vector<double> out{t.ratio(), static_cast<double>(t.stateSize())};
   if (t.isRigid()) return out;
   const int n = t.stateSize();
-  for (const ShaftPorts p : {ShaftPorts{0.3, 2.0, 0.002, 0.01}, ShaftPorts{-0.01, -0.4, 0.0, 0.05},
-                             ShaftPorts{1.0, 30.0, 0.0095, 0.3}}) {
+  for (const ShaftPorts p :
+       {ShaftPorts{0.3, 2.0, 0.002, 0.01}, ShaftPorts{-0.01, -0.4, 0.0, 0.05}, ShaftPorts{1.0, 30.0, 0.0095, 0.3}}) {
     std::vector<double> x(static_cast<size_t>(n)), xdot(static_cast<size_t>(n));
     t.initialState(p.q_in, p.q_out, x.data());
     for (int i = 0; i < n; ++i) x[static_cast<size_t>(i)] += 1e-5 * (i + 1);  // off equilibrium: every element acts
@@ -120,9 +120,12 @@ TEST(ParameterTables, EveryTransmissionKeyReadsChangesAndActsOnItsOwnField) {
   b.side = ComplianceSide::Output;
   checkTable<ElastoBacklash, Transmission>(ElastoBacklash(b), [&](const std::string& key, double v) {
     auto p = b;
-    if (key == "backlash") p.backlash = v;
-    else if (key == "stiffness") p.stiffness = v;
-    else return std::shared_ptr<const Transmission>();
+    if (key == "backlash")
+      p.backlash = v;
+    else if (key == "stiffness")
+      p.stiffness = v;
+    else
+      return std::shared_ptr<const Transmission>();
     return std::shared_ptr<const Transmission>(std::make_shared<ElastoBacklash>(p));
   });
   checkTable<RigidGear, Transmission>(RigidGear(7.0), [](const std::string&, double v) {
@@ -133,10 +136,14 @@ TEST(ParameterTables, EveryTransmissionKeyReadsChangesAndActsOnItsOwnField) {
     s.damping_mode = mode;
     checkTable<StrainWaveGear, Transmission>(StrainWaveGear(s), [&](const std::string& key, double v) {
       auto p = s;
-      if (key == "K_m") p.K_m = v;
-      else if (key == "alpha_t") p.alpha_t = v;
-      else if (key == "c_FS") p.c_FS = v;
-      else return std::shared_ptr<const Transmission>();
+      if (key == "K_m")
+        p.K_m = v;
+      else if (key == "alpha_t")
+        p.alpha_t = v;
+      else if (key == "c_FS")
+        p.c_FS = v;
+      else
+        return std::shared_ptr<const Transmission>();
       return std::shared_ptr<const Transmission>(std::make_shared<StrainWaveGear>(p));
     });
   }

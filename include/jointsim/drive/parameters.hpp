@@ -48,10 +48,10 @@ struct ParameterRange {
 
 /// One row of a component's parameter table.
 struct ParameterInfo {
-  std::string key;          ///< e.g. "stiffness", "positive.alpha0", "tau_pos[1][1]"
-  std::string unit;         ///< SI, "1" for a pure number, e.g. "N·m/rad"
-  double value = 0.0;       ///< the component's value
-  ParameterRange range;     ///< admissible values on its own
+  std::string key;       ///< e.g. "stiffness", "positive.alpha0", "tau_pos[1][1]"
+  std::string unit;      ///< SI, "1" for a pure number, e.g. "N·m/rad"
+  double value = 0.0;    ///< the component's value
+  ParameterRange range;  ///< admissible values on its own
   ParameterRole role = ParameterRole::None;
   std::string description;  ///< what it is, with the source's symbol, e.g. "gear stiffness c (motor side)"
 };
@@ -65,7 +65,7 @@ using ParameterChanges = std::vector<ParameterChange>;
 
 /// Where a component's table points into its own parameter struct (used by the components' implementations).
 struct ParameterRef {
-  ParameterInfo info;      ///< value is ignored (read from `target`)
+  ParameterInfo info;  ///< value is ignored (read from `target`)
   double* target = nullptr;
 };
 /// The table of `refs` with the values read from their targets.
