@@ -726,6 +726,20 @@ class Simulator:
         """Index of a signal (name with or without unit) in signal_names, for repeated use with signal_values()."""
         return self._s.signal_index(name)
 
+    # --- inputs of any plant (the command ports of a robot's drives, a joint rig's command and load torque)
+    inputs = property(lambda self: self._s.inputs,
+                      doc="The plant's inputs: a list of dicts with name, unit (SI), min, max, description, group, "
+                          "mode, active (in effect now) and value (the held value).")
+
+    def set_input(self, name: str, value: float) -> None:
+        """Holds input `name` (one of inputs, e.g. "elbow_joint.voltage" [V], "elbow_joint.q" [rad], "command")
+        at `value` from now on; an input of a group (a joint) selects its mode there (e.g. the voltage port)."""
+        self._s.set_input(name, _float(value, "value"))
+
+    def input(self, name: str) -> float:
+        """The value held at input `name`."""
+        return self._s.input(name)
+
     # --- robot with drives
     dof = property(lambda self: self._s.dof, doc="Number of joints (robot with drives).")
     joint_names = property(lambda self: list(self._s.joint_names), doc="Joint names, base to tip.")

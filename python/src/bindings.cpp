@@ -36,7 +36,6 @@
 #include "jointsim/report/dataset.hpp"
 #include "jointsim/sim/simulate.hpp"
 #include "jointsim/sim/simulator.hpp"
-#include "jointsim/systems/joint_rig.hpp"
 #include "jointsim/systems/robot_with_drives.hpp"
 
 namespace py = pybind11;
@@ -231,13 +230,15 @@ struct PyExperiment {
 /// the run's state is the simulator's own.
 struct PySimulator {
   std::shared_ptr<const sim::Plant> plant;
+  const systems::RobotSystem* robot_ptr = nullptr;  // the plant when it is a robot with drives (kept alive by plant)
   std::unique_ptr<sim::Simulator> sim;
   Gate gate = std::make_shared<std::mutex>();
 
   const systems::RobotSystem& robot() {
-    const auto* r = dynamic_cast<const systems::RobotSystem*>(plant.get());
-    if (!r) throw InputError(plant->name() + " has no per-joint command ports (only a robot with drives has them)");
-    return *r;
+    if (!robot_ptr)
+      throw InputError(plant->name() + " has no per-joint command ports (only a robot with drives has them; its " +
+                       "inputs: Simulator.inputs)");
+    return *robot_ptr;
   }
   sim::PlantState& state() { return sim->plantState(); }
   int joint(const py::object& j) {
@@ -619,6 +620,7 @@ PYBIND11_MODULE(_core, m) {
             PySimulator s;
             s.sim = experiments::makeSimulator(x.e);
             s.plant = s.sim->sharedPlant();  // keeps the experiment alive; only read: the simulator has its own lock
+            s.robot_ptr = x.e->robotSystem();
             return s;
           },
           py::arg("experiment"))
@@ -630,6 +632,7 @@ PYBIND11_MODULE(_core, m) {
             if (!q0.is_none()) robot->setInitialPositions(Eigen::VectorXd(vec(q0.cast<Array>(), robot->dof(), "q0")));
             PySimulator s;
             s.plant = robot;
+            s.robot_ptr = robot.get();
             s.sim = std::make_unique<sim::Simulator>(s.plant,
                                                      solverFrom(rtol, atol, max_order, max_step, max_gamma_change));
             return s;
@@ -724,6 +727,7 @@ PYBIND11_MODULE(_core, m) {
              const Use use(s.gate, "Simulator");
              PySimulator c;
              c.plant = s.plant;
+             c.robot_ptr = s.robot_ptr;
              c.sim = std::make_unique<sim::Simulator>(*s.sim);
              return c;
            })
@@ -848,12 +852,47 @@ PYBIND11_MODULE(_core, m) {
             return std::string(systems::portName(s.robot().commandPort(s.state(), s.joint(j))));
           },
           py::arg("joint"))
+      .def_property_readonly("inputs",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               py::list out;
+                               const auto ports = s.plant->inputPorts();
+                               for (size_t i = 0; i < ports.size(); ++i) {
+                                 const sim::InputPort& p = ports[i];
+                                 py::dict d;
+                                 d["name"] = p.name;
+                                 d["unit"] = p.unit;
+                                 d["min"] = p.min;
+                                 d["max"] = p.max;
+                                 d["description"] = p.description;
+                                 d["group"] = p.group;
+                                 d["mode"] = p.mode;
+                                 d["active"] = s.plant->inputActive(s.state(), static_cast<int>(i));
+                                 d["value"] = s.plant->input(s.state(), static_cast<int>(i));
+                                 out.append(d);
+                               }
+                               return out;
+                             })
+      .def(
+          "set_input",
+          [](PySimulator& s, const std::string& name, double value) {
+            const Use use(s.gate, "Simulator");
+            s.plant->setInput(s.state(), sim::inputIndex(*s.plant, name), value);
+          },
+          py::arg("name"), py::arg("value"))
+      .def(
+          "input",
+          [](PySimulator& s, const std::string& name) {
+            const Use use(s.gate, "Simulator");
+            return s.plant->input(s.state(), sim::inputIndex(*s.plant, name));
+          },
+          py::arg("name"))
       .def(
           "set_command",
           [](PySimulator& s, const py::object& j, double value) {
             const Use use(s.gate, "Simulator");
-            if (const auto* rig = dynamic_cast<const systems::JointRig*>(s.plant.get())) {
-              rig->setCommand(s.state(), value);
+            if (!s.robot_ptr) {  // a plant without joints (a joint rig): its `command` input
+              s.plant->setInput(s.state(), sim::inputIndex(*s.plant, "command"), value);
               return;
             }
             s.robot().setCommand(s.state(), s.joint(j), value);

@@ -15,7 +15,6 @@
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
 #include "jointsim/systems/faults.hpp"
-#include "jointsim/systems/joint_rig.hpp"
 #include "jointsim/systems/robot_system.hpp"
 
 namespace jointsim::fmi {
@@ -122,21 +121,6 @@ void collectNumbers(const nlohmann::ordered_json& j, const std::string& path, co
   }
 }
 
-struct PortInfo {
-  const char* unit;
-  const char* what;
-};
-PortInfo portInfo(systems::CommandPort p) {
-  switch (p) {
-    case systems::CommandPort::Voltage: return {"V", "motor voltage command"};
-    case systems::CommandPort::Current: return {"A", "current reference into the current loop"};
-    case systems::CommandPort::MotorTorque: return {"N·m", "electromagnetic motor torque"};
-    case systems::CommandPort::MotorVelocity: return {"rad/s", "motor speed reference into the velocity loop"};
-    case systems::CommandPort::Setpoint: return {"rad", "joint position reference"};
-  }
-  return {"", ""};
-}
-
 }  // namespace
 
 FmuDescription describe(experiments::Experiment& experiment, const ExportOptions& options,
@@ -160,85 +144,55 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
     d.variables.push_back(std::move(v));
   };
 
-  // Inputs.
-  if (auto* robot = dynamic_cast<systems::RobotSystem*>(&plant)) {
-    const Eigen::VectorXd y0 = robot->initialState();
-    std::vector<std::string> port_of(static_cast<size_t>(robot->dof()));
+  // Inputs: the plant's input ports (sim::InputPort) that the --inputs specs select. A spec is MODE (every group's
+  // input of that mode, e.g. "voltage" for every joint, "setpoint" for q, qd and qdd) or GROUP:MODE (one joint).
+  const std::vector<sim::InputPort> ports = plant.inputPorts();
+  {
+    auto start_state = plant.makeState();
+    plant.start(*start_state, 0.0, plant.initialState());  // the inputs' values at the start
+    std::map<std::string, std::string> mode_of_group;
     for (const std::string& spec : options.inputs) {
       const auto colon = spec.find(':');
-      std::vector<int> joints;
-      std::string port_text = spec;
-      if (colon != std::string::npos) {
-        joints.push_back(robot->model().jointIndex(spec.substr(0, colon)));
-        port_text = spec.substr(colon + 1);
-      } else {
-        for (int k = 0; k < robot->dof(); ++k) joints.push_back(k);
-      }
-      const systems::CommandPort port = systems::parsePort(port_text);
-      for (int k : joints) {
-        const std::string& joint = robot->model().joint_names[k];
-        std::string& given = port_of[static_cast<size_t>(k)];
-        if (!given.empty())
-          throw InputError("FMU export: joint " + joint + " has two command ports as inputs (" + given + " and " +
-                           port_text + ")");
-        given = port_text;
-        if (port == systems::CommandPort::Setpoint) {
-          Variable q;
-          q.name = "cmd_q_" + joint;
-          q.causality = Causality::Input;
-          q.unit = "rad";
-          q.description = "joint position reference of " + joint + " (setpoint port)";
-          q.start = y0[k];
-          q.joint = k;
-          q.port = "q";
-          add(q);
-          Variable qd = q;
-          qd.name = "cmd_qd_" + joint;
-          qd.unit = "rad/s";
-          qd.description = "joint velocity reference of " + joint + " (setpoint port)";
-          qd.start = 0.0;
-          qd.port = "qd";
-          add(qd);
-        } else {
-          const PortInfo info = portInfo(port);
-          Variable v;
-          v.name = std::string("cmd_") + systems::portName(port) + "_" + joint;
-          v.causality = Causality::Input;
-          v.unit = fmuUnit(info.unit);
-          v.description = std::string(info.what) + " of " + joint + " (" + systems::portName(port) + " port)";
-          v.joint = k;
-          v.port = systems::portName(port);
-          add(v);
+      const std::string group = colon == std::string::npos ? std::string() : spec.substr(0, colon);
+      const std::string mode = colon == std::string::npos ? spec : spec.substr(colon + 1);
+      std::set<std::string> modes, groups;
+      int matched = 0;
+      for (size_t i = 0; i < ports.size(); ++i) {
+        const sim::InputPort& p = ports[i];
+        const std::string p_mode = p.mode.empty() ? p.name : p.mode;
+        modes.insert(p_mode);
+        if (!p.group.empty()) groups.insert(p.group);
+        if (p_mode != mode || (!group.empty() && p.group != group)) continue;
+        ++matched;
+        if (!p.group.empty()) {
+          std::string& given = mode_of_group[p.group];
+          if (!given.empty() && given != mode)
+            throw InputError("FMU export: " + p.group + " has two command ports as inputs (" + given + " and " + mode +
+                             ")");
+          given = mode;
         }
+        Variable v;
+        const std::string suffix = p.group.empty() ? p.name : p.name.substr(p.group.size() + 1);
+        v.name = p.group.empty() ? (p.name == "command" ? std::string("cmd_input") : "cmd_" + p.name)
+                                 : "cmd_" + suffix + "_" + p.group;
+        v.causality = Causality::Input;
+        v.unit = fmuUnit(p.unit);
+        v.description = p.description;
+        v.start = plant.input(*start_state, static_cast<int>(i));
+        v.port = p.name;
+        add(v);
+      }
+      if (matched == 0) {
+        if (!group.empty() && groups.count(group) == 0)
+          throw InputError("FMU export: input '" + spec + "': no joint '" + group + "' (the plant's are " +
+                           join(std::vector<std::string>(groups.begin(), groups.end()), ", ") + ")");
+        throw InputError(
+            "FMU export: input '" + spec + "': " + plant.name() + " has no input of mode '" + mode + "'" +
+            (group.empty() ? "" : " at " + group) + " (its modes: " +
+            (modes.empty() ? std::string("none") : join(std::vector<std::string>(modes.begin(), modes.end()), ", ")) +
+            ")");
       }
     }
-  } else if (auto* rig = dynamic_cast<systems::JointRig*>(&plant)) {
-    for (const std::string& spec : options.inputs) {
-      if (spec != "command")
-        throw InputError("FMU export: input '" + spec + "' of a joint rig, expected 'command' (the rig's input)");
-      Variable v;
-      v.name = "cmd_input";
-      v.causality = Causality::Input;
-      v.port = "input";
-      switch (rig->setup().input) {
-        case systems::RigInput::MotorTorque:
-          v.unit = "N.m";
-          v.description = "motor torque";
-          break;
-        case systems::RigInput::Voltage:
-          v.unit = "V";
-          v.description = "motor voltage";
-          break;
-        case systems::RigInput::VelocityPI:
-          v.unit = "rad/s";
-          v.description = "velocity reference of the PI loop";
-          break;
-      }
-      v.description += " (held in place of the input profile)";
-      add(v);
-    }
-  } else {
-    throw InputError("FMU export: the experiment's plant has no command ports");
   }
 
   // Outputs.
@@ -260,9 +214,8 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
   }
 
   // Drive parameters of a robot with drives: the faults that apply to each drive, at their neutral values.
-  if (auto* robot = dynamic_cast<systems::RobotSystem*>(&plant)) {
-    for (int k = 0; k < robot->dof(); ++k) {
-      const systems::DriveSpec& drive = robot->drives()[static_cast<size_t>(k)];
+  if (const systems::RobotSystem* robot = experiment.robotSystem()) {
+    for (const systems::DriveSpec& drive : robot->drives()) {
       for (const std::string& type_name : systems::faultTypeNames()) {
         systems::Fault f;
         f.type = systems::faultTypeFromString(type_name);
@@ -276,7 +229,7 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
         v.causality = Causality::Parameter;
         v.unit = offset ? "rad" : "1";
         v.start = offset ? 0.0 : 1.0;
-        v.joint = k;
+        v.key = drive.joint;
         v.fault = type_name;
         v.description =
             "drive of " + drive.joint + ": " + type_name + (offset ? " [rad]" : " (factor on the robot file's value)");

@@ -14,8 +14,6 @@
 #include "jointsim/fmi/fmu.hpp"
 #include "jointsim/io/input_files.hpp"
 #include "jointsim/systems/faults.hpp"
-#include "jointsim/systems/joint_rig.hpp"
-#include "jointsim/systems/robot_system.hpp"
 
 namespace jointsim::fmi {
 
@@ -34,7 +32,7 @@ struct Instance::Impl {
   Logger logger;
   Phase phase = Phase::Instantiated;
   std::vector<double> values;  // inputs and parameters as set; outputs unused
-  std::vector<int> qd_of;      // for a "q" (setpoint) input, the index of its joint's "qd" input (-1: none)
+  std::vector<int> input_of;   // per variable: the plant's input port of an input variable (-1: not an input)
   double start_time = 0.0;
   bool stop_defined = false;  // fmi2SetupExperiment: a step past stop_time is an error
   double stop_time = 0.0;
@@ -74,7 +72,7 @@ struct Instance::Impl {
       if (!v.fault.empty()) {
         systems::Fault f;
         f.type = systems::faultTypeFromString(v.fault);
-        f.joint = v.name.substr(7, v.name.size() - 7 - v.fault.size() - 1);  // drives.<joint>.<fault>
+        f.joint = v.key;  // the joint whose drive
         f.value = values[i];
         faults.push_back(f);
       } else {
@@ -88,30 +86,27 @@ struct Instance::Impl {
       throw InputError("the experiment's type changed to '" + experiment->type() + "'");
     experiments::checkRunSettings(*experiment);  // the checks of jointsim run (e.g. a log rate beyond its limit)
     auto made = experiments::makeSimulator(experiment);
-    checkVariables(made->plant());  // before the simulator is kept: a failed check leaves none to read from
+    input_of = checkVariables(made->plant());  // before the simulator is kept: a failed check leaves none to read
     sim = std::move(made);
     // One fmi2DoStep may take at most the solver's max_num_steps internal steps (its meaning in the experiment file:
     // per output interval, here per communication step); a longer one fails with the simulated time and the plant.
     sim::AdvanceLimits limits;
     limits.max_steps = sim->integratorOptions().max_num_steps;
     sim->setLimits(limits);
-    if (const auto* robot = dynamic_cast<const systems::RobotSystem*>(&sim->plant())) {
-      for (const Variable& v : d.variables)
-        if (v.causality == Causality::Input && v.port != "q" && v.port != "qd")
-          robot->setCommandPort(sim->plantState(), v.joint, systems::parsePort(v.port));
-    }
     applyInputs();
     params_changed = false;
   }
 
   /// The description (resources/jointsim_fmu.json) against the plant it was loaded for: every output names a signal
-  /// of the plant under the same name, every input a joint of the robot and a port it has. An edited description
-  /// (the GUID is only a string in it) is an error here instead of a read out of bounds in fmi2GetReal.
-  void checkVariables(const sim::Plant& plant) const {
+  /// of the plant under the same name, every input one of its input ports. An edited description (the GUID is only a
+  /// string in it) is an error here instead of a read out of bounds in fmi2GetReal. Returns the input ports of the
+  /// variables (-1 for a variable that is not an input).
+  std::vector<int> checkVariables(const sim::Plant& plant) const {
     const auto& signals = plant.signalNames();
-    const auto* robot = dynamic_cast<const systems::RobotSystem*>(&plant);
     const std::string where = resources + "/jointsim_fmu.json: variable ";
-    for (const Variable& v : d.variables) {
+    std::vector<int> ports(d.variables.size(), -1);
+    for (size_t i = 0; i < d.variables.size(); ++i) {
+      const Variable& v = d.variables[i];
       if (v.causality == Causality::Output) {
         if (v.signal < 0 || static_cast<size_t>(v.signal) >= signals.size())
           throw InputError(where + v.name + ": signal " + std::to_string(v.signal) + " out of range (the plant has " +
@@ -120,41 +115,23 @@ struct Instance::Impl {
           throw InputError(where + v.name + ": signal " + std::to_string(v.signal) + " is '" +
                            signals[static_cast<size_t>(v.signal)] + "'; the FMU's resources were edited");
       } else if (v.causality == Causality::Input) {
-        if (robot != nullptr) {
-          if (v.joint < 0 || static_cast<size_t>(v.joint) >= robot->model().joint_names.size())
-            throw InputError(where + v.name + ": joint " + std::to_string(v.joint) + " out of range (the robot has " +
-                             std::to_string(robot->model().joint_names.size()) +
-                             " joints); the FMU's resources were edited");
-          if (v.port != "q" && v.port != "qd") systems::parsePort(v.port);  // InputError for an unknown port
-        } else if (v.joint != -1 || v.port != "input") {
-          throw InputError(where + v.name + ": expected the input of a joint rig (joint -1, port 'input')" +
-                           "; the FMU's resources were edited");
+        try {
+          ports[i] = sim::inputIndex(plant, v.port);
+        } catch (const InputError& e) {
+          throw InputError(where + v.name + ": " + e.what() + "; the FMU's resources were edited");
         }
       }
     }
+    return ports;
   }
 
+  /// The input variables' values into the plant's input ports, in the order of the description (a port of a group
+  /// selects its mode, e.g. the joint's voltage port).
   void applyInputs() {
     const sim::Plant& plant = sim->plant();
     sim::PlantState& state = sim->plantState();
-    const auto* robot = dynamic_cast<const systems::RobotSystem*>(&plant);
-    const auto* rig = dynamic_cast<const systems::JointRig*>(&plant);
-    for (size_t i = 0; i < d.variables.size(); ++i) {
-      const Variable& v = d.variables[i];
-      if (v.causality != Causality::Input) continue;
-      if (rig != nullptr) {
-        rig->setCommand(state, values[i]);
-      } else if (robot != nullptr) {
-        if (v.port == "q") {
-          const double qd = qd_of[i] >= 0 ? values[static_cast<size_t>(qd_of[i])] : 0.0;
-          if (robot->commandPort(state, v.joint) != systems::CommandPort::Setpoint)
-            robot->setCommandPort(state, v.joint, systems::CommandPort::Setpoint);
-          robot->setSetpoint(state, v.joint, values[i], qd);
-        } else if (v.port != "qd") {
-          robot->setCommand(state, v.joint, values[i]);
-        }
-      }
-    }
+    for (size_t i = 0; i < d.variables.size(); ++i)
+      if (input_of[i] >= 0) plant.setInput(state, input_of[i], values[i]);
   }
 
   /// Runs `f`, turning every exception into a logged error (a solver failure names the time and component).
@@ -197,16 +174,7 @@ Instance::Instance(std::string instance_name, const std::string& resource_dir, c
   if (guid != m.d.guid)
     throw InputError(path + ": GUID '" + guid + "' given by the importer, the FMU's is '" + m.d.guid + "'");
   m.values.resize(m.d.variables.size());
-  m.qd_of.assign(m.d.variables.size(), -1);
-  for (size_t i = 0; i < m.values.size(); ++i) {
-    m.values[i] = m.d.variables[i].start;
-    const Variable& v = m.d.variables[i];
-    if (v.causality == Causality::Input && v.port == "q")
-      for (size_t k = 0; k < m.d.variables.size(); ++k)
-        if (m.d.variables[k].causality == Causality::Input && m.d.variables[k].port == "qd" &&
-            m.d.variables[k].joint == v.joint)
-          m.qd_of[i] = static_cast<int>(k);
-  }
+  for (size_t i = 0; i < m.values.size(); ++i) m.values[i] = m.d.variables[i].start;
 }
 
 Instance::~Instance() = default;

@@ -83,6 +83,25 @@ void Plant::checkConfigurable(const char* setter) const {
         "are sized for its configuration): configure it before simulating it");
 }
 
+void Plant::setInput(PlantState& /*state*/, int port, double /*value*/) const {
+  throw InputError(name() + ": no input " + std::to_string(port) + " (the plant has no inputs)");
+}
+
+double Plant::input(const PlantState& /*state*/, int port) const {
+  throw InputError(name() + ": no input " + std::to_string(port) + " (the plant has no inputs)");
+}
+
+int inputIndex(const Plant& plant, const std::string& name) {
+  const std::vector<InputPort> ports = plant.inputPorts();
+  std::vector<std::string> names;
+  for (size_t i = 0; i < ports.size(); ++i) {
+    if (ports[i].name == name) return static_cast<int>(i);
+    names.push_back(ports[i].name);
+  }
+  throw InputError(plant.name() + ": no input '" + name + "'; " +
+                   (names.empty() ? std::string("the plant has no inputs") : "the inputs are: " + join(names, ", ")));
+}
+
 int signalIndex(const Plant& plant, const std::string& name) {
   const auto& names = plant.signalNames();
   for (size_t i = 0; i < names.size(); ++i)

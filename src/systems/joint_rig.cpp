@@ -123,6 +123,53 @@ void JointRig::releaseCommand(sim::PlantState& state) const {
   }
 }
 
+std::vector<sim::InputPort> JointRig::inputPorts() const {
+  sim::InputPort c;
+  c.name = "command";
+  switch (s_.input) {
+    case RigInput::MotorTorque:
+      c.unit = "N·m";
+      c.description = "motor torque";
+      break;
+    case RigInput::Voltage:
+      c.unit = "V";
+      c.description = "motor voltage";
+      break;
+    case RigInput::VelocityPI:
+      c.unit = "rad/s";
+      c.description = "velocity reference of the PI loop";
+      break;
+  }
+  c.description += " (held in place of the input profile)";
+  std::vector<sim::InputPort> out{c};
+  if (!s_.clamped) {
+    sim::InputPort l;
+    l.name = "load_torque";
+    l.unit = "N·m";
+    l.description = "external torque on the output shaft";
+    out.push_back(l);
+  }
+  return out;
+}
+
+void JointRig::setInput(sim::PlantState& state, int port, double value) const {
+  if (port == 0) return setCommand(state, value);
+  if (port == 1 && !s_.clamped) return setLoadTorque(state, value);
+  throw InputError(name() + ": input " + std::to_string(port) + " out of range 0.." + (s_.clamped ? "0" : "1"));
+}
+
+double JointRig::input(const sim::PlantState& state, int port) const {
+  const State& s = own<State>(state);
+  if (port == 0) return s.command;
+  if (port == 1 && !s_.clamped) return s.load_torque;
+  throw InputError(name() + ": input " + std::to_string(port) + " out of range 0.." + (s_.clamped ? "0" : "1"));
+}
+
+bool JointRig::inputActive(const sim::PlantState& state, int port) const {
+  (void)input(state, port);  // range check
+  return port == 1 || own<State>(state).held;
+}
+
 void JointRig::setLoadTorque(sim::PlantState& state, double tau) const {
   State& s = own<State>(state);
   if (!std::isfinite(tau))

@@ -108,6 +108,12 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
     }
     L.n_controller = controllers_.back().stateSize();
   }
+  for (int k = 0; k < n; ++k) {
+    for (int kind = 0; kind < 3; ++kind) inputs_.push_back({k, kind});
+    for (CommandPort p :
+         {CommandPort::MotorVelocity, CommandPort::Current, CommandPort::Voltage, CommandPort::MotorTorque})
+      if (portRefusal(k, p).empty()) inputs_.push_back({k, 3 + static_cast<int>(p)});
+  }
   // Controller states come last, so that sampled control can take them out of the ODE state.
   for (auto& L : layout_) {
     if (L.n_controller > 0) {
@@ -387,6 +393,96 @@ std::string RobotSystem::portRefusal(int joint, CommandPort port) const {
     case CommandPort::MotorTorque: break;
   }
   return {};
+}
+
+const RobotSystem::InputSlot& RobotSystem::inputSlot(int port) const {
+  if (port < 0 || static_cast<size_t>(port) >= inputs_.size())
+    throw InputError(name() + ": input " + std::to_string(port) + " out of range 0.." +
+                     std::to_string(static_cast<long>(inputs_.size()) - 1));
+  return inputs_[static_cast<size_t>(port)];
+}
+
+std::vector<sim::InputPort> RobotSystem::inputPorts() const {
+  static const char* const ref_names[] = {"q", "qd", "qdd"};
+  static const char* const ref_units[] = {"rad", "rad/s", "rad/s²"};
+  static const char* const ref_what[] = {"joint position reference", "joint velocity reference",
+                                         "joint acceleration reference (feed-forward of the logged inverse dynamics)"};
+  std::vector<sim::InputPort> out;
+  out.reserve(inputs_.size());
+  for (const InputSlot& in : inputs_) {
+    const std::string& joint = drives_[static_cast<size_t>(in.joint)].joint;
+    sim::InputPort p;
+    p.group = joint;
+    if (in.kind < 3) {
+      p.name = joint + "." + ref_names[in.kind];
+      p.unit = ref_units[in.kind];
+      p.description = std::string(ref_what[in.kind]) + " of " + joint + ", held (setpoint port)";
+      p.mode = "setpoint";
+    } else {
+      const auto port = static_cast<CommandPort>(in.kind - 3);
+      p.name = joint + "." + portName(port);
+      p.mode = portName(port);
+      switch (port) {
+        case CommandPort::MotorVelocity:
+          p.unit = "rad/s";
+          p.description = "motor speed reference into the velocity loop of " + joint;
+          break;
+        case CommandPort::Current:
+          p.unit = "A";
+          p.description = "current reference into the current loop of " + joint;
+          break;
+        case CommandPort::Voltage:
+          p.unit = "V";
+          p.description = "motor voltage command of " + joint + " (saturates at the supply voltage)";
+          break;
+        case CommandPort::MotorTorque:
+          p.unit = "N·m";
+          p.description = "electromagnetic motor torque of " + joint;
+          break;
+        case CommandPort::Setpoint: break;
+      }
+    }
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+void RobotSystem::setInput(sim::PlantState& state, int port, double value) const {
+  const InputSlot& in = inputSlot(port);
+  State& st = own<State>(state);
+  const size_t k = static_cast<size_t>(in.joint);
+  if (!std::isfinite(value))
+    throw InputError(name() + ": input " + inputPorts()[static_cast<size_t>(port)].name +
+                     ": expected a finite number, got " + formatNumber(value));
+  if (in.kind < 3) {
+    if (st.port[k] != CommandPort::Setpoint) setCommandPort(state, in.joint, CommandPort::Setpoint);
+    const bool held = st.ref_held[k] != 0;
+    // A reference held from now on: the parts not set yet are the start angle and zero rates.
+    double r[3] = {held ? st.ref_q[in.joint] : st.q_start[in.joint], held ? st.ref_qd[in.joint] : 0.0,
+                   held ? st.ref_qdd[in.joint] : 0.0};
+    r[in.kind] = value;
+    setSetpoint(state, in.joint, r[0], r[1], r[2]);
+    return;
+  }
+  const auto p = static_cast<CommandPort>(in.kind - 3);
+  if (st.port[k] != p) setCommandPort(state, in.joint, p);
+  setCommand(state, in.joint, value);
+}
+
+double RobotSystem::input(const sim::PlantState& state, int port) const {
+  const InputSlot& in = inputSlot(port);
+  const State& st = own<State>(state);
+  const bool held = st.ref_held[static_cast<size_t>(in.joint)] != 0;
+  if (in.kind == 0) return held ? st.ref_q[in.joint] : st.q_start[in.joint];
+  if (in.kind == 1) return held ? st.ref_qd[in.joint] : 0.0;
+  if (in.kind == 2) return held ? st.ref_qdd[in.joint] : 0.0;
+  return st.port[static_cast<size_t>(in.joint)] == static_cast<CommandPort>(in.kind - 3) ? st.cmd[in.joint] : 0.0;
+}
+
+bool RobotSystem::inputActive(const sim::PlantState& state, int port) const {
+  const InputSlot& in = inputSlot(port);
+  const CommandPort now = own<State>(state).port[static_cast<size_t>(in.joint)];
+  return in.kind < 3 ? now == CommandPort::Setpoint : now == static_cast<CommandPort>(in.kind - 3);
 }
 
 CommandPort RobotSystem::commandPort(const sim::PlantState& state, int joint) const {

@@ -211,8 +211,12 @@ TEST(FmuDescription, JsonRoundTripAndModelDescription) {
   }
   EXPECT_EQ(d.variables[0].name, "cmd_q_shoulder_pan_joint");
   EXPECT_EQ(d.variables[1].name, "cmd_qd_shoulder_pan_joint");
+  EXPECT_EQ(d.variables[2].name, "cmd_qdd_shoulder_pan_joint");
+  EXPECT_EQ(d.variables[1].unit, "rad/s");
+  EXPECT_EQ(d.variables[2].unit, "rad/s2");
+  EXPECT_EQ(d.variables[3].name, "cmd_q_shoulder_lift_joint");
   EXPECT_NEAR(d.variables[0].start, 0.0, 1e-12);  // the trajectory's offset of joint 1
-  EXPECT_NEAR(d.variables[2].start, -1.2, 1e-12);
+  EXPECT_NEAR(d.variables[3].start, -1.2, 1e-12);
   const std::string xml = d.modelDescriptionXml();
   EXPECT_NE(xml.find("<Unit name=\"N.m\"><BaseUnit kg=\"1\" m=\"2\" s=\"-2\"/></Unit>"), std::string::npos);
   for (const fmi::Variable& v : d.variables) {  // ASCII unit names (N.m, rad/s2); no parameter without effect
@@ -370,14 +374,14 @@ TEST(FmuInstance, AnEditedDescriptionIsAnErrorNotACrash) {
            if (v.causality == fmi::Causality::Output) v.signal = -7;
        },
        "malformed FMU description: signal = -7"},  // refused when the description is read
-      {"robot input joint out of range",
+      {"robot input port unknown",
        kUr5,
        {"shoulder_pan_joint:voltage"},
        [](fmi::FmuDescription& d) {
          for (auto& v : d.variables)
-           if (v.causality == fmi::Causality::Input) v.joint = 99;
+           if (v.causality == fmi::Causality::Input) v.port = "shoulder_pan_joint.warp";
        },
-       "joint 99 out of range"},
+       "no input 'shoulder_pan_joint.warp'"},
   };
   for (const Edit& e : edits) {
     SCOPED_TRACE(e.what);

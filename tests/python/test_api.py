@@ -584,6 +584,24 @@ def test_reset_clears_the_inputs_and_takes_a_start_pose():
         sim.reset(q0=[0.0, 1.0])
 
 
+def test_inputs_are_listed_with_units_and_set_by_name_like_the_ports():
+    a = jointsim.Simulator.from_robot(jointsim.data_path("robots/ur5_drives.yaml"))
+    b = a.copy()
+    inputs = {i["name"]: i for i in a.inputs}
+    assert inputs["elbow_joint.voltage"]["unit"] == "V" and inputs["elbow_joint.voltage"]["group"] == "elbow_joint"
+    assert inputs["elbow_joint.q"]["mode"] == "setpoint" and inputs["elbow_joint.q"]["active"]
+    assert not inputs["elbow_joint.current"]["active"]
+    a.set_input("elbow_joint.voltage", 6.0)
+    b.set_port("elbow_joint", "voltage")
+    b.set_command("elbow_joint", 6.0)
+    assert a.port(2) == "voltage" and a.input("elbow_joint.voltage") == 6.0
+    a.advance(0.05)
+    b.advance(0.05)
+    np.testing.assert_array_equal(a.state, b.state)
+    with pytest.raises(jointsim.InputError, match="elbow_joint.voltage"):  # the message lists the inputs
+        a.set_input("elbow_joint.volts", 1.0)
+
+
 def _ignore(error, call):
     try:
         call()

@@ -266,5 +266,89 @@ TEST(CommandPorts, JointRigHoldsACommandAndTakesALoadTorque) {
   EXPECT_DOUBLE_EQ(s.signal("command_torque"), 1.0);
 }
 
+// The same ports through the plant interface (sim::Plant::inputPorts/setInput), as the FMU and Python use them: the
+// table names every port the drive has with its unit, and a run driven through it equals, bit for bit, one driven
+// through the robot's own setters.
+TEST(InputPorts, TheRobotsPortsAsNamedInputsActAsItsOwnSetters) {
+  systems::RobotSystem r = singleJoint();
+  const auto ports = r.inputPorts();
+  std::vector<std::string> names, units;
+  for (const auto& p : ports) {
+    names.push_back(p.name);
+    units.push_back(p.unit);
+    EXPECT_EQ(p.group, "j1");
+    EXPECT_FALSE(p.description.empty());
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"j1.q", "j1.qd", "j1.qdd", "j1.motor_velocity", "j1.current", "j1.voltage",
+                                             "j1.motor_torque"}));
+  EXPECT_EQ(units, (std::vector<std::string>{"rad", "rad/s", "rad/s²", "rad/s", "A", "V", "N·m"}));
+  EXPECT_EQ(ports[5].mode, "voltage");
+  EXPECT_EQ(ports[1].mode, "setpoint");
+  // A torque-controlled drive has no current or voltage port.
+  systems::RobotSystem t = singleJoint(false);
+  for (const auto& p : t.inputPorts()) EXPECT_TRUE(p.name != "j1.current" && p.name != "j1.voltage") << p.name;
+  try {
+    (void)sim::inputIndex(t, "j1.voltage");
+    FAIL() << "a port the drive lacks";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("j1.motor_torque"), std::string::npos) << e.what();  // lists the inputs
+  }
+
+  auto drive = [&](bool generic) {
+    sim::Simulator s(r, tight());
+    if (generic) {
+      s.plant().setInput(s.plantState(), sim::inputIndex(r, "j1.voltage"), 12.0);
+      EXPECT_TRUE(r.inputActive(s.plantState(), 5));
+      EXPECT_FALSE(r.inputActive(s.plantState(), 0));
+      EXPECT_EQ(r.input(s.plantState(), 5), 12.0);
+    } else {
+      r.setCommandPort(s.plantState(), 0, CommandPort::Voltage);
+      r.setCommand(s.plantState(), 0, 12.0);
+    }
+    s.advanceTo(0.1);
+    if (generic) {
+      s.plant().setInput(s.plantState(), sim::inputIndex(r, "j1.q"), 0.7);
+      s.plant().setInput(s.plantState(), sim::inputIndex(r, "j1.qd"), 0.1);
+      EXPECT_EQ(r.commandPort(s.plantState(), 0), CommandPort::Setpoint);
+      EXPECT_EQ(r.input(s.plantState(), 0), 0.7);
+    } else {
+      r.setCommandPort(s.plantState(), 0, CommandPort::Setpoint);
+      r.setSetpoint(s.plantState(), 0, 0.7, 0.1);
+    }
+    s.advanceTo(0.3);
+    return Eigen::VectorXd(s.state());
+  };
+  const Eigen::VectorXd a = drive(true), b = drive(false);
+  EXPECT_EQ(a, b);
+  EXPECT_GT(std::abs(a[0]), 0.1);  // it moved
+  sim::Simulator s(r, tight());
+  EXPECT_THROW(r.setInput(s.plantState(), 7, 1.0), InputError);
+  EXPECT_THROW(r.setInput(s.plantState(), 5, std::nan("")), InputError);
+  EXPECT_EQ(r.commandPort(s.plantState(), 0), CommandPort::Setpoint);  // the refused value changed nothing
+}
+
+TEST(InputPorts, TheJointRigsCommandAndLoadTorqueAreNamedInputs) {
+  systems::JointRigSetup setup;
+  setup.rotor_inertia = 2e-3;
+  setup.load_inertia = 0.5;
+  setup.transmission = std::make_shared<drive::RigidGear>(4.0);
+  setup.profile = control::Profile::constant(1.0);
+  systems::JointRig rig(setup);
+  const auto ports = rig.inputPorts();
+  ASSERT_EQ(ports.size(), 2u);
+  EXPECT_EQ(ports[0].name, "command");
+  EXPECT_EQ(ports[0].unit, "N·m");
+  EXPECT_EQ(ports[1].name, "load_torque");
+  sim::Simulator s(rig, tight());
+  EXPECT_FALSE(rig.inputActive(s.plantState(), 0));  // the profile until a command is held
+  rig.setInput(s.plantState(), 0, 0.3);
+  rig.setInput(s.plantState(), sim::inputIndex(rig, "load_torque"), -0.4);
+  EXPECT_TRUE(rig.inputActive(s.plantState(), 0));
+  s.advanceTo(0.5);
+  const double a = (0.3 - 0.4 / 4.0) / (2e-3 + 0.5 / 16.0);
+  EXPECT_NEAR(s.signal("motor_angle"), 0.5 * a * 0.25, 1e-9);
+  EXPECT_THROW(rig.setInput(s.plantState(), 2, 0.0), InputError);
+}
+
 }  // namespace
 }  // namespace jointsim

@@ -30,6 +30,10 @@
 #include "jointsim/systems/faults.hpp"
 #include "jointsim/systems/joint_limits.hpp"
 
+namespace jointsim::systems {
+class RobotSystem;
+}  // namespace jointsim::systems
+
 namespace jointsim::experiments {
 
 /// Budgets of one run, from the experiment file's `limits: {steps, wall_time, log_rows}` block (0: none). A run
@@ -61,6 +65,9 @@ class Experiment {
   virtual void observe(const Eigen::VectorXd& /*row*/) {}
   /// Tables to write besides the log after a successful run.
   virtual std::vector<ExtraTable> extraTables() const { return {}; }
+  /// The robot with drives of an experiment type that simulates one (tracking; it is plant()), else null: for front
+  /// ends that use the robot's own API (its model, drives and motor states) besides the plant interface.
+  virtual const systems::RobotSystem* robotSystem() const { return nullptr; }
 
   const std::string& name() const { return name_; }  ///< experiment.name
   const std::string& type() const { return type_; }  ///< experiment.type

@@ -27,6 +27,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -39,6 +40,21 @@
 namespace jointsim::sim {
 
 class Plant;
+
+/// One named input of a plant: a value set between steps and held until changed (zero-order hold), e.g. a command
+/// port of a drive or a joint rig's command. Set through Plant::setInput() in a run's state; a change restarts the
+/// integrator at that time (PlantState::inputsChanged).
+struct InputPort {
+  std::string name;  ///< unique in the plant, e.g. "elbow_joint.voltage", "elbow_joint.q", "command"
+  std::string unit;  ///< SI unit, e.g. "V", "rad/s", "N·m"
+  double min = -std::numeric_limits<double>::infinity();  ///< admissible values: min <= value <= max, finite
+  double max = std::numeric_limits<double>::infinity();
+  std::string description;  ///< one line: what the value is and where it enters
+  /// Inputs of one group are alternatives (the command ports of a joint's drive): setting one makes its `mode` the
+  /// group's active one (with a bumpless switch where the plant has one). Empty: an independent input.
+  std::string group;
+  std::string mode;  ///< the mode of its group this input belongs to, e.g. "voltage", "setpoint" (for q, qd, qdd)
+};
 
 /// Everything about one run of a plant that changes, apart from the time and the continuous state: made by
 /// Plant::makeState(), owned by a simulator, copied (clone) for snapshots, saved as bytes. A plant's own state
@@ -158,6 +174,16 @@ class Plant {
   /// which a divergence bound (sim::AdvanceLimits::max_state) must therefore not apply to.
   virtual bool unboundedState(int /*i*/) const { return false; }
 
+  /// The inputs a user may set between steps (InputPort); empty for a plant without inputs.
+  virtual std::vector<InputPort> inputPorts() const { return {}; }
+  /// Sets input `port` (index in inputPorts()) in `state` to `value` and makes its mode the active one of its group.
+  /// \throws InputError (nothing changed) for a port out of range, a value outside [min, max] or not finite.
+  virtual void setInput(PlantState& state, int port, double value) const;
+  /// The value of input `port` in `state`: the last one set, else the plant's default (0 unless documented).
+  virtual double input(const PlantState& state, int port) const;
+  /// Whether input `port` is in effect in `state`: its mode is its group's active one (an independent input: true).
+  virtual bool inputActive(const PlantState& /*state*/, int /*port*/) const { return true; }
+
   /// Output signals as `name[unit]` (the CSV column names after "time[s]").
   virtual const std::vector<std::string>& signalNames() const = 0;
   /// Values of the output signals at (t, y), in signalNames() order (size signalNames().size()).
@@ -184,6 +210,10 @@ class Plant {
   std::uint64_t id_;
   mutable std::atomic<bool> frozen_{false};
 };
+
+/// Index of the input called `name` in plant.inputPorts(); throws InputError naming the plant and listing its inputs
+/// when absent.
+int inputIndex(const Plant& plant, const std::string& name);
 
 /// Index of the signal called `name` (without or with its `[unit]`) in plant.signalNames(); throws InputError
 /// naming the plant and listing the signals when absent.

@@ -104,6 +104,14 @@ class JointRig : public sim::Plant {
   /// transmission, where it acts on the merged shaft as τ/N on the motor side).
   void setLoadTorque(sim::PlantState& state, double tau) const;
 
+  /// Named inputs (sim::Plant::inputPorts): `command` (setCommand; its unit is the rig's input type's: N·m, V or
+  /// rad/s; 0 until set) and, unless the output is clamped, `load_torque` [N·m] (setLoadTorque).
+  std::vector<sim::InputPort> inputPorts() const override;
+  void setInput(sim::PlantState& state, int port, double value) const override;
+  double input(const sim::PlantState& state, int port) const override;
+  /// `command` is in effect while held (until releaseCommand); `load_torque` always.
+  bool inputActive(const sim::PlantState& state, int port) const override;
+
   std::string name() const override;
   int stateSize() const override { return n_; }
   Eigen::VectorXd initialState() const override;

@@ -209,6 +209,15 @@ class RobotSystem : public sim::Plant {
   void setExternalWrench(sim::PlantState& state, const std::string& frame,
                          const Eigen::Matrix<double, 6, 1>& wrench) const;
   void clearExternalWrenches(sim::PlantState& state) const;
+  /// The command ports as named inputs (sim::Plant::inputPorts): per joint J, in joint order, `J.q` [rad], `J.qd`
+  /// [rad/s], `J.qdd` [rad/s²] (mode "setpoint": the held reference, setSetpoint) and, where the drive has them,
+  /// `J.motor_velocity` [rad/s], `J.current` [A], `J.voltage` [V], `J.motor_torque` [N·m] (setCommand); group J.
+  /// Setting one selects its port for the joint (setCommandPort, bumpless). Any finite value is admissible (the
+  /// voltage saturates at the supply, as a command would).
+  std::vector<sim::InputPort> inputPorts() const override;
+  void setInput(sim::PlantState& state, int port, double value) const override;
+  double input(const sim::PlantState& state, int port) const override;
+  bool inputActive(const sim::PlantState& state, int port) const override;
   /// Bumpless transfer for joints whose port changed since the last call (or the start).
   void applyInputs(sim::PlantState& state, double t, Eigen::Ref<Eigen::VectorXd> y) const override;
 
@@ -341,6 +350,13 @@ class RobotSystem : public sim::Plant {
   void checkJoint(int joint, const char* what) const;
   // Why joint `joint`'s drive cannot take commands at `port` (empty: it can).
   std::string portRefusal(int joint, CommandPort port) const;
+  /// The inputs (inputPorts()): joint and kind (0, 1, 2: reference q, q̇, q̈; 3 + CommandPort: a command port).
+  struct InputSlot {
+    int joint;
+    int kind;
+  };
+  std::vector<InputSlot> inputs_;
+  const InputSlot& inputSlot(int port) const;
   void bumpless(State& st, int k, CommandPort from, double t, Eigen::Ref<Eigen::VectorXd> y) const;
   void multiRateStep(State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
   // The full initial state (controller states included, also under sampled control) with the joints at q0.

@@ -87,6 +87,7 @@ class TrackingExperiment : public Experiment {
     setJointLimits(jointLimitMonitor(s_.robot->model(), *s_.robot, s_.joint_limits));
   }
   sim::Plant& plant() override { return *s_.robot; }
+  const systems::RobotSystem* robotSystem() const override { return s_.robot.get(); }
   sim::SimulateOptions simulateOptions() const override {
     return sim::SimulateOptions::atRate(s_.duration, s_.log_rate, s_.solver);
   }
