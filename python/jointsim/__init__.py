@@ -755,6 +755,12 @@ class Simulator:
         """The robot's rigid-body model (with the reflected rotor inertias), for rnea/aba/... in a controller."""
         return self._s.model()
 
+    def drive_parameters(self, joint: Union[int, str]) -> Dict[str, List[Dict[str, Any]]]:
+        """The parameter tables of a joint's drive (the robot file's values): {"motor": [...], "transmission":
+        [...], "friction": [...]}, each row a dict with key, unit (SI), value, min, max, min_open, max_open, role and
+        description. The keys are those of an experiment's `drives:` mapping (docs/experiments.md)."""
+        return self._s.drive_parameters(_joint(joint))
+
     def set_port(self, joint: Union[int, str], port: str) -> None:
         """Chooses the command port of a joint (by index or name; one of PORTS); InputError if the drive lacks it."""
         self._s.set_port(_joint(joint), port)

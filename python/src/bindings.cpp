@@ -874,6 +874,32 @@ PYBIND11_MODULE(_core, m) {
                                return out;
                              })
       .def(
+          "drive_parameters",
+          [](PySimulator& s, const py::object& j) {
+            const Use use(s.gate, "Simulator");
+            const systems::DriveSpec& d = s.robot().drives()[static_cast<size_t>(s.joint(j))];
+            py::dict out;
+            for (const std::string& component : systems::driveComponents()) {
+              py::list rows;
+              for (const drive::ParameterInfo& p : systems::driveParameterTable(d, component)) {
+                py::dict r;
+                r["key"] = p.key;
+                r["unit"] = p.unit;
+                r["value"] = p.value;
+                r["min"] = p.range.min;
+                r["max"] = p.range.max;
+                r["min_open"] = p.range.min_open;
+                r["max_open"] = p.range.max_open;
+                r["role"] = drive::roleName(p.role);
+                r["description"] = p.description;
+                rows.append(r);
+              }
+              out[py::str(component)] = rows;
+            }
+            return out;
+          },
+          py::arg("joint"))
+      .def(
           "set_input",
           [](PySimulator& s, const std::string& name, double value) {
             const Use use(s.gate, "Simulator");

@@ -2,6 +2,7 @@
 #include "jointsim/systems/robot_with_drives.hpp"
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/drive/dc_motor.hpp"
 #include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/io/yaml.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
@@ -54,7 +55,51 @@ control::JointControllerParams readController(const YamlValue& node) {
 
 }  // namespace
 
-RobotSystem loadRobotWithDrives(const std::string& path, const std::vector<Fault>& faults) {
+const std::vector<std::string>& driveComponents() {
+  static const std::vector<std::string> names{"motor", "transmission", "friction"};
+  return names;
+}
+
+std::vector<drive::ParameterInfo> driveParameterTable(const DriveSpec& d, const std::string& component) {
+  if (component == "motor") return drive::parameterTable(d.motor);
+  if (component == "transmission")
+    return d.transmission ? d.transmission->parameters() : std::vector<drive::ParameterInfo>{};
+  if (component == "friction") return d.friction ? d.friction->parameters() : std::vector<drive::ParameterInfo>{};
+  throw InputError("drive of joint '" + d.joint + "': no component '" + component +
+                   "' (expected motor, transmission or friction)");
+}
+
+void applyDriveParameters(std::vector<DriveSpec>& drives, const std::vector<DriveParameterChange>& changes) {
+  for (const DriveParameterChange& c : changes) {
+    const std::string at = c.where.empty() ? std::string() : c.where + ": ";
+    DriveSpec* d = nullptr;
+    for (auto& x : drives)
+      if (x.joint == c.joint) d = &x;
+    try {
+      if (d == nullptr) {
+        std::string joints;
+        for (const auto& x : drives) joints += (joints.empty() ? "" : ", ") + x.joint;
+        throw InputError("no drive of joint '" + c.joint + "' (the drives: " + joints + ")");
+      }
+      const drive::ParameterChanges one{{c.key, c.value}};
+      if (c.component == "motor") {
+        d->motor = drive::withParameters(d->motor, one);
+      } else if (c.component == "transmission") {
+        d->transmission = d->transmission->withParameters(one);
+      } else if (c.component == "friction") {
+        if (!d->friction) throw InputError("the drive of joint '" + c.joint + "' has no friction");
+        d->friction = d->friction->withParameters(one);
+      } else {
+        throw InputError("no component '" + c.component + "' (expected motor, transmission or friction)");
+      }
+    } catch (const InputError& e) {
+      throw InputError(at + e.what());
+    }
+  }
+}
+
+RobotSystem loadRobotWithDrives(const std::string& path, const std::vector<Fault>& faults,
+                                const std::vector<DriveParameterChange>& changes) {
   const YamlValue root = YamlValue::loadFile(path);
   root.expectMap("a robot-with-drives mapping {name, multibody, drives, coupling}");
   root.allowKeys({"name", "multibody", "drives", "coupling"});
@@ -127,7 +172,8 @@ RobotSystem loadRobotWithDrives(const std::string& path, const std::vector<Fault
       for (size_t col = 0; col < n; ++col) G(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(col)) = row[col];
     }
   }
-  applyFaults(specs, faults);  // the constant ones; InputError names the fault
+  applyDriveParameters(specs, changes);  // InputError names where the change was given
+  applyFaults(specs, faults);            // the constant ones; InputError names the fault
   std::vector<Fault> during;
   for (const Fault& f : faults)
     if (f.timeVarying()) during.push_back(f);

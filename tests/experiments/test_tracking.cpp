@@ -154,3 +154,57 @@ TEST(Tracking, SampledControlWithNoisySensorsIsReproducibleBySeed) {
   for (double e : maxErrors(a.csv_path, 6)) EXPECT_LT(e * 180 / M_PI, 0.5);
   EXPECT_THAT(slurp(a.summary_path), HasSubstr("\"control_rate_hz\": 20000"));
 }
+
+// `drives:` of a tracking experiment changes parameters of the robot file's drives by their table keys: the held
+// pose's gear deflection follows the changed stiffness as the spring law says (δ = τ/c, output side), the other
+// drives are unchanged, and a key, component or joint that does not exist is an error at its file line.
+TEST(Tracking, DrivesKeyChangesDriveParametersByTheirTableKeys) {
+  const test::TempDir tmp;
+  auto write = [&](const std::string& drives) {
+    const auto path = tmp / "hold.yaml";
+    std::ofstream(path) << "experiment: {name: hold, type: tracking}\n"
+                        << "robot: " << test::sourcePath("config/robots/ur5_drives_elastic.yaml") << "\n"
+                        << drives << "trajectory:\n  type: point_to_point\n"
+                        << "  start: [0, -1.2, 1.0, -1.4, -1.57, 0]\n"
+                        << "  segments:\n    - {target: [0, -1.2, 1.0, -1.4, -1.57, 0], velocity: 1, acceleration: 1,"
+                        << " dwell: 0.4}\nduration: 0.4\nlog_rate: 100\n";
+    return path.string();
+  };
+  auto deflection = [&](const std::string& drives, double* stiffness) {
+    std::shared_ptr<experiments::Experiment> e = experiments::loadExperiment(write(drives));
+    const systems::RobotSystem& r = *e->robotSystem();
+    const int k = r.model().jointIndex("elbow_joint");
+    *stiffness = drive::parameterValue(r.drives()[static_cast<size_t>(k)].transmission->parameters(), "stiffness", "");
+    auto sim = experiments::makeSimulator(e);
+    sim->advanceTo(0.4);
+    const double tau = sim->signal("gear_torque_elbow_joint");
+    const Eigen::VectorXd y = sim->state();
+    const double delta = y[r.layout(k).motor] / r.layout(k).ratio - y[k];  // output-side deflection [rad]
+    return std::make_pair(delta, tau);
+  };
+  double c0 = 0, c1 = 0;
+  const auto [d0, t0] = deflection("", &c0);
+  const auto [d1, t1] = deflection("drives:\n  elbow_joint:\n    transmission: {stiffness: 2.0e4}\n", &c1);
+  EXPECT_EQ(c0, 1.446e5);  // the robot file's
+  EXPECT_EQ(c1, 2.0e4);
+  EXPECT_NEAR(d0, t0 / c0, 1e-3 * std::abs(t0 / c0));
+  EXPECT_NEAR(d1, t1 / c1, 1e-3 * std::abs(t1 / c1));
+  EXPECT_NEAR(t1, t0, 1e-3 * std::abs(t0));  // the same gravity torque held
+  EXPECT_GT(std::abs(d1), 5.0 * std::abs(d0));
+
+  // Nested keys of the table (both directions of a LuGre-type set would read positive.alpha0); errors at their line.
+  auto error = [&](const std::string& drives) {
+    try {
+      (void)experiments::loadExperiment(write(drives));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  std::string m = error("drives:\n  elbow_joint:\n    friction: {f_cc: 1.0}\n");
+  EXPECT_THAT(m, HasSubstr("hold.yaml:5: drives.elbow_joint.friction.f_cc"));
+  EXPECT_THAT(m, HasSubstr("f_c, f_v, k_q"));  // the table's keys
+  EXPECT_THAT(error("drives:\n  elbow_joint:\n    transmission: {stiffness: -1}\n"), HasSubstr("(0, inf)"));
+  EXPECT_THAT(error("drives:\n  elbo_joint:\n    motor: {R: 1}\n"), HasSubstr("no drive of joint 'elbo_joint'"));
+  EXPECT_THAT(error("drives:\n  elbow_joint:\n    gear: {R: 1}\n"), HasSubstr("gear"));
+}

@@ -602,6 +602,19 @@ def test_inputs_are_listed_with_units_and_set_by_name_like_the_ports():
         a.set_input("elbow_joint.volts", 1.0)
 
 
+def test_drive_parameter_tables_and_the_drives_key_that_changes_them():
+    path = jointsim.data_path("experiments/ur5_pick_and_place.yaml")
+    nominal = jointsim.Simulator.from_experiment(path).drive_parameters("elbow_joint")
+    km = next(r for r in nominal["transmission"] if r["key"] == "K_m")
+    assert km["unit"] == "N/m" and km["role"] == "stiffness" and km["min"] == 0.0 and km["min_open"]
+    assert {r["key"] for r in nominal["motor"]} == {"R", "L", "kt", "ke", "J_M", "V_supply"}
+    changed = jointsim.Simulator.from_experiment(
+        path, {"+drives.elbow_joint.transmission.K_m": 2 * km["value"], "+duration": 0.02}).drive_parameters(2)
+    assert next(r for r in changed["transmission"] if r["key"] == "K_m")["value"] == 2 * km["value"]
+    with pytest.raises(jointsim.InputError, match="K_WG"):  # an unknown key lists the table's keys
+        jointsim.load_experiment(path, {"+drives.elbow_joint.transmission.K_x": 1.0})
+
+
 def _ignore(error, call):
     try:
         call()

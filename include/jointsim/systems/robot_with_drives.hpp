@@ -20,14 +20,36 @@
 
 #include <vector>
 
+#include "jointsim/drive/parameters.hpp"
 #include "jointsim/systems/faults.hpp"
 #include "jointsim/systems/robot_system.hpp"
 
 namespace jointsim::systems {
 
+/// A change of one parameter of one drive's component by the key of the component's parameter table
+/// (drive/parameters.hpp): how an experiment, a sweep or an FMU changes a robot file's drive without editing it.
+struct DriveParameterChange {
+  std::string joint;      ///< the joint whose drive
+  std::string component;  ///< "motor", "transmission" or "friction"
+  std::string key;        ///< a key of the component's table, e.g. "stiffness", "positive.alpha0", "tau_pos[1][1]"
+  double value = 0.0;     ///< in the table's unit
+  std::string
+      where;  ///< where it was given, prefixed to errors (e.g. "exp.yaml:12: drives.elbow_joint..."); may be empty
+};
+
+/// The components of a drive that have parameter tables.
+const std::vector<std::string>& driveComponents();
+/// The parameter table of `component` ("motor", "transmission", "friction") of drive `d`; empty for a drive without
+/// friction. \throws InputError for another component name.
+std::vector<drive::ParameterInfo> driveParameterTable(const DriveSpec& d, const std::string& component);
+/// Applies `changes` to the drives of their joints (new, validated components). \throws InputError prefixed with
+/// the change's `where`: a joint without a drive, an unknown component or key, a value the component refuses.
+void applyDriveParameters(std::vector<DriveSpec>& drives, const std::vector<DriveParameterChange>& changes);
+
 /// Loads a robot-with-drives file. Throws InputError (file:line: key.path) on bad input, including a
-/// joint without a drive and gains of the wrong sign. `faults` are applied to the drives before the
-/// system is assembled (InputError if one does not apply).
-RobotSystem loadRobotWithDrives(const std::string& path, const std::vector<Fault>& faults = {});
+/// joint without a drive and gains of the wrong sign. `changes` are applied to the drives, then `faults` (InputError
+/// if one does not apply), before the system is assembled.
+RobotSystem loadRobotWithDrives(const std::string& path, const std::vector<Fault>& faults = {},
+                                const std::vector<DriveParameterChange>& changes = {});
 
 }  // namespace jointsim::systems

@@ -15,19 +15,65 @@ namespace jointsim::experiments {
 
 using io::YamlValue;
 
+namespace {
+
+// The numbers below a component's mapping as table keys: nested mappings joined with '.', list entries as [i]
+// ("positive.alpha0", "tau_pos[1][1]").
+void flattenNumbers(const YamlValue& node, const std::string& key, const std::string& joint,
+                    const std::string& component, std::vector<systems::DriveParameterChange>& out) {
+  if (node.isMap()) {
+    for (const std::string& k : node.keys())
+      flattenNumbers(node[k], key.empty() ? k : key + "." + k, joint, component, out);
+  } else if (node.isSequence()) {
+    for (size_t i = 0; i < node.size(); ++i)
+      flattenNumbers(node.at(i), key + "[" + std::to_string(i) + "]", joint, component, out);
+  } else {
+    systems::DriveParameterChange c;
+    c.joint = joint;
+    c.component = component;
+    c.key = key;
+    c.value = node.asDouble("a number in the unit of the component's parameter " + key);
+    c.where = node.file() + ":" + std::to_string(node.line()) + ": " + node.path();
+    out.push_back(c);
+  }
+}
+
+std::vector<systems::DriveParameterChange> readDriveChanges(const YamlValue& drives) {
+  std::vector<systems::DriveParameterChange> out;
+  if (!drives.defined()) return out;
+  drives.expectMap("a mapping {JOINT: {motor|transmission|friction: {KEY: VALUE}}}");
+  for (const std::string& joint : drives.keys()) {
+    const YamlValue d = drives[joint];
+    d.expectMap("a mapping {motor|transmission|friction: {KEY: VALUE}} of the drive's parameters to change");
+    d.allowKeys({"motor", "transmission", "friction"});
+    for (const std::string& component : systems::driveComponents()) {
+      const YamlValue c = d[component];
+      if (!c.defined()) continue;
+      c.expectMap("a mapping {KEY: VALUE} of parameters of the " + component + " (keys of its parameter table)");
+      flattenNumbers(c, "", joint, component, out);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name,
                                 const std::vector<systems::Fault>& faults) {
   (void)name;
-  root.allowKeys({"experiment", "robot", "trajectory", "initial_state", "duration", "log_rate", "solver",
+  root.allowKeys({"experiment", "robot", "drives", "trajectory", "initial_state", "duration", "log_rate", "solver",
                   "check_limits", "joint_limits", "control"});
+  const std::vector<systems::DriveParameterChange> changes = readDriveChanges(root["drives"]);
   TrackingSetup s;
   const std::string base_dir = std::filesystem::path(root.file()).parent_path().string();
   const YamlValue robot = root.required("robot", "robot-with-drives file, relative to this file");
   s.robot_file = robot.asPath();
   try {
-    s.robot = std::make_shared<systems::RobotSystem>(systems::loadRobotWithDrives(s.robot_file, faults));
+    s.robot = std::make_shared<systems::RobotSystem>(systems::loadRobotWithDrives(s.robot_file, faults, changes));
   } catch (const InputError& e) {
-    robot.fail(std::string("cannot load robot: ") + e.what());
+    const std::string m = e.what();
+    if (!changes.empty() && m.rfind(root.file() + ":", 0) == 0) throw;  // a change of the drives: names its own line
+    robot.fail(std::string("cannot load robot: ") + m);
   }
   systems::RobotSystem& sys = *s.robot;
   const int n = sys.dof();
