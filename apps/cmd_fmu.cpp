@@ -39,6 +39,11 @@ void addFmuCommand(CLI::App& app) {
     }
     std::printf("%s: FMI 2.0 Co-Simulation FMU '%s' with %d inputs, %d outputs, %d parameters\n", opt->output.c_str(),
                 d.model_identifier.c_str(), inputs, outputs, parameters);
+    if (!d.unoffered.empty()) {
+      std::string keys;
+      for (const auto& k : d.unoffered) keys += (keys.empty() ? "" : ", ") + k;
+      std::printf("  not offered as parameters (no known unit; they keep the file's values): %s\n", keys.c_str());
+    }
   });
 }
 

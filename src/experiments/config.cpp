@@ -292,5 +292,41 @@ nlohmann::ordered_json vectorJson(const Eigen::Ref<const Eigen::VectorXd>& v) {
   return out;
 }
 
+std::string keyPattern(const std::string& key) {
+  std::string out;
+  bool in_index = false;
+  for (const char c : key) {
+    if (c == '[') in_index = true;
+    if (c == ']') in_index = false;
+    if (!in_index || c == '[') out += c;
+  }
+  return out;
+}
+
+std::string commonKeyUnit(const std::string& key) {
+  static const std::pair<const char*, const char*> units[] = {{"duration", "s"},
+                                                              {"log_rate", "Hz"},
+                                                              {"solver.rtol", "1"},
+                                                              {"solver.atol", "1"},
+                                                              {"solver.max_step", "s"},
+                                                              {"solver.max_order", "1"},
+                                                              {"solver.max_num_steps", "1"},
+                                                              {"solver.max_gamma_change", "1"},
+                                                              {"limits.steps", "1"},
+                                                              {"limits.wall_time", "s"},
+                                                              {"limits.log_rows", "1"},
+                                                              {"joint_limits.stiffness", "N·m/rad"},
+                                                              {"joint_limits.damping", "N·m·s/rad"}};
+  for (const auto& [k, u] : units)
+    if (key == k) return u;
+  return {};
+}
+
+std::string tableKeyUnit(const std::vector<drive::ParameterInfo>& table, const std::string& key) {
+  for (const auto& p : table)
+    if (p.key == key || p.key == "positive." + key) return p.unit;
+  return {};
+}
+
 }  // namespace detail
 }  // namespace jointsim::experiments

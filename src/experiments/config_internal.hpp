@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "jointsim/drive/parameters.hpp"
 #include "jointsim/io/yaml.hpp"
 
 namespace jointsim::experiments::detail {
@@ -17,6 +18,14 @@ std::vector<std::string> keyParts(const std::string& path);
 void removeKey(const io::YamlValue& map, const std::string& key);
 /// A YAML value as JSON (scalars that parse as finite numbers or as booleans become numbers/booleans).
 nlohmann::ordered_json yamlToJson(const io::YamlValue& value);
+/// A key path with its list indices blanked: "trajectory.a[3][0]" -> "trajectory.a[][]".
+std::string keyPattern(const std::string& key);
+/// The unit of the keys every experiment type shares (duration, log_rate, solver.*, limits.*, joint_limits.*), ""
+/// for another key.
+std::string commonKeyUnit(const std::string& key);
+/// The unit of `key` in a component's parameter table, also for the symmetric friction keys (alpha0 for
+/// positive.alpha0 and negative.alpha0); "" when the table has no such key.
+std::string tableKeyUnit(const std::vector<drive::ParameterInfo>& table, const std::string& key);
 /// A vector as a JSON array.
 nlohmann::ordered_json vectorJson(const Eigen::Ref<const Eigen::VectorXd>& v);
 

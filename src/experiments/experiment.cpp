@@ -58,6 +58,8 @@ std::unique_ptr<Experiment> buildExperiment(const YamlValue& root, const std::st
 
 }  // namespace
 
+std::string Experiment::keyUnit(const std::string& key) const { return detail::commonKeyUnit(key); }
+
 std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::vector<std::string>& overrides,
                                            const std::vector<systems::Fault>& faults) {
   io::InputRecord inputs;  // every file read from here on, the experiment file first

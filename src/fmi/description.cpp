@@ -10,12 +10,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/constants.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
+#include "jointsim/sim/simulator.hpp"
 #include "jointsim/systems/faults.hpp"
 #include "jointsim/systems/robot_system.hpp"
+#include "jointsim/systems/robot_with_drives.hpp"
 
 namespace jointsim::fmi {
 
@@ -118,6 +121,39 @@ void collectNumbers(const nlohmann::ordered_json& j, const std::string& path, co
     v.start = j.get<double>();
     v.description = "experiment file key " + path + " (as --set " + path + "=VALUE)";
     out.push_back(v);
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// Which outputs depend directly on which inputs (FMI ModelStructure): measured as the FMU behaves after its build (all
+// inputs at their start values, fmi2GetReal right after fmi2SetReal): an input changed by two different amounts at the
+// start state changes the output without a step. Inputs act on the other outputs only through the states.
+void directDependencies(const sim::Plant& plant, FmuDescription& d) {
+  std::vector<size_t> inputs;
+  for (size_t i = 0; i < d.variables.size(); ++i)
+    if (d.variables[i].causality == Causality::Input) inputs.push_back(i);
+  std::vector<int> port(d.variables.size(), -1);
+  for (size_t i : inputs) port[i] = sim::inputIndex(plant, d.variables[i].port);
+  sim::CvodeOptions options;
+  sim::Simulator base(plant, options);
+  for (size_t i : inputs) plant.setInput(base.plantState(), port[i], d.variables[i].start);
+  const Eigen::VectorXd s0 = base.signals();
+  for (auto& v : d.variables)
+    if (v.causality == Causality::Output) v.depends_known = true;
+  for (size_t i : inputs) {
+    for (const double delta : {0.37, -0.61}) {
+      sim::Simulator probe(base);
+      plant.setInput(probe.plantState(), port[i],
+                     d.variables[i].start + delta * (1.0 + std::abs(d.variables[i].start)));
+      const Eigen::VectorXd s1 = probe.signals();
+      for (auto& v : d.variables)
+        if (v.causality == Causality::Output && s1[v.signal] != s0[v.signal] &&
+            (v.depends.empty() || v.depends.back() != static_cast<int>(i)))
+          v.depends.push_back(static_cast<int>(i));
+    }
   }
 }
 
@@ -231,6 +267,17 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
         v.start = offset ? 0.0 : 1.0;
         v.key = drive.joint;
         v.fault = type_name;
+        // The severity ranges of checkFault (faults.hpp): a factor in (0, 100], a backlash in [0, 0.5] rad, a bias
+        // within ±π rad.
+        if (f.type == systems::FaultType::BacklashAdd) {
+          v.min = 0.0;
+          v.max = 0.5;
+        } else if (f.type == systems::FaultType::SensorBias) {
+          v.min = -kPi;
+          v.max = kPi;
+        } else {
+          v.max = 100.0;
+        }
         v.description =
             "drive of " + drive.joint + ": " + type_name + (offset ? " [rad]" : " (factor on the robot file's value)");
         add(v);
@@ -240,10 +287,44 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
 
   // Parameters: the experiment file's numbers, but for `duration` (the importer sets the stop time; the DefaultExperiment
   // carries it).
+  // Parameters of the drives' components (their parameter tables, drive/parameters.hpp): every scalar with its unit
+  // and range, applied as the experiment file's drives: key ("+drives.JOINT.COMPONENT.KEY=VALUE"). Table rows
+  // (keys with an index, e.g. table friction's tau_pos[1][1]) are not offered: an override cannot add list entries.
+  const systems::RobotSystem* robot = experiment.robotSystem();
+  if (robot != nullptr) {
+    for (const systems::DriveSpec& drive : robot->drives())
+      for (const std::string& component : systems::driveComponents())
+        for (const drive::ParameterInfo& p : systems::driveParameterTable(drive, component)) {
+          if (p.key.find('[') != std::string::npos) continue;
+          Variable v;
+          v.name = "drives." + drive.joint + "." + component + "." + p.key;
+          v.causality = Causality::Parameter;
+          v.unit = fmuUnit(p.unit);
+          v.start = p.value;
+          v.key = "+" + v.name;  // the override that sets it
+          if (!p.range.min_open && std::isfinite(p.range.min)) v.min = p.range.min;
+          if (!p.range.max_open && std::isfinite(p.range.max)) v.max = p.range.max;
+          v.description = "drive of " + drive.joint + ": " + component + " " + p.description + " [" + p.unit +
+                          "], in " + p.range.text();
+          add(v);
+        }
+  }
+
+  // Parameters: the experiment file's numbers with a known unit, but for `duration` (the importer sets the stop time;
+  // the DefaultExperiment carries it) and a robot's drives: (offered above from the tables).
   std::vector<Variable> params;
   collectNumbers(experiment.config(), "", "", params);
-  for (auto& p : params)
-    if (p.key != "duration") add(std::move(p));
+  for (auto& p : params) {
+    if (p.key == "duration" || (robot != nullptr && p.key.rfind("drives.", 0) == 0)) continue;
+    p.unit = fmuUnit(experiment.keyUnit(p.key));
+    if (p.unit.empty()) {
+      d.unoffered.push_back(p.key);
+      continue;
+    }
+    add(std::move(p));
+  }
+
+  directDependencies(plant, d);
   return d;
 }
 
@@ -380,12 +461,23 @@ std::string FmuDescription::modelDescriptionXml() const {
         break;
     }
     if (!v.unit.empty()) x << " unit=\"" << xmlEscape(v.unit) << "\"";
+    if (std::isfinite(v.min)) x << " min=\"" << number(v.min) << "\"";
+    if (std::isfinite(v.max)) x << " max=\"" << number(v.max) << "\"";
     x << "/>\n    </ScalarVariable>\n";
   }
   x << "  </ModelVariables>\n  <ModelStructure>\n";
   std::ostringstream outputs;
   for (size_t i = 0; i < variables.size(); ++i)
-    if (variables[i].causality == Causality::Output) outputs << "      <Unknown index=\"" << i + 1 << "\"/>\n";
+    if (variables[i].causality == Causality::Output) {
+      outputs << "      <Unknown index=\"" << i + 1 << "\"";
+      if (variables[i].depends_known) {
+        outputs << " dependencies=\"";
+        for (size_t k = 0; k < variables[i].depends.size(); ++k)
+          outputs << (k ? " " : "") << variables[i].depends[k] + 1;
+        outputs << "\"";
+      }
+      outputs << "/>\n";
+    }
   if (!outputs.str().empty()) {
     x << "    <Outputs>\n" << outputs.str() << "    </Outputs>\n";
     x << "    <InitialUnknowns>\n" << outputs.str() << "    </InitialUnknowns>\n";

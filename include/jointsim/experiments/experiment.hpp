@@ -65,6 +65,10 @@ class Experiment {
   virtual void observe(const Eigen::VectorXd& /*row*/) {}
   /// Tables to write besides the log after a successful run.
   virtual std::vector<ExtraTable> extraTables() const { return {}; }
+  /// The SI unit of the number at `key` of the experiment file (a key path as --set takes it, e.g.
+  /// "trajectory.a[0][1]", "drives.elbow_joint.transmission.stiffness"); "1" for a pure number, "" when the type does
+  /// not know it. The FMU export offers the file's numbers with a known unit as parameters.
+  virtual std::string keyUnit(const std::string& key) const;
   /// The robot with drives of an experiment type that simulates one (tracking; it is plant()), else null: for front
   /// ends that use the robot's own API (its model, drives and motor states) besides the plant interface.
   virtual const systems::RobotSystem* robotSystem() const { return nullptr; }

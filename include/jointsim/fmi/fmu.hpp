@@ -28,6 +28,7 @@
 /// logger with the simulated time and the component; nothing throws across the C interface.
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -56,8 +57,16 @@ struct Variable {
   int signal = -1;
   std::string key;
   /// Drive parameters of a robot with drives: the systems::FaultType name (e.g. "gear_stiffness_scale") applied
-  /// to the drive of `joint` when the value differs from its neutral start (1 for a scale, 0 otherwise).
+  /// to the drive of the joint named by `key` when the value differs from its neutral start (1 for a scale, 0
+  /// otherwise).
   std::string fault;
+  /// Parameters: the admissible values where they are a closed interval (FMI min/max; ±inf: none).
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  /// Outputs: the input variables (indices in FmuDescription::variables) the output depends on directly (FMI
+  /// ModelStructure dependencies), measured at export; `depends_known` false: on all (not written).
+  std::vector<int> depends;
+  bool depends_known = false;
 };
 
 /// A unit in the ASCII notation of FMI unit names and Modelica: N·m → N.m, kg·m² → kg.m2, Ω → Ohm (jointsim's own
@@ -75,6 +84,9 @@ struct FmuDescription {
   double step_size = 1e-3;             ///< suggested communication step [s] (DefaultExperiment)
   std::vector<std::string> overrides;  ///< "key.path=value" given at export (applied before the parameters')
   std::vector<Variable> variables;
+  /// Numbers of the experiment file not offered as parameters because their unit is unknown (Experiment::keyUnit);
+  /// reported by the export, not stored.
+  std::vector<std::string> unoffered;
 
   nlohmann::ordered_json toJson() const;
   /// InputError naming `where` and the key for a malformed document.

@@ -94,6 +94,63 @@ namespace {
 class JointRigExperiment : public PlantExperiment<systems::JointRig> {
  public:
   using PlantExperiment::PlantExperiment;
+  std::string keyUnit(const std::string& key) const override {
+    const systems::JointRigSetup& s = plant_.setup();
+    auto after = [&](const char* prefix) {
+      const std::string p = prefix;
+      return key.rfind(p, 0) == 0 ? key.substr(p.size()) : std::string();
+    };
+    if (const std::string k = after("motor."); !k.empty())
+      return s.motor ? detail::tableKeyUnit(drive::parameterTable(*s.motor), k) : std::string();
+    if (const std::string k = after("transmission."); !k.empty()) {
+      const auto table = s.transmission->parameters();
+      if (k == "alpha_t_deg") return "deg";
+      if (k == "Z_FS" || k == "Z_CS") return "1";
+      if (k == "damping.value") {  // every c_*: a unit when they share one (damping ratios)
+        std::string unit;
+        for (const auto& p : table)
+          if (p.key.rfind("c_", 0) == 0) {
+            if (!unit.empty() && unit != p.unit) return {};
+            unit = p.unit;
+          }
+        return unit;
+      }
+      return detail::tableKeyUnit(table, k);
+    }
+    if (const std::string k = after("friction.model."); !k.empty())
+      return s.friction ? detail::tableKeyUnit(s.friction->parameters(), k) : std::string();
+    const std::string u = s.input == RigInput::MotorTorque ? "N·m" : s.input == RigInput::Voltage ? "V" : "rad/s";
+    const std::string out = s.pi.voltage_output ? "V" : "N·m";
+    const std::pair<std::string, std::string> units[] = {{"rotor_inertia", "kg·m²"},
+                                                         {"load.inertia", "kg·m²"},
+                                                         {"load.damping", "N·m·s/rad"},
+                                                         {"initial_state.motor_angle", "rad"},
+                                                         {"initial_state.output_angle", "rad"},
+                                                         {"initial_state.motor_velocity", "rad/s"},
+                                                         {"initial_state.output_velocity", "rad/s"},
+                                                         {"input.profile.value", u},
+                                                         {"input.profile.initial", u},
+                                                         {"input.profile.final", u},
+                                                         {"input.profile.offset", u},
+                                                         {"input.profile.amplitude", u},
+                                                         {"input.profile.values[]", u},
+                                                         {"input.profile.slope", u + "/s"},
+                                                         {"input.profile.time", "s"},
+                                                         {"input.profile.t0", "s"},
+                                                         {"input.profile.t1", "s"},
+                                                         {"input.profile.period", "s"},
+                                                         {"input.profile.until", "s"},
+                                                         {"input.profile.times[]", "s"},
+                                                         {"input.profile.frequency", "Hz"},
+                                                         {"input.profile.phase", "rad"},
+                                                         {"input.controller.kp", out + "·s/rad"},
+                                                         {"input.controller.ki", out + "/rad"},
+                                                         {"input.controller.limit", out}};
+    const std::string p = detail::keyPattern(key);
+    for (const auto& [k, unit] : units)
+      if (p == k) return unit;
+    return detail::commonKeyUnit(key);
+  }
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult&) const override {
     const systems::JointRigSetup& s = plant_.setup();
     if (s.motor) {

@@ -134,6 +134,54 @@ class TrackingExperiment : public Experiment {
   }
   sim::Plant& plant() override { return *s_.robot; }
   const systems::RobotSystem* robotSystem() const override { return s_.robot.get(); }
+  std::string keyUnit(const std::string& key) const override {
+    const std::string p = detail::keyPattern(key);
+    if (p.rfind("drives.", 0) == 0) {  // drives.JOINT.COMPONENT.KEY: the unit of the component's table
+      const auto a = p.find('.', 7), b = a == std::string::npos ? a : p.find('.', a + 1);
+      if (b == std::string::npos) return {};
+      const std::string joint = key.substr(7, a - 7), component = key.substr(a + 1, b - a - 1);
+      for (const systems::DriveSpec& d : s_.robot->drives())
+        if (d.joint == joint) {
+          try {
+            return detail::tableKeyUnit(systems::driveParameterTable(d, component), key.substr(b + 1));
+          } catch (const InputError&) {
+            return {};
+          }
+        }
+      return {};
+    }
+    static const std::pair<const char*, const char*> units[] = {
+        {"initial_state.q[]", "rad"},
+        {"control.rate", "Hz"},
+        {"control.current_rate", "Hz"},
+        {"control.seed", "1"},
+        // point_to_point
+        {"trajectory.start[]", "rad"},
+        {"trajectory.segments[].target[]", "rad"},
+        {"trajectory.segments[].velocity", "rad/s"},
+        {"trajectory.segments[].acceleration", "rad/s²"},
+        {"trajectory.segments[].duration", "s"},
+        {"trajectory.segments[].dwell", "s"},
+        // fourier (control/trajectory.hpp: the sine and cosine coefficients a, b in rad/s)
+        {"trajectory.base_frequency", "Hz"},
+        {"trajectory.harmonics", "1"},
+        {"trajectory.offset[]", "rad"},
+        {"trajectory.a[][]", "rad/s"},
+        {"trajectory.b[][]", "rad/s"},
+        {"trajectory.fade_in", "s"},
+        {"trajectory.duration", "s"},
+        // csv
+        {"trajectory.gap_factor", "1"},
+        // kinematic_ptp
+        {"trajectory.q_begin[]", "rad"},
+        {"trajectory.q_end[]", "rad"},
+        {"trajectory.qd_max[]", "rad/s"},
+        {"trajectory.qdd_max[]", "rad/s²"},
+        {"trajectory.start_time", "s"}};
+    for (const auto& [k, u] : units)
+      if (p == k) return u;
+    return detail::commonKeyUnit(key);
+  }
   sim::SimulateOptions simulateOptions() const override {
     return sim::SimulateOptions::atRate(s_.duration, s_.log_rate, s_.solver);
   }
