@@ -84,6 +84,11 @@ const std::vector<FrictionMode>& DriveChain::modes(const sim::PlantState& state)
 
 DriveChain::DriveChain(DriveChainSetup setup) : s_(std::move(setup)) {
   s_.validate();
+  for (const auto& e : s_.elements)
+    backlash_.push_back(e.type == ChainElementType::ElastoBacklash
+                            ? std::make_shared<const drive::ElastoBacklash>(drive::ElastoBacklashParams{
+                                  1.0, std::max(e.c, 1e-300), e.d, e.backlash, drive::ComplianceSide::Motor})
+                            : nullptr);
   for (const auto& in : s_.inertias) {
     signals_.push_back(in.name + ".phi[rad]");
     signals_.push_back(in.name + ".w[rad/s]");
@@ -162,11 +167,9 @@ void DriveChain::solve(const State& st, double t, const Eigen::Ref<const Eigen::
     const double w_rel = relSpeed(e, y);
     switch (el.type) {
       case ChainElementType::SpringDamper: tau = el.c * phi_rel + el.d * w_rel; break;
-      case ChainElementType::ElastoBacklash: {
-        const drive::ElastoBacklash eb({1.0, std::max(el.c, 1e-300), el.d, el.backlash, drive::ComplianceSide::Motor});
-        tau = el.c > 0.0 ? eb.contactTorque(phi_rel, w_rel) : 0.0;
+      case ChainElementType::ElastoBacklash:
+        tau = el.c > 0.0 ? backlash_[static_cast<size_t>(e)]->contactTorque(phi_rel, w_rel) : 0.0;
         break;
-      }
       default: {  // friction
         switch (st.modes[k]) {
           case FrictionMode::Free: tau = 0.0; break;

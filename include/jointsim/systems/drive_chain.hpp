@@ -24,6 +24,7 @@
 
 #include "jointsim/control/profile.hpp"
 #include "jointsim/drive/msl_friction.hpp"
+#include "jointsim/drive/transmissions.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/sim/simulate.hpp"
 
@@ -136,6 +137,8 @@ class DriveChain : public sim::Plant {
   double relAccel(const State& st, int e) const;
   DriveChainSetup s_;
   std::vector<std::string> signals_;
+  /// Per element: its contact law when it is an elasto-backlash element (made once, not in the right-hand side).
+  std::vector<std::shared_ptr<const drive::ElastoBacklash>> backlash_;
 };
 
 }  // namespace jointsim::systems
