@@ -10,6 +10,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/text.hpp"
+#include "jointsim/sim/simulator.hpp"
 
 namespace jointsim::sim {
 
@@ -116,14 +117,6 @@ std::vector<std::string> tableColumns(const Plant& plant) {
   return columns;
 }
 
-namespace {
-
-/// Thrown through CVODE from the right-hand side to stop the run (budget, interruption); simulate() reports the
-/// reason it recorded.
-struct StopRun {};
-
-}  // namespace
-
 void installPlantJacobian(const Plant& plant, const PlantState& state, CvodeIntegrator& integ) {
   const CvodeOptions& o = integ.options();
   if (!plant.providesJacobian() || !o.plant_jacobian || o.method != Method::BDF) return;
@@ -143,70 +136,24 @@ SimulationResult simulate(const Plant& plant, const SimulateOptions& options, co
 
 SimulationResult simulate(const Plant& plant, PlantState& state, const SimulateOptions& options,
                           const OutputSink& sink) {
+  // The stepping simulator (simulator.hpp) on the caller's state, with the run's end, stepped from one output of the
+  // grid to the next with interpolated landings; the events, samples, restarts and the per-call chattering guard and
+  // step budget are the simulator's. Here: the output grid and the run's budgets (steps, wall time, interruption).
   options.validate();
   if (state.ownerId() != plant.id())
     throw InputError(plant.name() + ": simulate: given a state made by another plant object");
-  plant.freeze();
-  CvodeOptions solver = options.solver;
-  if (solver.component.empty()) solver.component = plant.name();
-  if (!solver.state_name) solver.state_name = [&plant](int i) { return plant.stateName(i); };
-  const int n = plant.stateSize();
+  const std::string component = options.solver.component.empty() ? plant.name() : options.solver.component;
   const double t_end = options.t_end;
-  const bool keep_history = solver.input_jump == CvodeOptions::InputJump::KeepHistory;
   const auto wall_start = std::chrono::steady_clock::now();
   auto wall = [&wall_start] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   };
-
-  // Why the run is being stopped from outside its physics: an interruption (requestStop) or the wall-clock
-  // budget. Checked after every advance() and, since one advance() may take many steps, in the right-hand side
-  // (the stop flag at every call, the clock every 256 calls).
-  std::string stop_flag, stop_message;
-  auto stopNow = [&]() {
-    if (const int sig = stopRequested()) {
-      stop_flag = "INTERRUPTED";
-      stop_message = "interrupted (signal " + std::to_string(sig) + ")";
-      return true;
-    }
-    if (options.max_wall_time > 0.0 && wall() > options.max_wall_time) {
-      stop_flag = "WALL_TIME_BUDGET";
-      stop_message =
-          "more than its wall-clock budget of " + formatNumber(options.max_wall_time) + " s (limits.wall_time)";
-      return true;
-    }
-    return false;
-  };
-  long rhs_calls = 0;
-  CvodeIntegrator integ(
-      n,
-      [&](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-        if ((stopRequested() || (options.max_wall_time > 0.0 && (++rhs_calls & 255) == 0)) && stopNow())
-          throw StopRun{};
-        plant.derivatives(state, t, y, yd);
-      },
-      solver);
-  installPlantJacobian(plant, state, integ);
-  integ.setStepLimit(options.max_steps);  // enforced inside advance(): one output interval cannot overspend
-  if (plant.rootCount() > 0)
-    integ.setRootFunction(plant.rootCount(),
-                          [&plant, &state](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                                           Eigen::Ref<Eigen::VectorXd> g) { plant.roots(state, t, y, g); });
-
-  // Time events inside (0, t_end), then the end itself.
-  std::vector<double> breaks;
-  for (double b : plant.timeEvents(t_end))
-    if (b > 0.0 && b < t_end) breaks.push_back(b);
-  std::sort(breaks.begin(), breaks.end());
-  breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
-  breaks.push_back(t_end);
-  size_t next_break = 0;
-
-  // Sampled part: samples at k·T_s for k >= 1 while before t_end (the one at t = 0 is part of the start).
-  const double Ts = plant.samplePeriod();
-  if (!(Ts >= 0.0) || !std::isfinite(Ts)) throw InputError(plant.name() + ": sample period must be >= 0 s");
-  long sample_k = 1;
-  auto sampleTime = [&](long k) { return Ts > 0.0 ? std::min(t_end, static_cast<double>(k) * Ts) : kInf; };
-  double t_sample = sampleTime(sample_k);
+  {
+    const Eigen::Index n0 = plant.initialState().size();
+    if (n0 != plant.stateSize())
+      throw InputError(plant.name() + ": initial state has " + std::to_string(n0) + " entries, expected " +
+                       std::to_string(plant.stateSize()));
+  }
 
   // Output grid (its row count is bounded by validate()).
   const bool by_rate = options.output_rate > 0.0;
@@ -216,109 +163,110 @@ SimulationResult simulate(const Plant& plant, PlantState& state, const SimulateO
                    : std::min(t_end, static_cast<double>(k) * options.output_interval);
   };
 
-  Eigen::VectorXd row(1 + static_cast<Eigen::Index>(plant.signalNames().size()));
   SimulationResult result;
-  Eigen::VectorXd y = plant.initialState();
-  if (y.size() != n)
-    throw InputError(plant.name() + ": initial state has " + std::to_string(y.size()) + " entries, expected " +
-                     std::to_string(n));
-  auto emit = [&](double t) {
-    row[0] = t;
-    plant.signals(state, t, y, row.tail(row.size() - 1));
+  std::unique_ptr<Simulator> sim;
+  double t = 0.0;
+  auto fill = [&](double t_reached) {
+    if (!sim) return;
+    result.stats = sim->stats();
+    result.events = sim->events();
+    result.samples = sim->samples();
+    result.restarts = std::max(0L, sim->restarts() - 1);  // not the start
+    result.input_jumps = sim->inputJumps();
+    result.sim_time_s = t_reached;
+    result.wall_time_s = wall();
+  };
+  // Why the run is being stopped from outside its physics (checked after every output interval; inside one by the
+  // simulator's guard in the right-hand side): an interruption or the wall-clock budget.
+  auto wallMessage = [&] {
+    return "more than its wall-clock budget of " + formatNumber(options.max_wall_time) + " s (limits.wall_time)";
+  };
+  auto stopIfAsked = [&](double t_now) {
+    if (const int sig = stopRequested()) {
+      fill(t_now);
+      throw Interrupted(SolverError(component + ": interrupted (signal " + std::to_string(sig) +
+                                        ") at t = " + formatNumber(t_now) + " s",
+                                    t_now, "INTERRUPTED", component),
+                        result, sig);
+    }
+    if (options.max_wall_time > 0.0 && wall() > options.max_wall_time) {
+      fill(t_now);
+      throw SimulationFailure(SolverError(component + ": " + wallMessage() + " at t = " + formatNumber(t_now) + " s",
+                                          t_now, "WALL_TIME_BUDGET", component),
+                              result);
+    }
+  };
+  // Each output interval is one call of the simulator, with the budgets left: the solver's max_num_steps per output
+  // interval, the run's steps and wall-clock time.
+  const long per_interval = options.solver.max_num_steps;
+  auto callLimits = [&] {
+    AdvanceLimits l;
+    l.max_events = options.max_events_per_output;
+    l.max_steps = per_interval;
+    if (options.max_steps > 0) {
+      const long left = std::max(1L, options.max_steps - sim->stats().steps);
+      l.max_steps = l.max_steps > 0 ? std::min(l.max_steps, left) : left;
+    }
+    if (options.max_wall_time > 0.0) l.max_wall_time = std::max(1e-9, options.max_wall_time - wall());
+    return l;
+  };
+  Eigen::VectorXd row(1 + static_cast<Eigen::Index>(plant.signalNames().size()));
+  auto emit = [&](double t_now) {
+    row[0] = t_now;
+    row.tail(row.size() - 1) = sim->signals();
     sink(row);
     ++result.outputs;
   };
-  // The stop time at the next event or sample; at t_end only when asked to stop there.
-  auto setStop = [&]() {
-    const double stop = std::min(t_sample, breaks[next_break]);
-    if (options.stop_at_end || stop < t_end) integ.setStopTime(stop);
-  };
-  // At a sample: keep CVODE's history when asked to and the jump of the held inputs is small enough for the next
-  // step's error test (CvodeIntegrator::jumpError ≤ 1); otherwise restart. f_old: before the sample's update.
-  Eigen::VectorXd f_old(n), f_new(n);
-  auto sampleAt = [&](double t_now) {
-    if (keep_history) plant.derivatives(state, t_now, y, f_old);
-    plant.sample(state, t_now, y);
-    ++result.samples;
-    t_sample = sampleTime(++sample_k);
-  };
-  auto keepHistory = [&](double t_now) {
-    if (!keep_history) return false;
-    plant.derivatives(state, t_now, y, f_new);
-    return integ.jumpError(f_old, f_new, std::min(t_sample, breaks[next_break]) - t_now) <= kKeepHistoryLimit;
-  };
-  // After an event (`restart`: the right-hand side may jump anywhere) or a sample: restart, or go on with the
-  // history; then the stop time at the next event or sample.
-  // A restart at a sample alone (the state is continuous, the held inputs jumped) starts with the last Jacobian.
-  auto goOn = [&](double t_now, bool restart) {
-    if (restart || !keepHistory(t_now)) {
-      integ.initialize(t_now, y, !restart);
-      ++result.restarts;
-    } else {
-      ++result.input_jumps;  // CVODE stopped exactly at the sample and goes on with the new held inputs
-    }
-    setStop();
-  };
-  auto budgets = [&](double t) {
-    if (stopNow()) throw SolverError(solver.component + ": " + stop_message, t, stop_flag, solver.component);
-  };
-
-  double t = 0.0;
   try {
-    plant.start(state, 0.0, y);
-    if (Ts > 0.0) ++result.samples;  // the plant's start includes the sample at t = 0
-    integ.initialize(0.0, y);
-    setStop();
+    sim.reset(new Simulator(plant, options.solver, state, t_end, options.stop_at_end));
     emit(0.0);
     for (long k = 1;; ++k) {
       const double t_out = outputTime(k);
       // An output due just after a sample (rounding of k / rate against k·T_s) is taken at the sample.
+      const double t_sample = sim->t_sample_ < t_end ? sim->t_sample_ : kInf;
       const double target = (t_out > t_sample && t_out <= t_sample + kSampleOutputTolerance) ? t_sample : t_out;
-      long events_here = 0;
-      while (t < target) {
-        t = integ.advance(std::min(target, std::min(t_sample, breaks[next_break])), y);
-        budgets(t);
-        const bool root = integ.rootFound();
-        const bool at_break = t >= breaks[next_break] && next_break + 1 < breaks.size();
-        const bool at_sample = t >= t_sample && t < target && t_sample < t_end;
-        if (root || at_break) {
-          if (at_break) ++next_break;
-          plant.updateModes(state, t, y, root ? integ.rootDirections() : std::vector<int>{});
-          ++result.events;
-          if (++events_here > options.max_events_per_output)
-            throw SolverError(solver.component + ": more than " + std::to_string(options.max_events_per_output) +
-                                  " events in one output interval (chattering) at t = " + std::to_string(t) + " s",
-                              t, "EVENT_CHATTERING", solver.component);
-        }
-        if (at_sample) sampleAt(t);
-        if (root || at_break || at_sample) goOn(t, root || at_break);
+      if (target > t) {
+        sim->setLimits(callLimits());
+        t = sim->advanceTo(target, Landing::Interpolate);
       }
+      stopIfAsked(t);
       emit(t);
-      const bool done = by_rate ? k >= n_outputs : t_out >= t_end;
-      if (done) break;
-      if (t >= t_sample && t_sample < t_end) {  // the output was due at a sample: update after it
-        sampleAt(t);
-        goOn(t, false);
-      }
+      if (by_rate ? k >= n_outputs : t_out >= t_end) break;
     }
+  } catch (const Interrupted& e) {
+    fill(e.time());
+    throw Interrupted(SolverError(component + ": interrupted (signal " + std::to_string(e.signal()) +
+                                      ") at t = " + formatNumber(e.time()) + " s",
+                                  e.time(), "INTERRUPTED", component),
+                      result, e.signal());
+  } catch (const SimulationFailure&) {
+    throw;  // stopIfAsked's, complete
   } catch (const SolverError& e) {
-    // What the run had done; the reason of a stop from outside replaces CVODE's report of the aborted step.
-    result.stats = integ.stats();
-    result.sim_time_s = e.time();
-    result.wall_time_s = wall();
-    if (e.flag() == "STEP_BUDGET" && stop_flag.empty()) {
-      stop_flag = "STEP_BUDGET";
-      stop_message = "more than " + std::to_string(options.max_steps) + " solver steps (limits.steps)";
+    // What the run had done; a budget's reason in the terms of the run's settings.
+    fill(e.time());
+    const std::string at = " at t = " + formatNumber(e.time()) + " s";
+    if (e.flag() == "WALL_TIME_BUDGET")
+      throw SimulationFailure(SolverError(component + ": " + wallMessage() + at, e.time(), e.flag(), component),
+                              result);
+    if (e.flag() == "STEP_BUDGET") {
+      if (options.max_steps > 0 && result.stats.steps > options.max_steps)
+        throw SimulationFailure(SolverError(component + ": more than " + std::to_string(options.max_steps) +
+                                                " solver steps (limits.steps)" + at,
+                                            e.time(), "STEP_BUDGET", component),
+                                result);
+      throw SimulationFailure(SolverError(component + ": more than max_num_steps = " + std::to_string(per_interval) +
+                                              " solver steps in one output interval (CV_TOO_MUCH_WORK)" + at,
+                                          e.time(), "CV_TOO_MUCH_WORK", component),
+                              result);
     }
-    if (stop_flag.empty()) throw SimulationFailure(e, result);
-    const SolverError why(solver.component + ": " + stop_message + " at t = " + formatNumber(e.time()) + " s", e.time(),
-                          stop_flag, solver.component);
-    if (stop_flag == "INTERRUPTED") throw Interrupted(why, result, stopRequested());
-    throw SimulationFailure(why, result);
+    if (e.flag() == "EVENT_CHATTERING")
+      throw SimulationFailure(SolverError(component + ": more than " + std::to_string(options.max_events_per_output) +
+                                              " events in one output interval (chattering)" + at,
+                                          e.time(), e.flag(), component),
+                              result);
+    throw SimulationFailure(e, result);
   }
-  result.sim_time_s = t;
-  result.wall_time_s = wall();
-  result.stats = integ.stats();
+  fill(t);
   return result;
 }
 

@@ -47,6 +47,9 @@ void AdvanceLimits::validate() const {
   if (!(max_state >= 0.0) || !std::isfinite(max_state))
     throw InputError("advance limits: max_state: expected a finite bound >= 0 (0: none), got " +
                      formatNumber(max_state));
+  if (max_events < 0)
+    throw InputError("advance limits: max_events: expected a number of events >= 0 (0: none), got " +
+                     std::to_string(max_events));
 }
 
 namespace {
@@ -82,7 +85,20 @@ Simulator::Simulator(std::shared_ptr<const Plant> plant, const CvodeOptions& sol
 
 Simulator::Simulator(Simulator& other) : plant_(other.plant_), limits_(other.limits_) {
   build(other.integ_->options());
+  end_ = other.end_;
+  stop_at_end_ = other.stop_at_end_;
   restore(other.snapshot());
+}
+
+Simulator::Simulator(const Plant& plant, const CvodeOptions& solver, PlantState& borrowed, double t_end,
+                     bool stop_at_end)
+    : plant_(std::shared_ptr<const Plant>(&plant, [](const Plant*) {})) {
+  build(solver);
+  end_ = t_end;
+  stop_at_end_ = stop_at_end;
+  owned_.reset();
+  state_ = &borrowed;
+  begin(0.0, plant.initialState(), nullptr);
 }
 
 void Simulator::build(const CvodeOptions& solver) {
@@ -96,7 +112,8 @@ void Simulator::build(const CvodeOptions& solver) {
   plant_->freeze();  // shared from now on: its configuration must not change under its simulators' states
   keep_history_ = options.input_jump == CvodeOptions::InputJump::KeepHistory;
   const int n = plant_->stateSize();
-  state_ = plant_->makeState();
+  owned_ = plant_->makeState();
+  state_ = owned_.get();
   const Plant* p = plant_.get();
   // The callbacks read the state through this simulator: restore() may replace it.
   integ_ = std::make_unique<CvodeIntegrator>(
@@ -147,9 +164,15 @@ void Simulator::reset(double t0, const Eigen::VectorXd& y0) {
     throw InputError(plant_->name() + ": reset: the state has " + std::to_string(y0.size()) + " entries, expected " +
                      std::to_string(n));
   if (!y0.allFinite()) throw InputError(plant_->name() + ": reset: the state must be finite");
-  std::unique_ptr<PlantState> fresh = plant_->makeState();
-  plant_->start(*fresh, t0, y0);
-  state_ = std::move(fresh);
+  begin(t0, y0, plant_->makeState());
+}
+
+void Simulator::begin(double t0, const Eigen::VectorXd& y0, std::unique_ptr<PlantState> fresh) {
+  plant_->start(fresh ? *fresh : *state_, t0, y0);
+  if (fresh) {
+    owned_ = std::move(fresh);
+    state_ = owned_.get();
+  }
   t_ = t0_ = t0;
   y_ = y0;
   y_work_ = y0;
@@ -213,7 +236,8 @@ void Simulator::checkSnapshot(const Snapshot& snapshot, const char* what) const 
 
 void Simulator::restore(const Snapshot& snapshot) {
   checkSnapshot(snapshot, "restore");
-  state_ = snapshot.plant_state_->clone();
+  owned_ = snapshot.plant_state_->clone();
+  state_ = owned_.get();
   t_ = snapshot.t_;
   t0_ = snapshot.t0_;
   y_ = snapshot.y_;
@@ -381,10 +405,11 @@ void Simulator::refreshEvents(double t_target) {
   if (t_target <= horizon_ && horizon_ > t0_) return;
   // The plant lists its events in (0, t_end): ask for a horizon well beyond the target, so that a loop of small
   // steps asks rarely.
-  const double horizon = std::max(t_target, t_ + std::max(1.0, 2.0 * (horizon_ - t0_)));
+  // A run with an end (sim::simulate) asks once, for all its events before the end.
+  const double horizon = std::isfinite(end_) ? end_ : std::max(t_target, t_ + std::max(1.0, 2.0 * (horizon_ - t0_)));
   events_list_.clear();
   for (double e : plant_->timeEvents(horizon))
-    if (e > t_ && !near(t_, e) && std::isfinite(e)) events_list_.push_back(e);
+    if (e > t_ && !near(t_, e) && e < end_ && std::isfinite(e)) events_list_.push_back(e);
   std::sort(events_list_.begin(), events_list_.end());
   events_list_.erase(std::unique(events_list_.begin(), events_list_.end()), events_list_.end());
   horizon_ = horizon;
@@ -436,8 +461,19 @@ void Simulator::prepare(double t_target) {
       inputJumped();
     invalidate();
   }
-  if (Ts_ > 0.0 && (t_ >= t_sample_ || near(t_, t_sample_))) takeSample();  // due at the end of the last advance
-  restartIfNeeded(std::min(t_sample_, t_target) - t_);
+  // A sample due at the end of the last advance (a step landing within the snap distance of it counts).
+  if (Ts_ > 0.0 && t_sample_ < end_ && (t_ >= t_sample_ || (landing_ == Landing::Stop && near(t_, t_sample_))))
+    takeSample();
+  restartIfNeeded(nextStop(t_target, landing_, true) - t_);
+}
+
+double Simulator::nextStop(double t_target, Landing landing, bool horizon) const {
+  const double t_event = next_event_ < events_list_.size() ? events_list_[next_event_] : kInf;
+  double stop = std::min(t_event, t_sample_ < end_ ? t_sample_ : kInf);
+  if (landing == Landing::Stop) stop = std::min(stop, t_target);
+  // The end bounds the next step as a stop time, and always the horizon of an input jump's error estimate.
+  if (stop_at_end_ || horizon) stop = std::min(stop, end_);
+  return stop;
 }
 
 double Simulator::advance(double dt) {
@@ -446,29 +482,35 @@ double Simulator::advance(double dt) {
   return advanceTo(t_ + dt);
 }
 
-double Simulator::advanceTo(double t_target) {
+double Simulator::advanceTo(double t_target, Landing landing) {
   if (!std::isfinite(t_target) || t_target < t_)
     throw InputError(plant_->name() + ": advanceTo: expected a finite time >= the current time " + formatNumber(t_) +
                      " s, got " + formatNumber(t_target));
   if (t_target == t_) return t_;
+  landing_ = landing;
   refreshEvents(t_target);
-  // Snap the target onto a sample or event it nearly meets (accumulated rounding of t + dt).
-  if (Ts_ > 0.0 && near(t_target, t_sample_)) t_target = t_sample_;
-  if (next_event_ < events_list_.size() && near(t_target, events_list_[next_event_]))
-    t_target = events_list_[next_event_];
-  refreshEvents(t_target);  // a no-op unless the snap moved the target past the horizon
+  if (landing == Landing::Stop) {
+    // Snap the target onto a sample or event it nearly meets (accumulated rounding of t + dt).
+    if (Ts_ > 0.0 && near(t_target, t_sample_)) t_target = t_sample_;
+    if (next_event_ < events_list_.size() && near(t_target, events_list_[next_event_]))
+      t_target = events_list_[next_event_];
+    refreshEvents(t_target);  // a no-op unless the snap moved the target past the horizon
+  }
   // The call's limits: a step budget over all segments from here, a wall-clock deadline for the guard.
   stop_flag_.clear();
   guard_calls_ = 0;
   call_deadline_ = limits_.max_wall_time > 0.0 ? clockSeconds() + limits_.max_wall_time : 0.0;
   integ_->setStepLimit(limits_.max_steps > 0 ? integ_->stats().steps + limits_.max_steps : 0);
+  long events_here = 0;
   try {
     prepare(t_target);
     while (t_ < t_target) {
       const double t_event = next_event_ < events_list_.size() ? events_list_[next_event_] : kInf;
-      const double stop = std::min(t_target, std::min(t_sample_, t_event));
-      integ_->setStopTime(stop);
-      const double t = integrate(stop);
+      // The integrator never steps past the next stop (sample, event, the end, and the target when landing there);
+      // it returns at the target, interpolating when it stepped past it.
+      const double stop = nextStop(t_target, landing, false);
+      if (std::isfinite(stop)) integ_->setStopTime(stop);
+      const double t = integrate(std::min(t_target, std::min(t_sample_, t_event)));
       t_ = t;
       y_ = y_work_;
       invalidate();
@@ -483,17 +525,22 @@ double Simulator::advanceTo(double t_target) {
         plant_->updateModes(*state_, t_, y_, root ? integ_->rootDirections() : std::vector<int>{});
         ++events_;
         restart_ = fresh_jacobian_ = true;
+        if (limits_.max_events > 0 && ++events_here > limits_.max_events)
+          throw SolverError(plant_->name() + ": more than " + std::to_string(limits_.max_events) +
+                                " events in one call (chattering) at t = " + formatNumber(t_) + " s",
+                            t_, "EVENT_CHATTERING", component_);
       }
       if (at_sample) takeSample();
       // At the target: the next advance restarts or goes on (after its inputs).
-      if (t_ < t_target) restartIfNeeded(std::min(t_sample_, t_target) - t_);
+      if (t_ < t_target) restartIfNeeded(nextStop(t_target, landing, true) - t_);
     }
   } catch (const SolverError&) {
     restart_ = fresh_jacobian_ = true;  // the integrator's history is unusable; y_ is the last state reached
     throw;
   }
-  // The derivative with the inputs in force now: the reference for an input change before the next advance.
-  if (keep_history_) plant_->derivatives(*state_, t_, y_, f_old_);
+  // The derivative with the inputs in force now: the reference for an input change before the next advance (none
+  // between the calls of an output grid).
+  if (keep_history_ && landing == Landing::Stop) plant_->derivatives(*state_, t_, y_, f_old_);
   return t_;
 }
 

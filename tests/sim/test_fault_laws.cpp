@@ -196,7 +196,16 @@ TEST(FaultLaws, ProgressiveParametersAreRebuiltOnTheirSchedule) {
   const auto run = sys.makeState();
   const auto o = sim::SimulateOptions::atRate(1.0, 100, sim::CvodeOptions{});
   const sim::SimulationResult r = sim::simulate(sys, *run, o, [](const Eigen::VectorXd&) {});
-  EXPECT_GE(r.events, static_cast<long>(instants.size()));
+  // Instants closer than the simulator's time resolution of events (1e-12 s relative: 0.3 of one schedule and
+  // 0.30000000000000004 of another) are one event.
+  long distinct = 0;
+  double last = -1.0;
+  for (double e : instants) {
+    if (e - last > 1e-12 * std::max(1.0, e)) ++distinct;
+    last = e;
+  }
+  EXPECT_GE(r.events, distinct);
+  EXPECT_GE(distinct, 55);
   EXPECT_GE(instants.size(), 60u);
   EXPECT_DOUBLE_EQ(stiffness(sys, *run), 0.5 * k0);
   EXPECT_DOUBLE_EQ(dynamic_cast<const drive::LuGreUr5Friction&>(*sys.drives(*run)[kElbow].friction).params().f_c,

@@ -34,6 +34,7 @@
 /// DIVERGED) or by a stop request (sim::Interrupted, flag INTERRUPTED) leaves the simulator at the last internal
 /// step it completed, ready for the next call.
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +43,7 @@
 
 #include "jointsim/sim/cvode_integrator.hpp"
 #include "jointsim/sim/plant.hpp"
+#include "jointsim/sim/simulate.hpp"
 
 namespace jointsim::sim {
 
@@ -56,6 +58,8 @@ struct AdvanceLimits {
   /// motors that may keep turning: Plant::unboundedState) are not bounded. Non-finite states and derivatives are
   /// always caught (CvodeOptions::check_finite).
   double max_state = 0.0;
+  /// Root and time events per call (flag EVENT_CHATTERING): more is chattering (modes switching without end).
+  long max_events = 0;
   /// Throws InputError for a negative or non-finite entry.
   void validate() const;
 };
@@ -96,6 +100,16 @@ class Snapshot {
   long seen_revision_ = 0;
 };
 
+/// How advanceTo() lands on its target.
+enum class Landing {
+  /// The integrator stops exactly at the target (a CVODE stop time): the right landing before the inputs change.
+  Stop,
+  /// The integrator may step past the target (never past a sample, a time event or the run's end) and the state at
+  /// the target is interpolated (CVODE's dense output, accurate to the tolerances): the landing of an output grid
+  /// (sim::simulate), cheaper where outputs are dense. Inputs must not change between such calls.
+  Interpolate,
+};
+
 class Simulator {
  public:
   /// Steps `plant`, which must outlive the simulator; reset() to the plant's initial state at t = 0. The plant is
@@ -133,8 +147,9 @@ class Simulator {
   /// Integrates over `dt` [s] (> 0, finite); returns the time reached [s]. A target within 1e-12 s (relative)
   /// of a sample or time event is moved onto it, so steps of 1e-3 s meet samples at k·1e-3 s.
   double advance(double dt);
-  /// Integrates to `t` [s] (>= time(), finite); returns the time reached.
-  double advanceTo(double t);
+  /// Integrates to `t` [s] (>= time(), finite); returns the time reached. With Landing::Interpolate the target is
+  /// not moved onto a nearby sample or event.
+  double advanceTo(double t, Landing landing = Landing::Stop);
 
   double time() const { return t_; }                   ///< [s]
   const Eigen::VectorXd& state() const { return y_; }  ///< continuous state (the plant's layout)
@@ -176,6 +191,15 @@ class Simulator {
   long inputJumps() const { return input_jumps_; }
 
  private:
+  // sim::simulate is this simulator with an output grid and the run's budgets: it runs on the caller's plant state,
+  // with an end time (no sample or event at or after it; optionally a stop time there).
+  friend SimulationResult simulate(const Plant& plant, PlantState& state, const SimulateOptions& options,
+                                   const OutputSink& sink);
+  Simulator(const Plant& plant, const CvodeOptions& solver, PlantState& borrowed, double t_end, bool stop_at_end);
+  void begin(double t0, const Eigen::VectorXd& y0, std::unique_ptr<PlantState> fresh);  // reset()'s work
+  // The next time the integrator must not step past (sample, event, the end with stop_at_end_, the target under
+  // Landing::Stop); `horizon`: the end always (the reach of the next step, for an input jump's error estimate).
+  double nextStop(double t_target, Landing landing, bool horizon) const;
   void prepare(double t_target);       // input changes and a pending sample at t_, then the restart if needed
   void takeSample();                   // the plant's sampled part at t_, next sample time, input jump pending
   void inputJumped();                  // a held input jumped at t_: a restart or a kept history, per the options
@@ -191,7 +215,13 @@ class Simulator {
   void checkSnapshot(const Snapshot& snapshot, const char* what) const;
 
   std::shared_ptr<const Plant> plant_;
-  std::unique_ptr<PlantState> state_;
+  PlantState* state_ = nullptr;        // the run's plant state: owned_, or the one sim::simulate runs on
+  std::unique_ptr<PlantState> owned_;  // the state when this simulator owns it (always, but inside sim::simulate)
+  // The run's end (sim::simulate; infinite for stepping): no sample or time event at or after it is taken; a stop
+  // time there when stop_at_end_.
+  double end_ = std::numeric_limits<double>::infinity();
+  bool stop_at_end_ = false;
+  Landing landing_ = Landing::Stop;  // of the current call
   std::unique_ptr<CvodeIntegrator> integ_;
   std::string component_;
   double t_ = 0.0, t0_ = 0.0;
