@@ -1,7 +1,8 @@
 #pragma once
 /// \file
-/// The one simulate loop: runs any sim::Plant (plant.hpp) with CVODE from t = 0 to t_end, handling root
-/// events, time events and the sampled part, and hands the outputs on a grid to a sink.
+/// A run of any sim::Plant (plant.hpp) from t = 0 to t_end with its outputs on a grid handed to a sink: the stepping
+/// sim::Simulator (simulator.hpp, the one event engine: events, samples, restarts, chattering guard, step budgets)
+/// stepped from one output to the next with interpolated landings (Landing::Interpolate), plus the run's budgets.
 ///
 /// Event handling. The integrator carries a stop time at the next time event or sample, so no step crosses
 /// one. At a located root or a time event the plant updates its modes (updateModes) and CVODE is restarted

@@ -1,8 +1,8 @@
 #pragma once
 /// \file
-/// A stepping simulator over any sim::Plant: the loop of sim::simulate() opened up, so that a user's own
-/// controller can run around the plant at its own rate and change the plant's inputs (command ports) between
-/// steps.
+/// A stepping simulator over any sim::Plant, so that a user's own controller can run around the plant at its own rate
+/// and change the plant's inputs (command ports) between steps; also the one event engine under sim::simulate()
+/// (which steps it from output to output and adds the output grid and the run's budgets).
 ///
 ///   systems::RobotSystem robot = systems::loadRobotWithDrives("config/robots/ur5_drives.yaml");
 ///   sim::Simulator sim(robot, solver);                        // the robot is only read; sim owns the run's state
@@ -18,7 +18,8 @@
 /// the next advance) a held input jumps: the integrator goes on with its history (CvodeOptions::input_jump
 /// KeepHistory, the default) or restarts (Restart). A change of the state (setState, or applyInputs moving
 /// controller states for a bumpless switch) always restarts. Between unchanged inputs CVODE keeps its step-size
-/// and order history across calls. Every advance ends exactly at its target time (a CVODE stop time), never by interpolation. A
+/// and order history across calls. An advance ends exactly at its target time: by a CVODE stop time (Landing::Stop,
+/// the default), or by interpolation after stepping past it (Landing::Interpolate: sim::simulate's outputs). A
 /// sample due exactly at the target time is taken at the start of the next advance, so signals() at the target
 /// show the inputs held over the interval that ends there (as sim::simulate's outputs do).
 ///
