@@ -283,6 +283,99 @@ TEST(Simulator, SteppingAnExperimentReproducesItsRunOnTheLogGrid) {
   EXPECT_GT(s->events(), 0);  // the path's breakpoints
 }
 
+// One event engine: sim::simulate's rows are the stepping simulator's at the grid with interpolated landings, bit for
+// bit (samples, a time event, the input jumps' history decisions, the counters); landing by stop times gives the same
+// run within the solver tolerance (a different step sequence).
+TEST(Simulator, SimulateIsTheSteppingSimulatorOnItsOutputGrid) {
+  SampledDecay p;
+  const sim::SimulateOptions o = sim::SimulateOptions::atRate(1.0, 100.0, tight());
+  sim::SimulationResult result;
+  const sim::SignalTable run = sim::simulateTable(p, o, &result);
+  ASSERT_EQ(run.values.rows(), 101);
+  sim::Simulator interpolating(p, o.solver), stopping(p, o.solver);
+  double worst = 0.0;
+  for (Eigen::Index r = 1; r < run.values.rows(); ++r) {
+    const double t = run.values(r, 0);
+    ASSERT_EQ(interpolating.advanceTo(t, sim::Landing::Interpolate), t);
+    ASSERT_EQ(interpolating.signals()[0], run.values(r, 1)) << "t = " << t;
+    stopping.advanceTo(t);
+    worst = std::max(worst, std::abs(stopping.signals()[0] - run.values(r, 1)));
+  }
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_NEAR(run.values(100, 1), std::pow(0.9, 10), 1e-10);  // the closed form at t = 1
+  EXPECT_EQ(interpolating.stats().steps, result.stats.steps);
+  EXPECT_EQ(interpolating.stats().rhs_evals, result.stats.rhs_evals);
+  EXPECT_EQ(interpolating.samples(), result.samples);
+  EXPECT_EQ(interpolating.events(), result.events);
+  EXPECT_EQ(interpolating.restarts() - 1, result.restarts);  // simulate does not count the start
+  EXPECT_EQ(interpolating.inputJumps(), result.input_jumps);
+  EXPECT_EQ(result.samples, 10);  // t = 0, 0.1, ..., 0.9
+  EXPECT_EQ(result.events, 1);    // t = 0.35
+}
+
+/// A relay whose switching instants accumulate (Zeno): ẏ = −m, m flipped each time y crosses 0.
+class ZenoRelay : public sim::Plant {
+ public:
+  struct State : sim::PlantStateOf<State> {
+    using PlantStateOf::PlantStateOf;
+    double m = 1.0;
+  };
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
+  std::string name() const override { return "zeno relay"; }
+  int stateSize() const override { return 1; }
+  Eigen::VectorXd initialState() const override { return Eigen::VectorXd::Constant(1, 0.5); }
+  void derivatives(const sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>&,
+                   Eigen::Ref<Eigen::VectorXd> yd) const override {
+    yd[0] = -own<State>(state).m;
+  }
+  int rootCount() const override { return 1; }
+  void roots(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+             Eigen::Ref<Eigen::VectorXd> g) const override {
+    g[0] = y[0];
+  }
+  void updateModes(sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>&,
+                   const std::vector<int>& fired) const override {
+    if (!fired.empty() && fired[0] != 0) own<State>(state).m = fired[0] < 0 ? -1.0 : 1.0;
+  }
+  const std::vector<std::string>& signalNames() const override { return names_; }
+  void signals(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override {
+    out[0] = y[0];
+  }
+
+ private:
+  std::vector<std::string> names_{"y[1]"};
+};
+
+// The chattering guard is the simulator's (events per call), and so sim::simulate's per output interval.
+TEST(SimulatorLimits, ChatteringEventsEndTheCallOrTheOutputInterval) {
+  ZenoRelay p;
+  sim::Simulator s(p, tight());
+  sim::AdvanceLimits limits;
+  limits.max_events = 50;
+  s.setLimits(limits);
+  try {
+    s.advance(1.0);
+    FAIL() << "the relay chatters from t = 0.5 s on";
+  } catch (const SolverError& e) {
+    EXPECT_EQ(e.flag(), "EVENT_CHATTERING") << e.what();
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("more than 50 events in one call"));
+    EXPECT_NEAR(e.time(), 0.5, 1e-3);
+  }
+  EXPECT_EQ(s.events(), 51);
+  sim::SimulateOptions o = sim::SimulateOptions::atRate(1.0, 10.0, tight());
+  o.max_events_per_output = 50;
+  try {
+    sim::simulate(p, o, [](const Eigen::VectorXd&) {});
+    FAIL() << "the relay chatters";
+  } catch (const sim::SimulationFailure& e) {
+    EXPECT_EQ(e.flag(), "EVENT_CHATTERING") << e.what();
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("more than 50 events in one output interval (chattering)"));
+    // The interval that ends at 0.5 s has the first switch; the next one the 51 that end the run.
+    EXPECT_EQ(e.partial().events, 52);
+  }
+}
+
 /// ẏ = −a y + u with a digital P controller u_k = −K y(t_k) held over [t_k, t_k + T_s): the exact recursion
 /// y_{k+1} = e^{−a T_s} y_k + (1 − e^{−a T_s}) u_k / a.
 class SampledFirstOrder : public sim::Plant {
