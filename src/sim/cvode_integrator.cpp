@@ -959,6 +959,8 @@ double CvodeIntegrator::time() const { return impl_->t_last; }
 
 int CvodeIntegrator::size() const { return impl_->n; }
 
+long CvodeIntegrator::steps() const { return impl_->stepsSoFar(); }
+
 SolverStats CvodeIntegrator::stats() const {
   const SolverStats cur = impl_->segmentStats();
   SolverStats s = impl_->base;

@@ -204,7 +204,7 @@ SimulationResult simulate(const Plant& plant, PlantState& state, const SimulateO
     l.max_events = options.max_events_per_output;
     l.max_steps = per_interval;
     if (options.max_steps > 0) {
-      const long left = std::max(1L, options.max_steps - sim->stats().steps);
+      const long left = std::max(1L, options.max_steps - sim->integ_->steps());
       l.max_steps = l.max_steps > 0 ? std::min(l.max_steps, left) : left;
     }
     if (options.max_wall_time > 0.0) l.max_wall_time = std::max(1e-9, options.max_wall_time - wall());

@@ -500,7 +500,7 @@ double Simulator::advanceTo(double t_target, Landing landing) {
   stop_flag_.clear();
   guard_calls_ = 0;
   call_deadline_ = limits_.max_wall_time > 0.0 ? clockSeconds() + limits_.max_wall_time : 0.0;
-  integ_->setStepLimit(limits_.max_steps > 0 ? integ_->stats().steps + limits_.max_steps : 0);
+  integ_->setStepLimit(limits_.max_steps > 0 ? integ_->steps() + limits_.max_steps : 0);
   long events_here = 0;
   try {
     prepare(t_target);

@@ -280,6 +280,8 @@ class CvodeIntegrator {
   int size() const;
   /// Solver counters, see SolverStats.
   SolverStats stats() const;
+  /// Internal steps so far, over all restarts (stats().steps, without the other counters' cost).
+  long steps() const;
   /// The options given at construction.
   const CvodeOptions& options() const;
 
