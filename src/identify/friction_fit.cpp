@@ -318,6 +318,34 @@ double FrictionFit::map(double v) const {
   return 0.0;
 }
 
+drive::ParameterChanges frictionChanges(const FrictionFit& fit, const drive::Friction& model) {
+  const std::vector<drive::ParameterInfo> table = model.parameters();
+  auto has = [&](const std::string& key) {
+    for (const auto& p : table)
+      if (p.key == key) return true;
+    return false;
+  };
+  drive::ParameterChanges out;
+  for (const DirectionFit* d : {&fit.positive, &fit.negative})
+    for (const auto& [name, estimate] : {std::pair<const char*, const ParameterEstimate*>{"alpha0", &d->alpha0},
+                                         {"alpha1", &d->alpha1},
+                                         {"alpha2", &d->alpha2},
+                                         {"v_s", &d->v_s}}) {
+      const std::string key = d->direction + "." + name;
+      if (!has(key))
+        throw InputError("identified friction map: the " + model.type() + " friction model has no parameter '" + key +
+                         "' (the map applies to models with the Stribeck static set: stribeck, lugre)");
+      out.push_back({key, estimate->value});
+    }
+  if (has("delta")) {
+    out.push_back({"delta", fit.delta.value});
+  } else if (fit.delta.value != 2.0) {
+    throw InputError("identified friction map: delta = " + formatShortest(fit.delta.value) + ", but the " +
+                     model.type() + " friction model has its Stribeck curve with delta = 2 and no parameter for it");
+  }
+  return out;
+}
+
 FrictionFit fitFrictionMap(const std::vector<double>& velocity, const std::vector<double>& torque,
                            const FrictionFitOptions& options) {
   const QuietCeres quiet;

@@ -27,6 +27,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/drive/friction_models.hpp"
+#include "jointsim/drive/parameters.hpp"
 #include "jointsim/drive/transmissions.hpp"
 #include "jointsim/identify/friction_fit.hpp"
 #include "jointsim/systems/joint_rig.hpp"
@@ -152,6 +153,34 @@ TEST(FrictionFit, NoiseFreeSteadyStateRecoversTable43Exactly) {
   EXPECT_FALSE(fit.delta_fitted);
   EXPECT_EQ(fit.delta.value, 2.0);
   for (double v : {-0.5, -0.02, -1e-3, 1e-3, 0.03, 0.7}) EXPECT_NEAR(fit.map(v), model.steadyState(v), 1e-8);
+}
+
+// The identified map applied to other friction models through their parameter tables: a LuGre model with other
+// static parameters and bristles takes the map (its steady state is the identified one, its σ0 stays), a Stribeck
+// model takes the map and δ, and a model without the static set is refused naming the key.
+TEST(FrictionFit, TheMapAppliesToModelsByTheirTableKeys) {
+  const auto truth = table43Model();
+  const Map m = steadyStateMap(truth, 40, 1e-3, 1.0, 0.0, 1);
+  const FrictionFit fit = identify::fitFrictionMap(m.v, m.tau);
+  drive::LuGreParams other;
+  other.sigma0 = 1234.0;
+  other.positive = {1.0, 0.5, 1.0, 0.1};
+  other.negative = {2.0, 0.1, 3.0, 0.2};
+  const drive::LuGreFriction lugre(other);
+  const auto applied = lugre.withParameters(identify::frictionChanges(fit, lugre));
+  for (double v : {-0.5, -0.02, -1e-3, 1e-3, 0.03, 0.7})
+    EXPECT_NEAR(applied->steadyState(v), truth.steadyState(v), 1e-7) << v;
+  EXPECT_EQ(drive::parameterValue(applied->parameters(), "sigma0", "lugre"), 1234.0);
+  const drive::StribeckFriction stribeck(drive::StribeckParams{});
+  const auto st = stribeck.withParameters(identify::frictionChanges(fit, stribeck));
+  EXPECT_EQ(drive::parameterValue(st->parameters(), "delta", "stribeck"), fit.delta.value);
+  for (double v : {-0.5, -0.2, 0.2, 0.7}) EXPECT_NEAR(st->steadyState(v), fit.map(v), 1e-6) << v;  // limiter ≈ 1
+  try {
+    (void)identify::frictionChanges(fit, drive::CoulombViscousFriction(drive::CoulombViscousParams{}));
+    FAIL() << "coulomb_viscous has no Stribeck static set";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("positive.alpha0"));
+  }
 }
 
 TEST(FrictionFit, NoisySteadyStateRecoversTable43WithinTwoPercent) {

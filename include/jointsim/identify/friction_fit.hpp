@@ -107,6 +107,14 @@ struct FrictionMapData {
 /// cell, or a file without data rows.
 FrictionMapData readFrictionMap(const std::string& path);
 
+/// The fit applied to a friction model of a drive by the keys of the model's parameter table (drive/parameters.hpp):
+/// the static set of both directions (positive.alpha0 … negative.v_s) and, where the model has it, the form factor
+/// delta; for any model with those keys (stribeck, lugre), e.g. `model.withParameters(frictionChanges(fit, model))`
+/// or the same keys under an experiment's `drives: {JOINT: {friction: ...}}`.
+/// \throws InputError naming the model and the missing key when its table lacks one of the static set, or when the
+/// fit has δ ≠ 2 and the model has no delta (LuGre's Stribeck curve has δ = 2).
+drive::ParameterChanges frictionChanges(const FrictionFit& fit, const drive::Friction& model);
+
 /// Options of frictionFitYaml().
 struct FrictionYamlOptions {
   std::string source;         ///< name of the map file, written as fit.source (may be empty)
