@@ -303,4 +303,32 @@ std::string clampingReportYaml(const ClampingFitResult& r, const std::string& da
   return y.str();
 }
 
+drive::ParameterChanges clampingChanges(const ClampingFitResult& fit, const drive::Transmission& gear) {
+  const std::vector<drive::ParameterInfo> table = gear.parameters();
+  const drive::ParameterInfo* stiffness = nullptr;
+  const drive::ParameterInfo* backlash = nullptr;
+  const drive::ParameterInfo* damping = nullptr;
+  int stiffnesses = 0;
+  for (const auto& p : table) {
+    if (p.role == drive::ParameterRole::Stiffness) {
+      stiffness = &p;
+      ++stiffnesses;
+    }
+    if (p.role == drive::ParameterRole::Backlash) backlash = &p;
+    if (p.key == "damping") damping = &p;
+  }
+  const std::string side = gear.complianceSide();
+  if (stiffnesses != 1 || backlash == nullptr || side.empty())
+    throw InputError("identified clamping curve: a " + gear.type() +
+                     " transmission does not take it (it identifies one spring with backlash on the motor side: an "
+                     "elastic or elasto_backlash gear)");
+  const double N = gear.ratio();
+  const bool output = side == "output";
+  drive::ParameterChanges out{{stiffness->key, output ? N * N * fit.stiffness.value : fit.stiffness.value},
+                              {backlash->key, output ? fit.backlash.value / N : fit.backlash.value}};
+  if (fit.damping && damping != nullptr)
+    out.push_back({damping->key, output ? N * N * fit.damping->value : fit.damping->value});
+  return out;
+}
+
 }  // namespace jointsim::identify

@@ -21,6 +21,8 @@
 
 #include "jointsim/common/error.hpp"
 #include "jointsim/drive/friction_models.hpp"
+#include "jointsim/drive/parameters.hpp"
+#include "jointsim/drive/strain_wave_gear.hpp"
 #include "jointsim/drive/transmissions.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/identify/clamping_fit.hpp"
@@ -126,6 +128,37 @@ TEST(ClampingFit, RoundTripTable61WithinThreePercent) {
   std::printf("round trip: c %.5g (%.2f %%), b %.5g (%.2f %%), F %.5g (%.2f %%), rms %.3g N*m\n", r.stiffness.value,
               100 * (r.stiffness.value / kC - 1), r.backlash.value, 100 * (r.backlash.value / kB - 1), r.friction.value,
               100 * (r.friction.value / kF - 1), r.rms_residual);
+}
+
+// The identified (motor-side) spring and backlash applied to gears by their table keys: an output-side gear of ratio N
+// takes N² c, b / N and N² d, and then delivers the same port torques as a motor-side gear with the identified values,
+// for the same shaft motions, in and out of the gap (the motor/output equivalence of transmissions.hpp).
+TEST(ClampingFit, TheIdentifiedGearAppliesToGearsOnEitherSideByTheirTableKeys) {
+  identify::ClampingFitResult fit;
+  fit.stiffness.value = 25.7;
+  fit.backlash.value = 0.0102;
+  fit.damping = identify::FittedParameter{0.5, 0.0, true, 0.5};
+  const double N = 50.0;
+  drive::ElastoBacklashParams motor_side{N, 1.0, 0.0, 0.0, drive::ComplianceSide::Motor};
+  drive::ElastoBacklashParams output_side{N, 1.0, 0.0, 0.0, drive::ComplianceSide::Output};
+  const drive::ElastoBacklash m0(motor_side), o0(output_side);
+  const auto m = m0.withParameters(identify::clampingChanges(fit, m0));
+  const auto o = o0.withParameters(identify::clampingChanges(fit, o0));
+  EXPECT_EQ(drive::parameterValue(m->parameters(), "stiffness", ""), 25.7);
+  EXPECT_DOUBLE_EQ(drive::parameterValue(o->parameters(), "stiffness", ""), N * N * 25.7);
+  EXPECT_DOUBLE_EQ(drive::parameterValue(o->parameters(), "backlash", ""), 0.0102 / N);
+  for (const double delta_m : {-0.05, -0.006, 0.0, 0.003, 0.0052, 0.02})
+    for (const double rate : {-0.3, 0.0, 0.7}) {
+      const drive::ShaftPorts ports{0.1 + delta_m, rate, 0.1 / N, 0.0};
+      const drive::PortTorques a = m->evaluate(ports, nullptr, nullptr), b = o->evaluate(ports, nullptr, nullptr);
+      EXPECT_NEAR(b.tau_in, a.tau_in, 1e-12 * (1.0 + std::abs(a.tau_in))) << delta_m << " " << rate;
+      EXPECT_NEAR(b.tau_out, a.tau_out, 1e-12 * (1.0 + std::abs(a.tau_out))) << delta_m << " " << rate;
+    }
+  // An elastic gear takes it too (becoming elasto-backlash); a strain-wave gear (five stiffnesses) does not.
+  const drive::ElasticGear elastic(drive::ElasticGearParams{N, 1.0, 0.0, drive::ComplianceSide::Motor});
+  EXPECT_EQ(elastic.withParameters(identify::clampingChanges(fit, elastic))->type(), "elasto_backlash");
+  EXPECT_THROW((void)identify::clampingChanges(fit, drive::StrainWaveGear(drive::StrainWaveGearParams{})), InputError);
+  EXPECT_THROW((void)identify::clampingChanges(fit, drive::RigidGear(N)), InputError);
 }
 
 TEST(ClampingFit, ValidationSimulationFollowsTheMeasuredAngle) {

@@ -62,6 +62,9 @@ class Transmission {
   virtual std::vector<std::string> stateNames() const { return {}; }
   /// The parameter table (parameters.hpp): every scalar parameter with its key, unit, range, value and role.
   virtual std::vector<ParameterInfo> parameters() const { return {}; }
+  /// The shaft whose units the compliance parameters of the table are in: "motor" or "output" for a gear with one
+  /// spring (c_out = N² c_m, b_out = b_m / N, d_out = N² d_m), "" for others.
+  virtual std::string complianceSide() const { return {}; }
   /// A new, validated transmission with `changes` (keys of parameters()) applied and every other parameter kept. It
   /// has the same stateSize() and isRigid(), and the same ratio() unless `ratio` is changed; its type() may differ
   /// (an elastic gear given a backlash > 0 becomes an elasto_backlash gear). \throws InputError for an unknown key

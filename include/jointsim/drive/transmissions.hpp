@@ -55,6 +55,7 @@ class ElasticGear : public Transmission {
   double storedEnergy(const ShaftPorts& ports, const double* x) const override;
   const ElasticGearParams& params() const { return p_; }
 
+  std::string complianceSide() const override { return p_.side == ComplianceSide::Motor ? "motor" : "output"; }
   std::vector<ParameterInfo> parameters() const override;
   std::shared_ptr<const Transmission> withParameters(const ParameterChanges& changes) const override;
 
@@ -86,6 +87,7 @@ class ElastoBacklash : public Transmission {
   /// The contact law itself: torque for deflection δ [rad] and deflection rate δ̇ [rad/s] on `side`.
   double contactTorque(double delta, double delta_dot) const;
 
+  std::string complianceSide() const override { return p_.side == ComplianceSide::Motor ? "motor" : "output"; }
   std::vector<ParameterInfo> parameters() const override;
   std::shared_ptr<const Transmission> withParameters(const ParameterChanges& changes) const override;
 

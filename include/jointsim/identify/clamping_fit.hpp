@@ -17,6 +17,8 @@
 #include <optional>
 #include <string>
 
+#include "jointsim/drive/parameters.hpp"
+#include "jointsim/drive/transmission.hpp"
 #include "jointsim/identify/clamping_curve.hpp"
 
 namespace jointsim::identify {
@@ -77,5 +79,12 @@ double elastoBacklashStatic(double x, double stiffness, double backlash);
 /// YAML report of a result (parameters with value, unit, std_error; Algorithm II estimates; residuals;
 /// half-cycles; side and gear ratio). `data_path` and `gear_ratio` [-] are echoed.
 std::string clampingReportYaml(const ClampingFitResult& result, const std::string& data_path, double gear_ratio);
+
+/// The fit applied to a drive's gear by the keys of its parameter table (drive/parameters.hpp): `stiffness` and
+/// `backlash` (and `damping` when it was fitted) of a gear with one spring (elastic, elasto_backlash), converted from
+/// the motor side on which they are identified to the gear's compliance side (output side: c = N² c_m, b = b_m / N,
+/// d = N² d_m with N = gear.ratio()). The Coulomb friction F belongs to the friction model and is not included.
+/// \throws InputError naming the gear's type when it has no such keys or more than one stiffness (a strain-wave gear).
+drive::ParameterChanges clampingChanges(const ClampingFitResult& fit, const drive::Transmission& gear);
 
 }  // namespace jointsim::identify
