@@ -347,7 +347,6 @@ nlohmann::ordered_json FmuDescription::toJson() const {
     x["unit"] = v.unit;
     x["description"] = v.description;
     x["start"] = v.start;
-    x["joint"] = v.joint;
     x["port"] = v.port;
     x["signal"] = v.signal;
     x["key"] = v.key;
@@ -392,7 +391,6 @@ FmuDescription FmuDescription::fromJson(const nlohmann::ordered_json& j, const s
       v.unit = x.at("unit").get<std::string>();
       v.description = x.at("description").get<std::string>();
       v.start = x.at("start").get<double>();
-      v.joint = indexField(x, "joint", where);
       v.port = x.at("port").get<std::string>();
       v.signal = indexField(x, "signal", where);
       v.key = x.at("key").get<std::string>();

@@ -30,7 +30,7 @@ def fault_dataset(cli, root, tmp_path_factory):
     return sweep, out / "runs", h5
 
 
-def test_dataset_labels_shapes_and_units_match_the_manifest_and_logs(fault_dataset):
+def test_dataset_labels_shapes_and_units_match_the_manifest_and_logs(fault_dataset, tmp_path):
     sweep, runs_dir, h5 = fault_dataset
     manifest = pd.read_csv(runs_dir / "manifest.csv", keep_default_na=False, dtype=str)
     assert len(manifest) >= 50 and (manifest["status"] == "ok").all()
@@ -82,7 +82,7 @@ def test_dataset_labels_shapes_and_units_match_the_manifest_and_logs(fault_datas
             assert g["time"].attrs["unit"] == "s" and g["q_elbow_joint"].attrs["unit"] == "rad"
             assert g["gear_torque_elbow_joint"].attrs["unit"] == "N·m"
     # The same file from the Python API, without rewriting the manifest: the same labels.
-    again = runs_dir.parent / "again.h5"
+    again = tmp_path / "again.h5"
     info = jointsim.write_dataset(sweep, again, runs_dir)
     assert info["runs"] == len(manifest) and info["runs_with_data"] == len(manifest)
     with h5py.File(again, "r") as a, h5py.File(h5, "r") as b:

@@ -64,6 +64,16 @@ sim::CvodeOptions tight() {
   return o;
 }
 
+/// A joint rig with a rigid gear N = 4, rotor 2e-3 kg·m², load 0.5 kg·m², a torque input whose profile is 1 N·m.
+systems::JointRigSetup rigidRig() {
+  systems::JointRigSetup setup;
+  setup.rotor_inertia = 2e-3;
+  setup.load_inertia = 0.5;
+  setup.transmission = std::make_shared<drive::RigidGear>(4.0);
+  setup.profile = control::Profile::constant(1.0);
+  return setup;
+}
+
 double jointInertia(const systems::RobotSystem& r) { return kIzz + kN * kN * r.drives()[0].motor.J_M; }
 
 TEST(CommandPorts, VoltageGivesTheMotorsNoLoadSpeed) {
@@ -247,12 +257,7 @@ TEST(CommandPorts, SetpointVoltageSetpointSwitchOnTheUr5TwinIsBumpless) {
 TEST(CommandPorts, JointRigHoldsACommandAndTakesALoadTorque) {
   // Rigid gear N = 4, torque input: the held command τ and a load torque τ_l on the output give
   // q̈_m = (τ + τ_l / N) / (J_m + J_l / N²) from rest (closed form q_m = ½ q̈_m t²).
-  systems::JointRigSetup setup;
-  setup.rotor_inertia = 2e-3;
-  setup.load_inertia = 0.5;
-  setup.transmission = std::make_shared<drive::RigidGear>(4.0);
-  setup.profile = control::Profile::constant(1.0);
-  systems::JointRig rig(setup);
+  systems::JointRig rig(rigidRig());
   sim::Simulator s(rig, tight());
   rig.setCommand(s.plantState(), 0.3);
   rig.setLoadTorque(s.plantState(), -0.4);
@@ -328,12 +333,7 @@ TEST(InputPorts, TheRobotsPortsAsNamedInputsActAsItsOwnSetters) {
 }
 
 TEST(InputPorts, TheJointRigsCommandAndLoadTorqueAreNamedInputs) {
-  systems::JointRigSetup setup;
-  setup.rotor_inertia = 2e-3;
-  setup.load_inertia = 0.5;
-  setup.transmission = std::make_shared<drive::RigidGear>(4.0);
-  setup.profile = control::Profile::constant(1.0);
-  systems::JointRig rig(setup);
+  systems::JointRig rig(rigidRig());
   const auto ports = rig.inputPorts();
   ASSERT_EQ(ports.size(), 2u);
   EXPECT_EQ(ports[0].name, "command");

@@ -49,10 +49,9 @@ struct Variable {
   std::string unit;         ///< SI unit ("" for a dimensionless number or an unknown unit)
   std::string description;  ///< one line
   double start = 0.0;       ///< start value (inputs, parameters)
-  /// Inputs: the joint (index in the robot's joint list; -1 for a joint rig) and the port ("voltage", ...,
-  /// "q" and "qd" for the setpoint port, "input" for a rig). Outputs: the signal's index in the plant's
-  /// signalNames(). Parameters: the key path of the experiment file.
-  int joint = -1;
+  /// Inputs: the plant's input port (sim::InputPort name, e.g. "elbow_joint.voltage", "command"). Outputs: the
+  /// signal's index in the plant's signalNames(). Parameters: the override that sets it (the experiment file's key
+  /// path, "+drives.<joint>.<component>.<key>" for a drive parameter); for a fault parameter the joint's name.
   std::string port;
   int signal = -1;
   std::string key;
