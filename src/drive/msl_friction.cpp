@@ -33,9 +33,14 @@ double frictionTorque(FrictionMode m, double f, double stuck_torque) {
   return stuck_torque;
 }
 
-FrictionEventFlags frictionEventFlags(const std::vector<int>& fired, size_t k) {
+FrictionEventFlags frictionEventFlags(const std::vector<int>& fired, size_t k, int normal_slot) {
   if (fired.size() < 2 * k + 2) return {};
-  return {fired[2 * k] != 0, fired[2 * k] > 0, fired[2 * k + 1] < 0, fired[2 * k + 1] != 0};
+  FrictionEventFlags f{fired[2 * k] != 0, fired[2 * k] > 0, fired[2 * k + 1] < 0, fired[2 * k + 1] != 0};
+  if (normal_slot >= 0 && static_cast<size_t>(normal_slot) < fired.size()) {
+    f.engage = fired[static_cast<size_t>(normal_slot)] > 0;
+    f.release = fired[static_cast<size_t>(normal_slot)] < 0;
+  }
+  return f;
 }
 
 namespace {

@@ -300,23 +300,19 @@ void ClampedRobot::start(sim::PlantState& state, double t, const Eigen::Ref<cons
 void ClampedRobot::updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                                const std::vector<int>& fired) const {
   State& st = own<State>(state);
-  for (int iter = 0; iter < 30; ++iter) {
-    solve(st, t, y);
-    bool changed = false;
-    for (int k = 0; k < n_; ++k) {
-      const auto& a = s_.axes[static_cast<size_t>(k)];
-      const auto i = static_cast<size_t>(k);
-      const drive::FrictionEventFlags f = iter == 0 ? drive::frictionEventFlags(fired, i) : drive::FrictionEventFlags{};
-      const double t0 = drive::frictionTableValue(a.tau_pos, 0.0);
-      const FrictionMode m = drive::nextFrictionMode(st.modes[i], false, st.stuck[k], y[motorState(k) + 1], st.wdot[k],
-                                                     t0, a.peak * t0, f);
-      if (m != st.modes[i]) {
-        st.modes[i] = m;
-        changed = true;
-      }
-    }
-    if (!changed) break;
-  }
+  drive::iterateFrictionModes(
+      st.modes.data(), st.modes.size(), fired, [&] { solve(st, t, y); },
+      [&](size_t i) {
+        const auto k = static_cast<int>(i);
+        const auto& a = s_.axes[i];
+        drive::FrictionElementView v;
+        v.S = st.stuck[k];
+        v.w = y[motorState(k) + 1];
+        v.a = st.wdot[k];
+        v.tau0 = drive::frictionTableValue(a.tau_pos, 0.0);
+        v.tau0max = a.peak * v.tau0;
+        return v;
+      });
 }
 
 std::string ClampedRobot::name() const { return "clamping '" + s_.name + "'"; }

@@ -12,6 +12,11 @@
 namespace jointsim::systems {
 
 using drive::frictionModeNumber;
+
+namespace {
+constexpr double kEngageForce = 1e-12;  // [-], relative to fn_max: see DriveChain::roots
+}  // namespace
+
 using drive::frictionTableValue;
 
 bool ChainElement::isFriction() const {
@@ -89,6 +94,10 @@ DriveChain::DriveChain(DriveChainSetup setup) : s_(std::move(setup)) {
                             ? std::make_shared<const drive::ElastoBacklash>(drive::ElastoBacklashParams{
                                   1.0, std::max(e.c, 1e-300), e.d, e.backlash, drive::ComplianceSide::Motor})
                             : nullptr);
+  int slot = 2 * static_cast<int>(s_.elements.size());
+  for (const auto& e : s_.elements)
+    normal_slot_.push_back(e.type == ChainElementType::Clutch || e.type == ChainElementType::Brake ? slot++ : -1);
+  root_count_ = slot;
   for (const auto& in : s_.inertias) {
     signals_.push_back(in.name + ".phi[rad]");
     signals_.push_back(in.name + ".w[rad/s]");
@@ -127,6 +136,12 @@ double DriveChain::relSpeed(int e, const Eigen::Ref<const Eigen::VectorXd>& y) c
 double DriveChain::relAccel(const State& st, int e) const {
   const auto& el = s_.elements[static_cast<size_t>(e)];
   return (el.b >= 0 ? st.acc[el.b] : 0.0) - (el.a >= 0 ? st.acc[el.a] : 0.0);
+}
+
+double DriveChain::normalForce(int e, double t) const {
+  const auto& el = s_.elements[static_cast<size_t>(e)];
+  if (el.type == ChainElementType::BearingFriction) return 1.0;  // no normal force: never free
+  return el.fn_max * el.normalized.value(t);
 }
 
 double DriveChain::tau0(int e, double t) const {
@@ -267,6 +282,10 @@ void DriveChain::roots(const sim::PlantState& state, double t, const Eigen::Ref<
     }
     g[2 * e] = g0;
     g[2 * e + 1] = g1;
+    // MSL: free = fn <= 0, a state event. A free element engages where fn exceeds kEngageForce·fn_max: a normal force
+    // that starts at zero (a sine from t = 0) leaves zero at a restart, which CVODE does not report as a root.
+    if (normal_slot_[k] >= 0)
+      g[normal_slot_[k]] = normalForce(e, t) - (st.modes[k] == FrictionMode::Free ? kEngageForce * el.fn_max : 0.0);
   }
 }
 
@@ -289,13 +308,11 @@ std::vector<double> DriveChain::timeEvents(double t_end) const {
 void DriveChain::start(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   State& st = own<State>(state);
   for (size_t k = 0; k < s_.elements.size(); ++k) {
-    const auto& el = s_.elements[k];
-    if (!el.isFriction()) continue;
+    if (!s_.elements[k].isFriction()) continue;
     const double w = relSpeed(static_cast<int>(k), y);
-    if (el.type != ChainElementType::BearingFriction && el.fn_max * el.normalized.value(t) <= 0.0)
-      st.modes[k] = FrictionMode::Free;
-    else
-      st.modes[k] = w > 0 ? FrictionMode::Forward : (w < 0 ? FrictionMode::Backward : FrictionMode::Stuck);
+    st.modes[k] = normalForce(static_cast<int>(k), t) <= 0.0
+                      ? FrictionMode::Free
+                      : (w > 0 ? FrictionMode::Forward : (w < 0 ? FrictionMode::Backward : FrictionMode::Stuck));
   }
   updateModes(st, t, y, {});
 }
@@ -303,28 +320,23 @@ void DriveChain::start(sim::PlantState& state, double t, const Eigen::Ref<const 
 void DriveChain::updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                              const std::vector<int>& fired) const {
   State& st = own<State>(state);
-  for (int iter = 0; iter < 20; ++iter) {
-    solve(st, t, y);
-    bool changed = false;
-    for (size_t k = 0; k < s_.elements.size(); ++k) {
-      const auto& el = s_.elements[k];
-      if (!el.isFriction()) continue;
-      const int e = static_cast<int>(k);
-      // Crossings CVODE reported at this event (first pass only): the located point may sit exactly on
-      // the threshold, so the decision follows the reported crossing rather than a strict comparison
-      // (a root function that restarts at exactly zero is not reported again).
-      const drive::FrictionEventFlags flags =
-          iter == 0 ? drive::frictionEventFlags(fired, k) : drive::FrictionEventFlags{};
-      const double t0 = tau0(e, t), t0max = el.peak * t0, w = relSpeed(e, y), a = relAccel(st, e), S = st.tau_el[e];
-      const bool free = el.type != ChainElementType::BearingFriction && el.fn_max * el.normalized.value(t) <= 0.0;
-      const FrictionMode m = drive::nextFrictionMode(st.modes[k], free, S, w, a, t0, t0max, flags);
-      if (m != st.modes[k]) {
-        st.modes[k] = m;
-        changed = true;
-      }
-    }
-    if (!changed) break;
-  }
+  drive::iterateFrictionModes(
+      st.modes.data(), st.modes.size(), fired, [&] { solve(st, t, y); },
+      [&](size_t k) {
+        drive::FrictionElementView v;
+        const auto& el = s_.elements[k];
+        v.friction = el.isFriction();
+        if (!v.friction) return v;
+        const int e = static_cast<int>(k);
+        v.S = st.tau_el[e];
+        v.w = relSpeed(e, y);
+        v.a = relAccel(st, e);
+        v.tau0 = tau0(e, t);
+        v.tau0max = el.peak * v.tau0;
+        v.fn = normalForce(e, t);
+        v.normal_slot = normal_slot_[k];
+        return v;
+      });
 }
 
 double DriveChain::elementTorque(const sim::PlantState& state, int e, double t,

@@ -176,14 +176,18 @@ void RobotR3Axis::roots(const sim::PlantState& state, double t, const Eigen::Ref
 void RobotR3Axis::updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                               const std::vector<int>& fired) const {
   FrictionMode& mode = own<State>(state).mode;
-  for (int iter = 0; iter < 20; ++iter) {
-    const Eval ev = evaluateIn(mode, t, y);
-    const drive::FrictionEventFlags f = iter == 0 ? drive::frictionEventFlags(fired, 0) : drive::FrictionEventFlags{};
-    const FrictionMode m =
-        drive::nextFrictionMode(mode, false, ev.stuck_torque, ev.wm, ev.wm_dot, s_.Rv0, s_.peak * s_.Rv0, f);
-    if (m == mode) break;
-    mode = m;
-  }
+  Eval ev{};
+  drive::iterateFrictionModes(
+      &mode, 1, fired, [&] { ev = evaluateIn(mode, t, y); },
+      [&](size_t) {
+        drive::FrictionElementView v;
+        v.S = ev.stuck_torque;
+        v.w = ev.wm;
+        v.a = ev.wm_dot;
+        v.tau0 = s_.Rv0;
+        v.tau0max = s_.peak * s_.Rv0;
+        return v;
+      });
 }
 
 void RobotR3Axis::signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,

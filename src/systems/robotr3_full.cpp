@@ -264,24 +264,19 @@ void RobotR3Full::roots(const sim::PlantState& state, double t, const Eigen::Ref
 void RobotR3Full::updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                               const std::vector<int>& fired) const {
   State& st = own<State>(state);
-  for (int iter = 0; iter < 30; ++iter) {
-    solve(st, t, y);
-    bool changed = false;
-    for (int j = 0; j < n_; ++j) {
-      const auto& a = s_.axes[static_cast<size_t>(j)];
-      const auto k = static_cast<size_t>(j);
-      const drive::FrictionEventFlags f = iter == 0 ? drive::frictionEventFlags(fired, k) : drive::FrictionEventFlags{};
-      const double w = a.type == 1 ? st.wm[j] : y[n_ + j];
-      const double acc = a.type == 1 ? st.wm_dot[j] : st.qdd[j];
-      const FrictionMode m = drive::nextFrictionMode(st.modes[k], false, st.stuck[j], w, acc, a.Rv0, a.peak * a.Rv0, f);
-      if (m != st.modes[k]) {
-        st.modes[k] = m;
-        changed = true;
-        break;  // re-solve: the stuck torques of type-2 joints are coupled
-      }
-    }
-    if (!changed) break;
-  }
+  drive::iterateFrictionModes(
+      st.modes.data(), st.modes.size(), fired, [&] { solve(st, t, y); },
+      [&](size_t k) {
+        const auto j = static_cast<int>(k);
+        const auto& a = s_.axes[k];
+        drive::FrictionElementView v;
+        v.S = st.stuck[j];
+        v.w = a.type == 1 ? st.wm[j] : y[n_ + j];
+        v.a = a.type == 1 ? st.wm_dot[j] : st.qdd[j];
+        v.tau0 = a.Rv0;
+        v.tau0max = a.peak * a.Rv0;
+        return v;
+      });
 }
 
 void RobotR3Full::signals(const sim::PlantState& state, double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y,

@@ -297,3 +297,132 @@ TEST(DriveChainGear, IdealGearReflectsInertiaAndTorque) {
   bad.elements = {g};
   EXPECT_THROW(DriveChain{bad}, jointsim::InputError);
 }
+
+namespace {
+// Two inertias (J = 1 and 2 kg·m²) joined by a clutch with constant μ = 0.5, cgeo = 0.1 m, fn_max = 100 N: while
+// it slides forward its torque is τ = 5·fn/fn_max N·m, +τ on the input and −τ on the output.
+DriveChainSetup clutchPair(control::Profile normalized, double w_out0, double duration) {
+  DriveChainSetup s;
+  s.inertias = {{"in", 1.0, 0.0, 0.0}, {"out", 2.0, 0.0, w_out0}};
+  ChainElement c;
+  c.name = "clutch";
+  c.type = ChainElementType::Clutch;
+  c.a = 0;
+  c.b = 1;
+  c.fn_max = 100.0;
+  c.cgeo = 0.1;
+  c.table = {{{0.0, 0.5}}};
+  c.peak = 1.1;
+  c.normalized = std::move(normalized);
+  s.elements = {c};
+  s.duration = duration;
+  s.log_rate = 10000;
+  s.solver.rtol = 1e-10;
+  s.solver.atol = 1e-12;
+  return s;
+}
+
+Eigen::Index column(const sim::Plant& plant, const std::string& name) {
+  const auto cols = sim::tableColumns(plant);
+  const auto it = std::find(cols.begin(), cols.end(), name);
+  EXPECT_NE(it, cols.end()) << name;
+  return static_cast<Eigen::Index>(it - cols.begin());
+}
+
+// The clutch's normal force fn = fn_max·sin(2πt) crosses zero falling at t = 0.5 s and rising at t = 1 s and 2 s.
+// While it slides (|w_rel| > 0) it must go free at each falling crossing and slide again at each rising one, so
+// that |w_rel| only decreases: d|w_rel|/dt = −5 sin(2πt)·(1/J_in + 1/J_out) = −7.5 sin(2πt) while fn > 0, else 0
+// (closed form below). Before the normal force had a root function, the clutch kept sliding with fn < 0, its
+// torque changed sign with fn and drove |w_rel| back up to its initial 10 rad/s at t = 1 s (friction feeding
+// energy into the slip). Checked in both sliding directions: every row against the closed form, the friction
+// power τ·w_rel never negative (the clutch only dissipates), and the energy balance E(0) − E(t) = ∫ τ·w_rel dt.
+void checkClutchThroughNormalForceZeros(double w_out0) {
+  const DriveChain chain(clutchPair(control::Profile::sine(1.0, 1.0), w_out0, 2.5));
+  std::vector<Eigen::VectorXd> rows;
+  sim::simulate(chain, chain.simulateOptions(), [&](const Eigen::VectorXd& r) { rows.push_back(r); });
+  const Eigen::Index w_in = column(chain, "in.w[rad/s]"), w_out = column(chain, "out.w[rad/s]");
+  const Eigen::Index tau = column(chain, "clutch.tau[N·m]"), w_rel = column(chain, "clutch.w_rel[rad/s]");
+  const Eigen::Index mode = column(chain, "clutch.mode[-]");
+  const double sliding = w_out0 > 0 ? 1.0 : -1.0;  // the logged mode while sliding (forward +1, backward −1)
+  const double drop = 7.5 / (2 * M_PI);            // |w_rel| lost over one half period of fn > 0 [rad/s]
+  auto expected = [&](double t) {                  // |w_rel|(t), closed form
+    const double cycles = std::floor(t), phase = t - cycles;  // fn > 0 for phase < 0.5
+    const double within = phase < 0.5 ? drop * (1 - std::cos(2 * M_PI * phase)) : 2 * drop;
+    return std::abs(w_out0) - 2 * drop * cycles - within;
+  };
+  auto energy = [&](const Eigen::VectorXd& r) { return 0.5 * r[w_in] * r[w_in] + 1.0 * r[w_out] * r[w_out]; };
+  double dissipated = 0.0;
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const auto& r = rows[k];
+    const double t = r[0], phase = t - std::floor(t);
+    ASSERT_NEAR(std::abs(r[w_rel]), expected(t), 1e-6) << "t = " << t;
+    ASSERT_GE(r[tau] * r[w_rel], -1e-12) << "friction power negative at t = " << t;
+    if (phase > 1e-3 && phase < 0.5 - 1e-3) {
+      EXPECT_EQ(r[mode], sliding) << "t = " << t;
+    }
+    if (phase > 0.5 + 1e-3 && phase < 1 - 1e-3) {
+      EXPECT_EQ(r[mode], 2.0) << "free, t = " << t;
+    }
+    if (k > 0) {
+      const auto& p = rows[k - 1];
+      dissipated += 0.5 * (r[0] - p[0]) * (r[tau] * r[w_rel] + p[tau] * p[w_rel]);
+      ASSERT_NEAR(energy(rows.front()) - energy(r), dissipated, 1e-6 * energy(rows.front())) << "t = " << t;
+    }
+  }
+  EXPECT_NEAR(std::abs(rows.back()[w_rel]), std::abs(w_out0) - 6 * drop, 1e-6);  // three half periods of slip
+  // The switch instants, stepping to just before and after each crossing (stop landings: no step crosses them).
+  sim::Simulator s(chain, chain.setup().solver);
+  for (const double crossing : {0.5, 1.0, 1.5, 2.0}) {
+    const bool frees = crossing - std::floor(crossing) == 0.5;
+    s.advanceTo(crossing - 1e-9);
+    EXPECT_EQ(chain.modes(s.plantState())[0],
+              frees ? (w_out0 > 0 ? FrictionMode::Forward : FrictionMode::Backward) : FrictionMode::Free)
+        << "just before t = " << crossing;
+    s.advanceTo(crossing + 1e-9);
+    EXPECT_EQ(chain.modes(s.plantState())[0],
+              frees ? FrictionMode::Free : (w_out0 > 0 ? FrictionMode::Forward : FrictionMode::Backward))
+        << "just after t = " << crossing;
+  }
+}
+}  // namespace
+
+TEST(DriveChainClutch, GoesFreeWhereItsNormalForceCrossesZeroWhileSlidingForward) {
+  checkClutchThroughNormalForceZeros(10.0);
+}
+
+TEST(DriveChainClutch, GoesFreeWhereItsNormalForceCrossesZeroWhileSlidingBackward) {
+  checkClutchThroughNormalForceZeros(-10.0);
+}
+
+// A brake (to ground) whose normal force follows a piecewise-linear law through zero: fn = fn_max·(1 − 2t) on
+// [0, 1] s, −fn_max after. Sliding at 20 rad/s it decelerates at 5(1 − 2t) N·m / 1 kg·m² until fn reaches zero at
+// t = 0.5 s, then turns free and keeps its speed: ω(t) = 20 − 5(t − t²) for t <= 0.5, then 18.75 rad/s.
+TEST(DriveChainBrake, GoesFreeWherePiecewiseLinearNormalForceCrossesZero) {
+  DriveChainSetup s;
+  s.inertias = {{"shaft", 1.0, 0.0, 20.0}};
+  ChainElement b;
+  b.name = "brake";
+  b.type = ChainElementType::Brake;
+  b.a = -1;
+  b.b = 0;
+  b.fn_max = 100.0;
+  b.cgeo = 0.1;
+  b.table = {{{0.0, 0.5}}};
+  b.normalized = control::Profile::piecewise({0.0, 1.0}, {1.0, -1.0});
+  s.elements = {b};
+  s.duration = 1.5;
+  s.log_rate = 1000;
+  s.solver.rtol = 1e-10;
+  s.solver.atol = 1e-12;
+  const DriveChain chain(s);
+  std::vector<Eigen::VectorXd> rows;
+  sim::simulate(chain, chain.simulateOptions(), [&](const Eigen::VectorXd& r) { rows.push_back(r); });
+  const Eigen::Index w = column(chain, "shaft.w[rad/s]"), mode = column(chain, "brake.mode[-]");
+  for (const auto& r : rows) {
+    const double t = r[0];
+    ASSERT_NEAR(r[w], t <= 0.5 ? 20 - 5 * (t - t * t) : 18.75, 1e-7) << "t = " << t;
+    if (t > 0.501) {
+      EXPECT_EQ(r[mode], 2.0) << "free, t = " << t;
+    }
+  }
+}

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "jointsim/common/bytes.hpp"
@@ -18,14 +19,24 @@ namespace jointsim::drive {
 enum class FrictionMode { Stuck, StartForward, StartBackward, Forward, Backward, Free };
 
 /// The root crossings CVODE located at an event for one friction element (slot 0: w or S − τ0max rising;
-/// slot 1: S + τ0max falling or the start-phase exit).
+/// slot 1: S + τ0max falling or the start-phase exit; the normal-force slot: fn rising through zero
+/// (`engage`) or falling through it (`release`)).
 struct FrictionEventFlags {
   bool w = false, up = false, down = false, second = false;
+  bool engage = false, release = false;
 };
 
-/// The flags of element k from CVODE's root directions (slots 2k and 2k+1); all false when `fired` is empty
-/// (a time event or the initial mode computation).
-FrictionEventFlags frictionEventFlags(const std::vector<int>& fired, std::size_t k);
+/// The flags of element k from CVODE's root directions (slots 2k and 2k+1, and `normal_slot` when >= 0, the root
+/// of its normal force); all false when `fired` is empty (a time event or the initial mode computation).
+FrictionEventFlags frictionEventFlags(const std::vector<int>& fired, std::size_t k, int normal_slot = -1);
+
+/// Whether an element with normal force fn [N] is free (MSL: free = fn <= 0): a crossing located at this event
+/// decides (the located point may sit exactly on zero), otherwise the sign of fn.
+inline bool frictionFree(double fn, const FrictionEventFlags& fired) {
+  if (fired.release) return true;
+  if (fired.engage) return false;
+  return fn <= 0.0;
+}
 
 /// One step of the MSL friction mode logic for one element: current mode m, `free` (normal force <= 0), stuck
 /// torque S (valid when m is Stuck) [N·m], sliding speed w [rad/s] and acceleration a [rad/s²], τ0 and τ0max
@@ -53,5 +64,52 @@ void saveModes(ByteWriter& out, const std::vector<FrictionMode>& modes);
 /// Reads what saveModes wrote into `modes`, whose size is the count expected (InputError otherwise, or for a number
 /// that is no mode).
 void loadModes(ByteReader& in, std::vector<FrictionMode>& modes);
+
+/// One friction element as the mode manager sees it, evaluated at the current modes.
+struct FrictionElementView {
+  bool friction = true;  ///< false: not a friction element (skipped; its root slots stay unused)
+  double S = 0.0;        ///< stuck torque from the torque balance (valid while stuck) [N·m]
+  double w = 0.0;        ///< relative sliding speed [rad/s]
+  double a = 0.0;        ///< relative acceleration [rad/s²]
+  double tau0 = 0.0;     ///< sliding friction at zero speed [N·m]
+  double tau0max = 0.0;  ///< break-away friction [N·m], >= tau0
+  double fn = 1.0;       ///< normal force [N] (clutch, brake; 1 for friction without one): <= 0 is free
+  int normal_slot = -1;  ///< root slot of the normal force, −1: none
+};
+
+/// The one event iteration of every model with exact stick–slip friction (the hybrid mode manager): at an event at
+/// time t, re-evaluate the model at the current modes (`evaluate()`), take the first element (in element order)
+/// whose mode changes by nextFrictionMode (from `view(k)`), change it, and repeat until no element changes — one
+/// change per evaluation, because stuck torques are coupled through the torque balance (one element breaking away
+/// changes the others' stuck torques). The crossings CVODE located (`fired`, root slots 2k and 2k+1 per element)
+/// decide for an element until its mode has changed once in this iteration; afterwards its thresholds decide. The
+/// iteration ends after at most 4·n + 8 changes (a chattering cycle ends there with the last modes). Returns the
+/// number of mode changes.
+template <class Evaluate, class View>
+int iterateFrictionModes(FrictionMode* modes, std::size_t n, const std::vector<int>& fired, Evaluate&& evaluate,
+                         View&& view) {
+  const std::size_t cap = 4 * n + 8;
+  std::size_t changes = 0;
+  std::uint64_t changed_once = 0;  // elements whose crossings have been used (first 64 elements)
+  while (changes < cap) {
+    evaluate();
+    bool changed = false;
+    for (std::size_t k = 0; k < n; ++k) {
+      const FrictionElementView v = view(k);
+      if (!v.friction) continue;
+      const bool fresh = k >= 64 || ((changed_once >> k) & 1U) == 0;
+      const FrictionEventFlags f = fresh ? frictionEventFlags(fired, k, v.normal_slot) : FrictionEventFlags{};
+      const FrictionMode m = nextFrictionMode(modes[k], frictionFree(v.fn, f), v.S, v.w, v.a, v.tau0, v.tau0max, f);
+      if (m == modes[k]) continue;
+      modes[k] = m;
+      if (k < 64) changed_once |= std::uint64_t{1} << k;
+      changed = true;
+      break;
+    }
+    if (!changed) break;
+    ++changes;
+  }
+  return static_cast<int>(changes);
+}
 
 }  // namespace jointsim::drive

@@ -76,7 +76,8 @@ struct DriveChainSetup {
 };
 
 /// The drive chain as a plant: modes of the friction elements as discrete state (in its State), two root
-/// functions per element (friction switching, elasto-backlash contact edges), the torque sources' and normal
+/// functions per element (friction switching, elasto-backlash contact edges) and one per clutch or brake (its normal
+/// force), the torque sources' and normal
 /// forces' breakpoints as time events. Constant once built (sim::Plant): the run's modes and the workspace of the
 /// right-hand side live in DriveChain::State.
 class DriveChain : public sim::Plant {
@@ -119,7 +120,9 @@ class DriveChain : public sim::Plant {
   /// ẏ for the modes in `state` (pure given the modes; no heap allocation).
   void derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) const override;
-  int rootCount() const override { return 2 * static_cast<int>(s_.elements.size()); }
+  /// Two per element (friction switching, elasto-backlash contact edges), then one per clutch or brake: its
+  /// normal force, so that it goes free where fn crosses zero ([MSL] free = fn <= 0) and engages again there.
+  int rootCount() const override { return root_count_; }
   void roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
              Eigen::Ref<Eigen::VectorXd> g) const override;
   std::vector<double> timeEvents(double t_end) const override;
@@ -132,6 +135,7 @@ class DriveChain : public sim::Plant {
  private:
   void solve(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // fills acc, tau_el
   double tau0(int e, double t) const;
+  double normalForce(int e, double t) const;              // fn of a clutch or brake [N]; 1 for a bearing
   double slidingTorque(int e, double t, double w) const;  // signed: opposes w
   double relSpeed(int e, const Eigen::Ref<const Eigen::VectorXd>& y) const;
   double relAccel(const State& st, int e) const;
@@ -139,6 +143,8 @@ class DriveChain : public sim::Plant {
   std::vector<std::string> signals_;
   /// Per element: its contact law when it is an elasto-backlash element (made once, not in the right-hand side).
   std::vector<std::shared_ptr<const drive::ElastoBacklash>> backlash_;
+  std::vector<int> normal_slot_;  ///< per element: the root slot of its normal force, −1: none
+  int root_count_ = 0;
 };
 
 }  // namespace jointsim::systems
