@@ -303,6 +303,19 @@ std::string keyPattern(const std::string& key) {
   return out;
 }
 
+std::string profileKeyUnit(const std::string& pattern, const std::string& prefix, const std::string& unit) {
+  if (pattern.rfind(prefix, 0) != 0) return {};
+  const std::string k = pattern.substr(prefix.size());
+  for (const char* v : {"value", "initial", "final", "offset", "amplitude", "values[]"})
+    if (k == v) return unit;
+  if (k == "slope") return unit + "/s";
+  for (const char* v : {"time", "t0", "t1", "period", "until", "times[]"})
+    if (k == v) return "s";
+  if (k == "frequency") return "Hz";
+  if (k == "phase") return "rad";
+  return {};
+}
+
 std::string commonKeyUnit(const std::string& key) {
   static const std::pair<const char*, const char*> units[] = {{"duration", "s"},
                                                               {"log_rate", "Hz"},

@@ -23,6 +23,10 @@ std::string keyPattern(const std::string& key);
 /// The unit of the keys every experiment type shares (duration, log_rate, solver.*, limits.*, joint_limits.*), ""
 /// for another key.
 std::string commonKeyUnit(const std::string& key);
+/// The unit of the key pattern `pattern` (keyPattern) inside a profile mapping at `prefix` ("input.profile.") whose
+/// values are in `unit`: value, initial, final, offset, amplitude, values[] in `unit`, slope in unit/s, times in s,
+/// frequency in Hz, phase in rad; "" for another key.
+std::string profileKeyUnit(const std::string& pattern, const std::string& prefix, const std::string& unit);
 /// The unit of `key` in a component's parameter table, also for the symmetric friction keys (alpha0 for
 /// positive.alpha0 and negative.alpha0); "" when the table has no such key.
 std::string tableKeyUnit(const std::vector<drive::ParameterInfo>& table, const std::string& key);

@@ -28,6 +28,7 @@ void JointRigSetup::validate() const {
   check::that(!(clamped && transmission->isRigid()), c, "load.clamped",
               "a rigid transmission with a clamped output locks the motor; use a compliant transmission");
   if (!clamped) check::positive(c, "load.inertia", load_inertia, "kg·m²");
+  check::that(!(clamped && load_torque), c, "load.torque", "a clamped output takes no load torque");
   check::nonNegative(c, "load.damping", load_damping, "N·m·s/rad");
   check::that(!(friction && friction_side == Side::Output && clamped), c, "friction.side",
               "friction on the output side of a clamped output has no effect; use side: motor");
@@ -42,7 +43,7 @@ void JointRigSetup::validate() const {
 
 struct JointRig::Eval {
   double command = 0, tau_motor = 0, current = 0, voltage = 0, di = 0, de = 0;
-  double tau_in = 0, tau_out = 0, tau_f = 0;
+  double tau_in = 0, tau_out = 0, tau_f = 0, tau_load = 0;
   double q_l = 0, qd_l = 0, qdd_m = 0, qdd_l = 0;
 };
 
@@ -80,6 +81,7 @@ JointRig::JointRig(JointRigSetup setup) : s_(std::move(setup)) {
     case RigInput::Voltage: signals_.emplace_back("command_voltage[V]"); break;
     case RigInput::VelocityPI: signals_.emplace_back("reference_velocity[rad/s]"); break;
   }
+  if (s_.load_torque) signals_.emplace_back("load_torque[N·m]");
   for (const char* c : {"transmission_torque_in[N·m]", "transmission_torque_out[N·m]", "friction_torque[N·m]",
                         "output_angle[rad]", "output_velocity[rad/s]"})
     signals_.emplace_back(c);
@@ -183,7 +185,12 @@ void JointRig::setLoadTorque(sim::PlantState& state, double tau) const {
 
 std::string JointRig::name() const { return "joint rig '" + s_.name + "'"; }
 
-std::vector<double> JointRig::timeEvents(double t_end) const { return s_.profile.breakpoints(t_end); }
+std::vector<double> JointRig::timeEvents(double t_end) const {
+  std::vector<double> events = s_.profile.breakpoints(t_end);
+  if (s_.load_torque)
+    for (double b : s_.load_torque->breakpoints(t_end)) events.push_back(b);
+  return events;
+}
 
 sim::SimulateOptions JointRig::simulateOptions() const {
   return sim::SimulateOptions::atRate(s_.duration, s_.log_rate, s_.solver);
@@ -236,6 +243,8 @@ JointRig::Eval JointRig::evaluate(const State& st, double t, const Eigen::Ref<co
   }
   const double* z = nz_ > 0 ? y.data() + z_idx_ : nullptr;
   const double b_l = s_.clamped ? 0.0 : s_.load_damping;
+  // External load on the output shaft: the port's value plus the file's profile [N·m].
+  e.tau_load = s_.clamped ? 0.0 : st.load_torque + (s_.load_torque ? s_.load_torque->value(t) : 0.0);
 
   if (rigid) {
     // One shaft, motor side: (J_m + J_l/N²) q̈_m = τ_M − b_l q̇_l / N − τ_f (reflected when on the output).
@@ -243,15 +252,14 @@ JointRig::Eval JointRig::evaluate(const State& st, double t, const Eigen::Ref<co
     double tau_f_motor_side = 0.0;
     if (s_.friction) {
       if (s_.friction_side == Side::Motor) {
-        e.tau_f = s_.friction->evaluate({qd_m, e.tau_motor - b_l * e.qd_l / N}, z, zdot);
+        e.tau_f = s_.friction->evaluate({qd_m, e.tau_motor + (e.tau_load - b_l * e.qd_l) / N}, z, zdot);
         tau_f_motor_side = e.tau_f;
       } else {
-        e.tau_f = s_.friction->evaluate({e.qd_l, N * e.tau_motor - b_l * e.qd_l}, z, zdot);
+        e.tau_f = s_.friction->evaluate({e.qd_l, N * e.tau_motor + e.tau_load - b_l * e.qd_l}, z, zdot);
         tau_f_motor_side = e.tau_f / N;
       }
     }
-    e.qdd_m = (e.tau_motor - b_l * e.qd_l / N - tau_f_motor_side) / J_eff;
-    if (st.load_torque != 0.0) e.qdd_m += st.load_torque / (N * J_eff);
+    e.qdd_m = (e.tau_motor + (e.tau_load - b_l * e.qd_l) / N - tau_f_motor_side) / J_eff;
     e.qdd_l = e.qdd_m / N;
     const double tau_f_on_motor = (s_.friction && s_.friction_side == Side::Motor) ? e.tau_f : 0.0;
     e.tau_in = e.tau_motor - tau_f_on_motor - J_m_ * e.qdd_m;
@@ -264,7 +272,7 @@ JointRig::Eval JointRig::evaluate(const State& st, double t, const Eigen::Ref<co
   e.tau_out = pt.tau_out;
   const double drive_m = e.tau_motor - e.tau_in;
   double drive_l = e.tau_out - b_l * e.qd_l;
-  if (st.load_torque != 0.0 && !s_.clamped) drive_l += st.load_torque;
+  drive_l += e.tau_load;
   double tau_f_m = 0.0, tau_f_l = 0.0;
   if (s_.friction) {
     if (s_.friction_side == Side::Motor) {
@@ -306,6 +314,7 @@ void JointRig::signals(const sim::PlantState& state, double t, const Eigen::Ref<
     row[k++] = e.voltage;
   }
   row[k++] = e.command;
+  if (s_.load_torque) row[k++] = e.tau_load;
   row[k++] = e.tau_in;
   row[k++] = e.tau_out;
   row[k++] = e.tau_f;

@@ -53,6 +53,9 @@ struct JointRigSetup {
   bool clamped = false;       ///< output held at q_l = 0
   double load_inertia = 1.0;  ///< J_l [kg·m²], > 0 unless clamped
   double load_damping = 0.0;  ///< viscous load b_l [N·m·s/rad], >= 0
+  /// External torque on the output shaft over time [N·m] (a load step, a disturbance; any profile, also from a
+  /// CSV file), added to the `load_torque` input port; not with a clamped output. Logged as load_torque[N·m].
+  std::optional<control::Profile> load_torque;
   RigInput input = RigInput::MotorTorque;
   control::Profile profile = control::Profile::constant(0.0);  ///< torque [N·m], voltage [V] or ω_ref [rad/s]
   VelocityPi pi;
@@ -71,7 +74,7 @@ struct JointRigSetup {
 };
 
 /// The assembled rig: state layout, pure right-hand side and logged signals. Its only time events are the
-/// input profile's breakpoints (the integrator restarts there).
+/// breakpoints of the input and load-torque profiles (the integrator restarts there).
 class JointRig : public sim::Plant {
  public:
   explicit JointRig(JointRigSetup setup);

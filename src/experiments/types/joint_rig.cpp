@@ -37,13 +37,17 @@ systems::JointRigSetup readJointRigSetup(const YamlValue& root, const std::strin
     s.friction = drive::frictionFromYaml(f.required("model", "friction model {type, ...}"));
   }
   if (const YamlValue load = root["load"]; load.defined()) {
-    load.expectMap("a load mapping {clamped, inertia, damping}");
-    load.allowKeys({"clamped", "inertia", "damping"});
+    load.expectMap("a load mapping {clamped, inertia, damping, torque}");
+    load.allowKeys({"clamped", "inertia", "damping", "torque"});
     s.clamped = load.has("clamped") && load["clamped"].asBool("true or false");
     s.load_inertia = load["inertia"].asDouble(s.load_inertia, "an inertia in kg·m²");
     if (!(s.load_inertia > 0.0)) load["inertia"].failExpected("an inertia > 0 kg·m²");
     s.load_damping = load["damping"].asDouble(0.0, "a damping in N·m·s/rad");
     if (!(s.load_damping >= 0.0)) load["damping"].failExpected("a damping >= 0 N·m·s/rad");
+    if (const YamlValue torque = load["torque"]; torque.defined()) {
+      if (s.clamped) torque.fail("a clamped output takes no load torque; remove load.torque or load.clamped");
+      s.load_torque = readProfile(torque, "N·m");
+    }
   }
   const YamlValue input = root.required("input", "the input {type, profile, controller}");
   input.expectMap("an input mapping {type, profile, controller}");
@@ -128,27 +132,14 @@ class JointRigExperiment : public PlantExperiment<systems::JointRig> {
                                                          {"initial_state.output_angle", "rad"},
                                                          {"initial_state.motor_velocity", "rad/s"},
                                                          {"initial_state.output_velocity", "rad/s"},
-                                                         {"input.profile.value", u},
-                                                         {"input.profile.initial", u},
-                                                         {"input.profile.final", u},
-                                                         {"input.profile.offset", u},
-                                                         {"input.profile.amplitude", u},
-                                                         {"input.profile.values[]", u},
-                                                         {"input.profile.slope", u + "/s"},
-                                                         {"input.profile.time", "s"},
-                                                         {"input.profile.t0", "s"},
-                                                         {"input.profile.t1", "s"},
-                                                         {"input.profile.period", "s"},
-                                                         {"input.profile.until", "s"},
-                                                         {"input.profile.times[]", "s"},
-                                                         {"input.profile.frequency", "Hz"},
-                                                         {"input.profile.phase", "rad"},
                                                          {"input.controller.kp", out + "·s/rad"},
                                                          {"input.controller.ki", out + "/rad"},
                                                          {"input.controller.limit", out}};
     const std::string p = detail::keyPattern(key);
     for (const auto& [k, unit] : units)
       if (p == k) return unit;
+    if (const std::string k = detail::profileKeyUnit(p, "input.profile.", u); !k.empty()) return k;
+    if (const std::string k = detail::profileKeyUnit(p, "load.torque.", "N·m"); !k.empty()) return k;
     return detail::commonKeyUnit(key);
   }
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult&) const override {
@@ -167,6 +158,7 @@ class JointRigExperiment : public PlantExperiment<systems::JointRig> {
     else
       w["friction"] = nullptr;
     w["load"] = {{"clamped", s.clamped}, {"inertia", s.load_inertia}, {"damping", s.load_damping}};
+    if (s.load_torque) w["load"]["torque"] = s.load_torque->describe();
     auto& in = w["input"];
     in["type"] = s.input == RigInput::MotorTorque ? "torque" : s.input == RigInput::Voltage ? "voltage" : "velocity_pi";
     in["profile"] = s.profile.describe();
