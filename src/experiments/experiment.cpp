@@ -90,10 +90,8 @@ std::unique_ptr<Experiment> buildExperiment(const YamlValue& root, const std::st
   const ExperimentType* type = findExperimentType(t);
   if (!type) type_node.failExpected("an experiment type (known: " + experimentTypeNames() + ")");
   if (!faults.empty() && !type->accepts_faults)
-    type_node.fail("faults (" + systems::describe(faults.front()) +
-                   ", ...) apply to experiments with a robot with drives "
-                   "(type tracking), not to type '" +
-                   t + "'");
+    type_node.fail("faults (" + systems::describe(faults.front()) + ", ...) apply to experiment types " +
+                   experimentTypeNames(true) + ", not to type '" + t + "'");
   // The run's budgets (common to every type): read, then taken out of the document the type's loader sees.
   RunLimits limits;
   const nlohmann::ordered_json config = detail::yamlToJson(root);

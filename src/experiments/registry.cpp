@@ -38,9 +38,10 @@ void registerExperimentType(ExperimentType type) {
   table().push_back(std::move(type));
 }
 
-std::string experimentTypeNames() {
+std::string experimentTypeNames(bool with_faults_only) {
   std::vector<std::string> names;
-  for (const auto& t : table()) names.push_back(t.name);
+  for (const auto& t : table())
+    if (!with_faults_only || t.accepts_faults) names.push_back(t.name);
   return join(names, ", ");
 }
 

@@ -268,6 +268,22 @@ void applyFault(DriveSpec& d, const Fault& f, double value) {
   }
 }
 
+drive::ParameterChanges tableFaultChanges(const std::vector<drive::ParameterInfo>& table, const Fault& f,
+                                          const std::string& component, double value) {
+  checkFault(f);
+  if (std::isnan(value)) value = f.value;
+  if (!f.parameterFault() || f.type == FaultType::SensorBias)
+    notApplicable(f, component + " (" + toString(f.type) +
+                         " needs the sensors and controllers of a robot with drives, experiment type tracking)");
+  if (f.timeVarying())
+    notApplicable(f, component + " with a time law (it takes constant faults, acting from t = 0; onsets and "
+                                 "progressions need a robot with drives, experiment type tracking)");
+  const drive::ParameterRole role = roleOf(f.type);
+  if (!drive::hasRole(table, role))
+    notApplicable(f, component + ", which has no " + drive::roleName(role) + " parameter");
+  return drive::roleChanges(table, role, value, f.type == FaultType::BacklashAdd);
+}
+
 void applyFaults(std::vector<DriveSpec>& drives, const std::vector<Fault>& faults) {
   for (const auto& f : faults) {
     bool found = false;

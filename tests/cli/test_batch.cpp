@@ -20,6 +20,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "jointsim/io/csv_reader.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -384,3 +385,87 @@ TEST(CliBatch, TheProgressLineOnATerminalGivesTheTimeLeft) {
 }
 
 }  // namespace
+
+namespace {
+// One column of a batch run's log.
+Eigen::VectorXd logColumn(const fs::path& csv, const std::string& name) {
+  const jointsim::io::CsvTable t = jointsim::io::readCsv(csv.string());
+  const int c = t.find(name);
+  EXPECT_GE(c, 0) << name << " in " << csv;
+  return c >= 0 ? Eigen::VectorXd(t.data.col(c)) : Eigen::VectorXd();
+}
+}  // namespace
+
+// Fault sweeps on the two whole-robot models whose drives are plain parameters (their axes' parameter tables):
+// the IRB140 clamping experiment of [Olsson2017] and the MSL RobotR3 FullRobot. Each fault is checked against the
+// physics it changes, not only against the nominal log:
+// - IRB140 joint 2 (ElastoBacklash c = 8.2 N·m/rad, b = 0.01 rad): at the largest deflection δ (a turning point,
+//   the damper idle) the spring torque is c·(|δ| − b/2); gear_stiffness_scale 0.5 halves that c,
+//   backlash_add 0.1 rad keeps c with b = 0.11 rad; coulomb_friction_scale 2 doubles every friction table torque,
+//   so the largest friction torque doubles (the table is linear in the speed, and the speeds stay alike).
+// - RobotR3 axis 2 (op-amp motor, torque k·i): torque_constant_scale 0.5 needs twice the current for the same
+//   torque along the same path; axis 1 (type 1, spring c): gear_stiffness_scale 0.5 needs (about) twice the spring
+//   deflection for the same torque.
+TEST(CliBatch, FaultSweepsOnTheIrb140ClampingAndTheRobotR3FullRobot) {
+  const TempDir tmp;
+  const fs::path& dir = tmp.path();
+  std::ofstream(dir / "irb.yaml") << "sweep:\n  name: irb140_faults\n  experiment: "
+                                  << jointsim::test::sourcePath("config/experiments/irb140_clamping.yaml")
+                                  << "\n  set: {duration: 1.5, curves: false}\nruns:\n  - name: nominal\nfaults:\n"
+                                     "  - {type: gear_stiffness_scale, joints: [joint2], values: [0.5]}\n"
+                                     "  - {type: coulomb_friction_scale, joints: [joint2], values: [2.0]}\n"
+                                     "  - {type: backlash_add, joints: [joint2], values: [0.1]}\n";
+  std::ofstream(dir / "r3.yaml") << "sweep:\n  name: r3_faults\n  experiment: "
+                                 << jointsim::test::sourcePath("config/experiments/robotr3_full_robot.yaml")
+                                 << "\nruns:\n  - name: nominal\nfaults:\n"
+                                    "  - {type: gear_stiffness_scale, joints: [r1], values: [0.5]}\n"
+                                    "  - {type: torque_constant_scale, joints: [r2], values: [0.5]}\n";
+  for (const char* sweep : {"irb", "r3"}) {
+    const Result r =
+        run("batch " + (dir / (std::string(sweep) + ".yaml")).string() + " -j 2 -o " + (dir / sweep).string());
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+  }
+  EXPECT_EQ(manifest(dir / "irb" / "manifest.csv").size(), 4u);
+  for (const auto& [name, status] : manifest(dir / "irb" / "manifest.csv")) EXPECT_EQ(status, "ok") << name;
+  for (const auto& [name, status] : manifest(dir / "r3" / "manifest.csv")) EXPECT_EQ(status, "ok") << name;
+
+  auto irb = [&](const std::string& run) { return dir / "irb" / run / "irb140_clamping.csv"; };
+  // Spring torque over (|δ| − b/2) at the largest deflection [N·m/rad].
+  auto stiffness = [&](const std::string& run, double b) {
+    const Eigen::VectorXd tau = logColumn(irb(run), "joint2.spring_torque");
+    const Eigen::VectorXd defl = logColumn(irb(run), "joint2.deflection");
+    Eigen::Index k = 0;
+    defl.cwiseAbs().maxCoeff(&k);
+    return std::abs(tau[k]) / (std::abs(defl[k]) - b / 2);
+  };
+  EXPECT_NEAR(stiffness("nominal", 0.01), 8.2, 0.02 * 8.2);
+  EXPECT_NEAR(stiffness("gear_stiffness_scale-joint2-0.5", 0.01), 4.1, 0.02 * 4.1);
+  EXPECT_NEAR(stiffness("backlash_add-joint2-0.1", 0.11), 8.2, 0.02 * 8.2);
+  EXPECT_GT(std::abs(stiffness("backlash_add-joint2-0.1", 0.01) - 8.2), 0.1 * 8.2) << "the backlash changed";
+  const double friction = logColumn(irb("nominal"), "joint2.friction_torque").cwiseAbs().maxCoeff();
+  const double doubled =
+      logColumn(irb("coulomb_friction_scale-joint2-2"), "joint2.friction_torque").cwiseAbs().maxCoeff();
+  EXPECT_NEAR(doubled / friction, 2.0, 0.03 * 2.0);
+
+  auto r3 = [&](const std::string& run, const std::string& column) {
+    return logColumn(dir / "r3" / run / "robotr3_full_robot.csv", column).cwiseAbs().maxCoeff();
+  };
+  EXPECT_NEAR(r3("torque_constant_scale-r2-0.5", "axis2.motor.La.i") / r3("nominal", "axis2.motor.La.i"), 2.0,
+              0.03 * 2.0);
+  const double deflection =
+      r3("gear_stiffness_scale-r1-0.5", "axis1.gear.spring.phi_rel") / r3("nominal", "axis1.gear.spring.phi_rel");
+  EXPECT_GT(deflection, 1.8);
+  EXPECT_LT(deflection, 2.5);
+
+  // A fault these models cannot take is refused with the reason, before anything runs.
+  std::ofstream(dir / "bad.yaml") << "sweep:\n  name: bad\n  experiment: "
+                                  << jointsim::test::sourcePath("config/experiments/irb140_clamping.yaml")
+                                  << "\nfaults:\n  - {type: coulomb_friction_scale, joints: [joint2], values: [2.0], "
+                                     "onset: 0.5}\n";
+  const Result bad = run("batch " + (dir / "bad.yaml").string() + " -o " + (dir / "bad").string());
+  EXPECT_NE(bad.status, 0);
+  std::string logs;
+  for (const auto& e : fs::directory_iterator(dir / "bad"))
+    if (e.is_directory()) logs += slurp(e.path() / "run.log");
+  EXPECT_THAT(logs, HasSubstr("clamping axis 'joint2' with a time law")) << bad.out << bad.err;
+}

@@ -339,7 +339,7 @@ struct CApi {
 // `capped`: the value references of the parameter solver.max_num_steps (the bound on the work of one doStep that the
 // harness adds at export), which setReal may lower but not raise above 2000.
 template <class Api>
-void drive(Api& api, fuzz::Bytes& in, size_t n_vars, const std::vector<unsigned>& capped, const Base& base) {
+void exercise(Api& api, fuzz::Bytes& in, size_t n_vars, const std::vector<unsigned>& capped, const Base& base) {
   size_t steps = 0;
   for (int op = 0; op < 48 && in.left() > 0; ++op) {
     int s = 0;
@@ -483,7 +483,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                         (how & 128) ? fmi2True : fmi2False);
     if (c != nullptr) {
       CApi api{c};
-      drive(api, in, n_vars, capped, base);
+      exercise(api, in, n_vars, capped, base);
       fmi2FreeInstance(c);  // a second free when the input freed it already: a no-op
       if (fmi2DoStep(c, 0.0, 1e-3, fmi2True) != fmi2Error) fail("fmi2DoStep after fmi2FreeInstance");
     }
@@ -501,7 +501,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     if (inst) {
       CppApi api{inst.get()};
-      drive(api, in, n_vars, capped, base);
+      exercise(api, in, n_vars, capped, base);
     }
   }
   fuzz::removeDir(dir);

@@ -44,6 +44,6 @@ const ExperimentType* findExperimentType(const std::string& name);
 /// Adds a type (InputError when the name is taken or the loader missing).
 void registerExperimentType(ExperimentType type);
 /// "passive_robot, joint_rig, ..." — the registered names.
-std::string experimentTypeNames();
+std::string experimentTypeNames(bool with_faults_only = false);
 
 }  // namespace jointsim::experiments

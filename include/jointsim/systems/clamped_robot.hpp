@@ -37,6 +37,7 @@
 
 #include "jointsim/control/clamping_path.hpp"
 #include "jointsim/drive/msl_friction.hpp"
+#include "jointsim/drive/parameters.hpp"
 #include "jointsim/drive/transmissions.hpp"
 #include "jointsim/multibody/data.hpp"
 #include "jointsim/multibody/model.hpp"
@@ -64,6 +65,11 @@ struct ClampingAxisParams {
   double controller_ratio = 1.0;          ///< r_c scaling the arm-side reference to the motor [-]
   control::ClampingPathParams path{0.0};  ///< reference swing (q_pos = 0: hold the start angle)
   void validate() const;                  ///< throws InputError naming the axis
+  /// Parameter table of the axis's drive (drive/parameters.hpp; keys as in a clamping file's axis mapping): inertia,
+  /// c (role stiffness), d, b (role backlash), friction.tau_pos[i][1] (role coulomb), friction.peak.
+  std::vector<drive::ParameterInfo> parameters() const;
+  /// A copy with `changes` applied (by the keys of parameters()), validated. InputError naming the axis and key.
+  ClampingAxisParams withParameters(const drive::ParameterChanges& changes) const;
 };
 
 struct ClampSpec {

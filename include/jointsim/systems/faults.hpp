@@ -36,6 +36,8 @@
 #include <string>
 #include <vector>
 
+#include "jointsim/drive/parameters.hpp"
+
 namespace jointsim::systems {
 
 struct DriveSpec;  // robot_system.hpp
@@ -115,6 +117,13 @@ bool faultApplies(const DriveSpec& drive, FaultType type);
 /// InputError when the fault does not apply to the drive's components or its value is out of range. The other
 /// types act during the run (RobotSystem::setFaults) and are only checked against the drive here.
 void applyFault(DriveSpec& drive, const Fault& fault, double value = std::numeric_limits<double>::quiet_NaN());
+/// The changes that apply the parameter fault `fault` (severity `value`; NaN: its severity) to a drive known only by its
+/// parameter table (an axis of the clamping or RobotR3 models, whose components are plain parameters): every parameter
+/// of the fault's role scaled (or, for backlash_add, offset). InputError naming the fault and `component` when it is no
+/// parameter fault, has a time law (these models take constant faults), or the table has no parameter of its role.
+drive::ParameterChanges tableFaultChanges(const std::vector<drive::ParameterInfo>& table, const Fault& fault,
+                                          const std::string& component,
+                                          double value = std::numeric_limits<double>::quiet_NaN());
 /// Applies every constant fault to the drive of its joint (the time-varying ones act during the run:
 /// RobotSystem::setFaults); throws InputError for a joint without a drive.
 void applyFaults(std::vector<DriveSpec>& drives, const std::vector<Fault>& faults);

@@ -19,6 +19,7 @@
 
 #include "jointsim/control/kinematic_ptp.hpp"
 #include "jointsim/drive/opamp_motor.hpp"
+#include "jointsim/drive/parameters.hpp"
 #include "jointsim/multibody/data.hpp"
 #include "jointsim/multibody/model.hpp"
 #include "jointsim/sim/plant.hpp"
@@ -36,6 +37,11 @@ struct RobotR3AxisParams {
   double kp = 5.0, ks = 0.5, Ts = 0.05;
   /// Axis j (1..6) of FullRobot (axis parameters of [MSL, RobotR3.FullRobot]).
   static RobotR3AxisParams fullRobot(int j);
+  /// Parameter table of the axis's drive (drive/parameters.hpp): motor.J, motor.k (role torque_constant), c (role
+  /// stiffness) and d of a type-1 axis, Rv0 (role coulomb), Rv1, peak.
+  std::vector<drive::ParameterInfo> parameters() const;
+  /// A copy with `changes` applied by the keys of parameters(). InputError naming `component` and the key.
+  RobotR3AxisParams withParameters(const drive::ParameterChanges& changes, const std::string& component) const;
 };
 
 struct RobotR3FullSetup {

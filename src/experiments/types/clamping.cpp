@@ -1,6 +1,8 @@
 // `type: clamping`: the whole-robot clamping experiment of [Olsson2017] (systems/clamped_robot.hpp).
 #include <set>
 
+#include <algorithm>
+
 #include <nlohmann/json.hpp>
 
 #include "jointsim/common/error.hpp"
@@ -361,12 +363,22 @@ ExperimentType clampingExperimentType() {
   t.description = "a whole robot with its flange clamped, axes swinging against it: clamping curves per axis";
   t.load = [](const YamlValue& root, const LoadContext& c) -> std::unique_ptr<Experiment> {
     ClampingExperimentSetup s = readClampingSetup(root, c.name);
+    // Faults: constant parameter faults on an axis's drive, through its parameter table.
+    for (const systems::Fault& f : c.faults) {
+      auto axis = std::find_if(s.setup.axes.begin(), s.setup.axes.end(),
+                               [&](const systems::ClampingAxisParams& a) { return a.joint == f.joint; });
+      if (axis == s.setup.axes.end())
+        throw InputError("fault " + systems::describe(f) + ": no axis drives joint '" + f.joint + "'");
+      const std::string what = "clamping axis '" + f.joint + "'";
+      *axis = axis->withParameters(systems::tableFaultChanges(axis->parameters(), f, what));
+    }
     try {
       return std::make_unique<ClampingExperiment>(std::move(s));
     } catch (const InputError& e) {
       root.relocate(e);  // e.g. a clamp frame on the fixed base
     }
   };
+  t.accepts_faults = true;
   t.figures = clampingFigures;
   t.key_signal = clampingKeySignal;
   return t;

@@ -1,4 +1,6 @@
 // `type: robotr3_full`: the Manutec r3 with six RobotR3 axes ([MSL, RobotR3.FullRobot]; systems/robotr3_full.hpp).
+#include <algorithm>
+
 #include <nlohmann/json.hpp>
 
 #include "jointsim/common/error.hpp"
@@ -101,8 +103,19 @@ ExperimentType robotR3FullExperimentType() {
   t.name = "robotr3_full";
   t.description = "the Manutec r3 arm with six RobotR3 axes on a synchronised path: MSL FullRobot";
   t.load = [](const YamlValue& root, const LoadContext& c) -> std::unique_ptr<Experiment> {
-    return std::make_unique<RobotR3FullExperiment>(readRobotR3FullSetup(root, c.name));
+    systems::RobotR3FullSetup s = readRobotR3FullSetup(root, c.name);
+    // Faults: constant parameter faults on an axis's drive, through its parameter table.
+    for (const systems::Fault& f : c.faults) {
+      const auto& names = s.arm.joint_names;
+      const auto j = static_cast<size_t>(std::find(names.begin(), names.end(), f.joint) - names.begin());
+      if (j >= s.axes.size())
+        throw InputError("fault " + systems::describe(f) + ": no axis drives joint '" + f.joint + "'");
+      const std::string what = "RobotR3 axis " + std::to_string(j + 1) + " (joint '" + f.joint + "')";
+      s.axes[j] = s.axes[j].withParameters(systems::tableFaultChanges(s.axes[j].parameters(), f, what), what);
+    }
+    return std::make_unique<RobotR3FullExperiment>(std::move(s));
   };
+  t.accepts_faults = true;
   t.figures = robotR3FullFigures;
   t.key_signal = [](const RunData& run) -> std::optional<KeySignal> {
     return timeKeySignal(run, run.col("mechanics.r1.phi"), "angle of joint 1");
