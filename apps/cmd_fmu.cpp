@@ -1,5 +1,5 @@
 // `jointsim fmu FILE.yaml -o NAME.fmu [--inputs PORT,...] [--outputs SIGNAL,...] [--set key=value]`: exports an
-// experiment (types tracking and joint_rig) as an FMI 2.0 Co-Simulation FMU (include/jointsim/fmi/fmu.hpp,
+// experiment (every type) as an FMI 2.0 Co-Simulation FMU (include/jointsim/fmi/fmu.hpp,
 // docs/fmu.md). Exit status 2 for bad input (nothing written), 1 for other errors.
 #include <cstdio>
 #include <memory>
@@ -15,8 +15,7 @@ void addFmuCommand(CLI::App& app) {
     fmi::ExportOptions fmu;
   };
   auto opt = std::make_shared<Options>();
-  CLI::App* cmd =
-      app.add_subcommand("fmu", "Export an experiment (tracking, joint_rig) as an FMI 2.0 Co-Simulation FMU");
+  CLI::App* cmd = app.add_subcommand("fmu", "Export an experiment (any type) as an FMI 2.0 Co-Simulation FMU");
   cmd->add_option("experiment", opt->config, "Experiment description (.yaml)")->required();
   cmd->add_option("-o,--output", opt->output, "The FMU file NAME.fmu (NAME, a C identifier, is its model identifier)")
       ->required();

@@ -495,7 +495,7 @@ def read_dataset(path: PathLike) -> Dataset:
 def export_fmu(config: PathLike, fmu_path: PathLike, inputs: Union[str, Sequence[str]] = (),
                outputs: Union[str, Sequence[str]] = (), overrides: Overrides = None,
                binary_dir: Optional[PathLike] = None, step_size: float = 1e-3) -> Dict[str, Any]:
-    """As `jointsim fmu`: writes an FMI 2.0 Co-Simulation FMU of an experiment file (types tracking, joint_rig).
+    """As `jointsim fmu`: writes an FMI 2.0 Co-Simulation FMU of an experiment file (any type).
 
     inputs: command ports, "PORT" (every joint) or "JOINT:PORT" (voltage, current, motor_torque, motor_velocity,
     setpoint) for a robot, "command" for a joint rig; a str or a list of str. outputs: signal names (default all),

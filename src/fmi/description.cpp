@@ -164,9 +164,6 @@ FmuDescription describe(experiments::Experiment& experiment, const ExportOptions
   FmuDescription d;
   d.model_identifier = model_identifier;
   d.experiment_type = experiment.type();
-  if (d.experiment_type != "tracking" && d.experiment_type != "joint_rig")
-    throw InputError("FMU export: experiment type '" + d.experiment_type +
-                     "' is not supported (expected tracking or joint_rig)");
   d.stop_time = experiment.simulateOptions().t_end;
   d.step_size = options.step_size;
   if (experiment.config().contains("experiment") && experiment.config()["experiment"].contains("description") &&
