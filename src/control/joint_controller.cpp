@@ -24,6 +24,22 @@ void JointControllerParams::validate(const std::string& where) const {
   }
 }
 
+double velocityPi(double kp, double ki, double limit, double e, double x, double& xdot) {
+  const double raw = kp * e + ki * x;
+  const bool winding_up = (raw > limit && e > 0) || (raw < -limit && e < 0);
+  xdot = winding_up ? 0.0 : e;
+  return std::clamp(raw, -limit, limit);
+}
+
+JointController JointController::torqueCascade(double kp, double ks, double Ts) {
+  JointControllerParams p;
+  p.type = ControllerType::TorqueCascade;
+  p.kp = kp;
+  p.ks = ks;
+  p.Ts = Ts;
+  return JointController(p);
+}
+
 int JointController::stateSize() const {
   switch (p_.type) {
     case ControllerType::VoltageCascade: return 2;
@@ -36,7 +52,7 @@ void JointController::initialState(const ControllerInputs& in, double* x) const 
   if (p_.type == ControllerType::VoltageCascade) {
     x[0] = x[1] = 0.0;
   } else if (p_.type == ControllerType::TorqueCascade) {
-    const double u = in.ratio * in.qd_set + p_.kp * (in.ratio * in.q_set - in.qm_fb) - in.qdm_fb;
+    const double u = in.ratio * in.qd_set + p_.kp * (in.qm_offset + in.ratio * in.q_set - in.qm_fb) - in.qdm_fb;
     x[0] = -u;  // InitialOutput: y(0) = 0
   }
 }
@@ -67,7 +83,7 @@ ControllerOutputs JointController::evaluate(const ControllerInputs& in, const do
     case ControllerType::TorqueCascade: {
       out.qdm_ref = in.entry == ControlEntry::MotorVelocity
                         ? in.command
-                        : in.ratio * in.qd_set + p_.kp * (in.ratio * in.q_set - in.qm_fb);
+                        : in.ratio * in.qd_set + p_.kp * (in.qm_offset + in.ratio * in.q_set - in.qm_fb);
       const double u = out.qdm_ref - in.qdm_fb;
       out.u = p_.ks * (u + x[0]);
       xdot[0] = u / p_.Ts;

@@ -101,6 +101,7 @@ ClampedRobot::ClampedRobot(ClampingSetup setup) : s_((setup.validate(), std::mov
     p.damping = a.d;
     p.backlash = a.b;
     eb_.emplace_back(p);
+    controllers_.push_back(control::JointController::torqueCascade(a.kp, a.ks, a.Ts));
     paths_.emplace_back(a.path);
   }
   // Coupling over the axes (axis order): q_axis = G φ_out.
@@ -149,7 +150,8 @@ ClampedRobot::ClampedRobot(ClampingSetup setup) : s_((setup.validate(), std::mov
 ClampedRobot::State::State(const ClampedRobot& robot) : PlantStateOf(robot), data(robot.model_) {
   modes.assign(static_cast<size_t>(robot.n_), FrictionMode::Stuck);
   fext = multibody::Matrix6Xd::Zero(6, robot.model_.nq);
-  for (Eigen::VectorXd* v : {&tau_out, &qa, &qda, &phi_out, &phid_out, &tau_s, &tau_m, &tau_f, &stuck, &wdot, &u, &ref})
+  for (Eigen::VectorXd* v :
+       {&tau_out, &qa, &qda, &phi_out, &phid_out, &tau_s, &tau_m, &tau_f, &stuck, &wdot, &xdot, &ref})
     v->setZero(robot.n_);
   tau.setZero(robot.model_.nq);
   dp.setZero();
@@ -236,8 +238,14 @@ void ClampedRobot::solve(const State& st, double t, const Eigen::Ref<const Eigen
     double qr, qdr, qddr;
     paths_[static_cast<size_t>(k)].evaluate(t, qr, qdr, qddr);
     st.ref[k] = qr;
-    st.u[k] = a.controller_ratio * qdr + a.kp * (phi_m0_[k] + a.controller_ratio * qr - phi_m) - w_m;
-    st.tau_m[k] = a.ks * (st.u[k] + x);
+    control::ControllerInputs in;  // the axis controller: reference φ_m(0) + r_c q_ref
+    in.ratio = a.controller_ratio;
+    in.qm_offset = phi_m0_[k];
+    in.q_set = qr;
+    in.qd_set = qdr;
+    in.qm_fb = phi_m;
+    in.qdm_fb = w_m;
+    st.tau_m[k] = controllers_[static_cast<size_t>(k)].evaluate(in, &x, &st.xdot[k]).u;
     st.stuck[k] = st.tau_m[k] - st.tau_s[k];
     st.tau_f[k] = drive::frictionTorque(st.modes[static_cast<size_t>(k)],
                                         drive::frictionTableValue(a.tau_pos, std::abs(w_m)), st.stuck[k]);
@@ -272,7 +280,7 @@ void ClampedRobot::derivatives(const sim::PlantState& state, double t, const Eig
     const int m = motorState(k);
     ydot[m] = y[m + 1];
     ydot[m + 1] = st.wdot[k];
-    ydot[m + 2] = st.u[k] / s_.axes[static_cast<size_t>(k)].Ts;
+    ydot[m + 2] = st.xdot[k];
   }
 }
 

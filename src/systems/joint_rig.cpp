@@ -6,6 +6,7 @@
 #include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
+#include "jointsim/control/joint_controller.hpp"
 
 namespace jointsim::systems {
 
@@ -228,10 +229,7 @@ JointRig::Eval JointRig::evaluate(const State& st, double t, const Eigen::Ref<co
   double u = e.command;
   if (s_.input == RigInput::VelocityPI) {
     const double err = e.command - (s_.pi.measure == Side::Motor ? qd_m : e.qd_l);
-    const double raw = s_.pi.kp * err + s_.pi.ki * y[e_idx_];
-    u = std::clamp(raw, -s_.pi.limit, s_.pi.limit);
-    const bool winding_up = (raw > s_.pi.limit && err > 0) || (raw < -s_.pi.limit && err < 0);
-    e.de = winding_up ? 0.0 : err;
+    u = control::velocityPi(s_.pi.kp, s_.pi.ki, s_.pi.limit, err, y[e_idx_], e.de);
   }
   if (i_idx_ >= 0) {
     e.current = y[i_idx_];

@@ -42,6 +42,7 @@ void RobotR3AxisSetup::validate() const {
 RobotR3Axis::RobotR3Axis(RobotR3AxisSetup setup)
     : s_((setup.validate(), std::move(setup))),
       motor_(s_.motor),
+      controller_(control::JointController::torqueCascade(s_.kp, s_.ks, s_.Ts)),
       path_(one(s_.q_begin), one(s_.q_end), one(s_.qd_max), one(s_.qdd_max), s_.start_time) {
   const std::string& p = s_.prefix;
   signals_ = {p + ".controller.PI.x[rad/s]",
@@ -127,8 +128,13 @@ RobotR3Axis::Eval RobotR3Axis::evaluateIn(FrictionMode mode, double t,
   const double N = s_.ratio;
   const double phi_m = N * q - phi_rel;
   ev.wm = N * qd - w_rel;
-  ev.e = s_.kp * (N * qr - phi_m) + N * qdr - ev.wm;
-  ev.i_ref = s_.ks * (x + ev.e);
+  control::ControllerInputs in;  // the axis controller, its output the current reference [A]
+  in.ratio = N;
+  in.q_set = qr;
+  in.qd_set = qdr;
+  in.qm_fb = phi_m;
+  in.qdm_fb = ev.wm;
+  ev.i_ref = controller_.evaluate(in, &x, &ev.xdot).u;
   ev.tau_s = s_.c * phi_rel + s_.d * w_rel;
   // Load: J_L q̈ = −ratio τ_s (the spring pulls the gear input with −τ_s).
   ev.qdd = -N * ev.tau_s / s_.load_inertia;
@@ -147,7 +153,7 @@ void RobotR3Axis::derivatives(const sim::PlantState& state, double t, const Eige
   ydot[1] = ev.qdd;
   ydot[2] = y[3];
   ydot[3] = s_.ratio * ev.qdd - ev.wm_dot;
-  ydot[4] = ev.e / s_.Ts;
+  ydot[4] = ev.xdot;
   ydot[5] = (y[6] - ev.i_ref) / (m.Ri * m.C());
   ydot[6] = (-m.amp_gain * y[5] - m.Ra * y[6] - m.k * ev.wm) / m.La();
   ydot[7] = -m.amp_gain * y[5] * y[6];

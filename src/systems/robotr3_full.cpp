@@ -67,6 +67,7 @@ RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
   for (int j = 0; j < n_; ++j) {
     const auto& a = s_.axes[static_cast<size_t>(j)];
     if (a.type == 2) s_.arm.armature[j] = a.ratio * a.ratio * a.motor.J;
+    controllers_.push_back(control::JointController::torqueCascade(a.kp, a.ks, a.Ts));
   }
   n_states_ = 2 * n_;
   rel_.assign(static_cast<size_t>(n_), -1);
@@ -98,7 +99,7 @@ RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
 
 RobotR3Full::State::State(const RobotR3Full& robot)
     : PlantStateOf(robot), modes(static_cast<size_t>(robot.n_), FrictionMode::Stuck), data(robot.s_.arm) {
-  for (Eigen::VectorXd* v : {&q_ref, &qd_ref, &qdd_ref, &tau, &qdd, &wm, &wm_dot, &tau_f, &stuck, &e, &iref})
+  for (Eigen::VectorXd* v : {&q_ref, &qd_ref, &qdd_ref, &tau, &qdd, &wm, &wm_dot, &tau_f, &stuck, &xdot, &iref})
     v->setZero(robot.n_);
   Mbar.setZero(robot.n_, robot.n_);
 }
@@ -169,8 +170,13 @@ void RobotR3Full::solve(const State& st, double t, const Eigen::Ref<const Eigen:
     } else {
       st.tau[j] = N * a.motor.k * i;
     }
-    st.e[j] = a.kp * (N * st.q_ref[j] - phi_m) + N * st.qd_ref[j] - st.wm[j];
-    st.iref[j] = a.ks * (y[c] + st.e[j]);
+    control::ControllerInputs in;  // the axis controller, its output the current reference [A]
+    in.ratio = N;
+    in.q_set = st.q_ref[j];
+    in.qd_set = st.qd_ref[j];
+    in.qm_fb = phi_m;
+    in.qdm_fb = st.wm[j];
+    st.iref[j] = controllers_[static_cast<size_t>(j)].evaluate(in, y.data() + c, &st.xdot[j]).u;
     const double w = a.type == 1 ? st.wm[j] : qd[j];
     st.tau_f[j] =
         drive::frictionTorque(st.modes[static_cast<size_t>(j)], a.Rv0 + a.Rv1 * std::abs(w), 0.0);  // stuck: below
@@ -240,7 +246,7 @@ void RobotR3Full::derivatives(const sim::PlantState& state, double t, const Eige
     }
     const int c = ctrl_[static_cast<size_t>(j)];
     const auto& m = a.motor;
-    ydot[c] = st.e[j] / a.Ts;
+    ydot[c] = st.xdot[j];
     ydot[c + 1] = (y[c + 2] - st.iref[j]) / (m.Ri * m.C());
     ydot[c + 2] = (-m.amp_gain * y[c + 1] - m.Ra * y[c + 2] - m.k * st.wm[j]) / m.La();
   }

@@ -6,8 +6,10 @@
 ///   reference. Output: voltage [V] (saturated by the PWM stage). The current integrator stops while the
 ///   voltage is saturated and the error drives further into saturation (conditional-integration
 ///   anti-windup; [Raviola2023] states none — without it a saturated start winds up and overshoots).
-/// - `TorqueCascade` — [Olsson2017, §2.8, §3.10, Table 3.7, A.12]: u = N q̇_ref + kp (N q_ref − φ_m) − ω_m,
-///   τ_m = ks (u + x), ẋ = u/Ts, x(0) = −u(0). Output: motor torque [N·m] (no current loop).
+/// - `TorqueCascade` — [Olsson2017, §2.8, §3.10, Table 3.7, A.12]: u = N q̇_ref + kp (φ_0 + N q_ref − φ_m) − ω_m,
+///   τ_m = ks (u + x), ẋ = u/Ts, x(0) = −u(0). Output: motor torque [N·m] (no current loop). The same P/PI law is
+///   the RobotR3 axis controller of [MSL, RobotR3.Utilities.Controller] (output the current reference [A], ks in
+///   A·s/rad) and the clamping robot's (φ_0 its start motor angle): the one implementation for all of them.
 /// - `None` — zero motor torque (uncontrolled).
 /// Each controller is a pure function of its inputs and its internal state slice.
 
@@ -50,6 +52,9 @@ struct ControllerInputs {
   double v_limit = 0;                           ///< supply voltage [V] (VoltageCascade anti-windup)
   ControlEntry entry = ControlEntry::Position;  ///< where the command enters
   double command = 0;  ///< motor speed reference [rad/s] (MotorVelocity) or current reference [A] (Current)
+  /// φ_0 [rad]: the motor angle reference is φ_0 + N q_set (TorqueCascade). Last, so that positional initialisers
+  /// of the fields above stay valid.
+  double qm_offset = 0;
 };
 
 struct ControllerOutputs {
@@ -62,6 +67,8 @@ struct ControllerOutputs {
 class JointController {
  public:
   explicit JointController(const JointControllerParams& p) : p_(p) {}
+  /// The TorqueCascade (P position loop, PI speed loop) with gains kp [1/s], ks [output·s/rad] and Ts [s].
+  static JointController torqueCascade(double kp, double ks, double Ts);
   const JointControllerParams& params() const { return p_; }
   int stateSize() const;
   /// Internal state at t0 for the given inputs ([Olsson2017]: zero initial output; [Raviola2023]: zero
@@ -79,6 +86,12 @@ class JointController {
  private:
   JointControllerParams p_;
 };
+
+/// The velocity PI loop of a test rig (the friction-map measurement of [Hauschild2003, §4.5.4]):
+///   u = clamp(kp e + ki x, −limit, limit),  ẋ = e, except 0 while the output is saturated and e drives it further
+/// (conditional integration, anti-windup). e [rad/s] the velocity error, x [rad] its integral; kp [out·s/rad],
+/// ki [out/rad], limit [out] > 0, the output a torque [N·m] or a voltage [V]. Returns u and sets `xdot`.
+double velocityPi(double kp, double ki, double limit, double e, double x, double& xdot);
 
 /// Spectral radius of the cascade's current loop when it is sampled every Ts [s] (zero-order hold, the integrator
 /// by forward Euler as in sampled control) around the motor's R–L circuit (R [Ω], L [H]; back-EMF, a slow

@@ -36,6 +36,7 @@
 #include <Eigen/Core>
 
 #include "jointsim/control/clamping_path.hpp"
+#include "jointsim/control/joint_controller.hpp"
 #include "jointsim/drive/msl_friction.hpp"
 #include "jointsim/drive/parameters.hpp"
 #include "jointsim/drive/transmissions.hpp"
@@ -115,8 +116,8 @@ class ClampedRobot : public sim::Plant {
     mutable Eigen::VectorXd tau;        ///< joint torques of model() [N·m]
     /// Per axis: gear output torque [N·m], joint angle [rad] and speed [rad/s] of the driven joint, gear output angle
     /// [rad] and speed [rad/s], spring, motor and friction torques [N·m], torque on a stuck motor [N·m], motor
-    /// acceleration [rad/s²], controller input u [rad/s] and reference [rad].
-    mutable Eigen::VectorXd tau_out, qa, qda, phi_out, phid_out, tau_s, tau_m, tau_f, stuck, wdot, u, ref;
+    /// acceleration [rad/s²], controller integrator rate ẋ = u/Ts [rad/s²] and reference [rad].
+    mutable Eigen::VectorXd tau_out, qa, qda, phi_out, phid_out, tau_s, tau_m, tau_f, stuck, wdot, xdot, ref;
     /// Clamp displacement [m] and rotation vector [rad], force [N] and moment [N·m] (world).
     mutable Eigen::Vector3d dp, theta, f_w, m_w;
     void save(ByteWriter& out) const override;
@@ -175,6 +176,7 @@ class ClampedRobot : public sim::Plant {
   std::vector<int> joint_;
   std::vector<std::array<int, 2>> orth_;
   std::vector<drive::ElastoBacklash> eb_;
+  std::vector<control::JointController> controllers_;  ///< per axis: the TorqueCascade with the axis's gains
   std::vector<control::ClampingPath> paths_;
   Eigen::MatrixXd Gfull_, GfullInv_;  // over the axes, in axis order: q_axis = G φ_out
   bool coupled_ = false;

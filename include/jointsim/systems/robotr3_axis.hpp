@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 
+#include "jointsim/control/joint_controller.hpp"
 #include "jointsim/control/kinematic_ptp.hpp"
 #include "jointsim/drive/opamp_motor.hpp"
 #include "jointsim/sim/plant.hpp"
@@ -95,7 +96,7 @@ class RobotR3Axis : public sim::Plant {
 
   /// Algebraic quantities at (t, y) for the mode in `state`.
   struct Eval {
-    double q_ref, qd_ref, e, i_ref, tau_s, tau_f, wm, wm_dot, qdd, stuck_torque;
+    double q_ref, qd_ref, xdot, i_ref, tau_s, tau_f, wm, wm_dot, qdd, stuck_torque;  // xdot: the PI state's rate
   };
   Eval evaluate(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
 
@@ -103,6 +104,7 @@ class RobotR3Axis : public sim::Plant {
   Eval evaluateIn(FrictionMode mode, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
   RobotR3AxisSetup s_;
   drive::OpAmpMotor motor_;
+  control::JointController controller_;  ///< the TorqueCascade (kp, ks, Ts), its output the current reference [A]
   control::KinematicPtpTrajectory path_;
   std::vector<std::string> signals_;
 };

@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include "jointsim/control/joint_controller.hpp"
 #include "jointsim/control/kinematic_ptp.hpp"
 #include "jointsim/drive/opamp_motor.hpp"
 #include "jointsim/drive/parameters.hpp"
@@ -66,7 +67,7 @@ class RobotR3Full : public sim::Plant {
     std::vector<FrictionMode> modes;  ///< per axis, base to tip
     // Workspace (holds nothing between calls; not saved).
     mutable multibody::Data data;
-    mutable Eigen::VectorXd q_ref, qd_ref, qdd_ref, tau, qdd, wm, wm_dot, tau_f, stuck, e, iref;
+    mutable Eigen::VectorXd q_ref, qd_ref, qdd_ref, tau, qdd, wm, wm_dot, tau_f, stuck, xdot, iref;
     mutable Eigen::MatrixXd Mbar;
     void save(ByteWriter& out) const override;
     void load(ByteReader& in) override;
@@ -107,6 +108,7 @@ class RobotR3Full : public sim::Plant {
   std::vector<int> rel_;   // index of φ_rel per axis (−1 for type 2)
   std::vector<int> ctrl_;  // index of x per axis (v_C, i follow)
   control::KinematicPtpTrajectory path_;
+  std::vector<control::JointController> controllers_;  ///< per axis: the TorqueCascade (kp, ks, Ts)
   std::vector<std::string> signals_;
 };
 
