@@ -145,10 +145,23 @@ ClampedRobot::ClampedRobot(ClampingSetup setup) : s_((setup.validate(), std::mov
   for (const char* c : {"clamp.dx[m]", "clamp.dy[m]", "clamp.dz[m]", "clamp.rx[rad]", "clamp.ry[rad]", "clamp.rz[rad]",
                         "clamp.displacement[m]", "clamp.rotation[rad]", "clamp.force[N]", "clamp.moment[N·m]"})
     signals_.emplace_back(c);
+  for (const auto& a : s_.axes) {
+    sim::InputPort m;
+    m.name = a.joint + ".motor_torque";
+    m.unit = "N·m";
+    m.description = "motor torque of the axis of " + a.joint + " (held in place of its controller, which freezes)";
+    ports_.push_back(m);
+    sim::InputPort l;
+    l.name = a.joint + ".load_torque";
+    l.unit = "N·m";
+    l.description = "external torque at the joint " + a.joint;
+    ports_.push_back(l);
+  }
 }
 
 ClampedRobot::State::State(const ClampedRobot& robot) : PlantStateOf(robot), data(robot.model_) {
   modes.assign(static_cast<size_t>(robot.n_), FrictionMode::Stuck);
+  inputs.resize(robot.ports_.size());
   fext = multibody::Matrix6Xd::Zero(6, robot.model_.nq);
   for (Eigen::VectorXd* v :
        {&tau_out, &qa, &qda, &phi_out, &phid_out, &tau_s, &tau_m, &tau_f, &stuck, &wdot, &xdot, &ref})
@@ -160,9 +173,33 @@ ClampedRobot::State::State(const ClampedRobot& robot) : PlantStateOf(robot), dat
   m_w.setZero();
 }
 
-void ClampedRobot::State::save(ByteWriter& out) const { drive::saveModes(out, modes); }
+void ClampedRobot::State::save(ByteWriter& out) const {
+  drive::saveModes(out, modes);
+  inputs.save(out);
+}
 
-void ClampedRobot::State::load(ByteReader& in) { drive::loadModes(in, modes); }
+void ClampedRobot::State::load(ByteReader& in) {
+  drive::loadModes(in, modes);
+  inputs.load(in);
+}
+
+void ClampedRobot::setInput(sim::PlantState& state, int port, double value) const {
+  State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  if (st.inputs.set(static_cast<size_t>(port), value, ports_, name())) st.inputsChanged();
+}
+
+double ClampedRobot::input(const sim::PlantState& state, int port) const {
+  const State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  return st.inputs.value[static_cast<size_t>(port)];
+}
+
+bool ClampedRobot::inputActive(const sim::PlantState& state, int port) const {
+  const State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  return st.inputs.held[static_cast<size_t>(port)] != 0 || port % 2 == 1;
+}
 
 const std::vector<FrictionMode>& ClampedRobot::modes(const sim::PlantState& state) const {
   return own<State>(state).modes;
@@ -246,6 +283,11 @@ void ClampedRobot::solve(const State& st, double t, const Eigen::Ref<const Eigen
     in.qm_fb = phi_m;
     in.qdm_fb = w_m;
     st.tau_m[k] = controllers_[static_cast<size_t>(k)].evaluate(in, &x, &st.xdot[k]).u;
+    const auto port = static_cast<size_t>(2 * k);  // a held motor torque replaces the controller, frozen
+    if (st.inputs.held[port]) {
+      st.tau_m[k] = st.inputs.value[port];
+      st.xdot[k] = 0.0;
+    }
     st.stuck[k] = st.tau_m[k] - st.tau_s[k];
     st.tau_f[k] = drive::frictionTorque(st.modes[static_cast<size_t>(k)],
                                         drive::frictionTableValue(a.tau_pos, std::abs(w_m)), st.stuck[k]);
@@ -259,7 +301,7 @@ void ClampedRobot::solve(const State& st, double t, const Eigen::Ref<const Eigen
   for (int k = 0; k < n_; ++k) {
     double tj = tau_out[k];
     if (coupled_) tj = GfullInv_.col(k).dot(tau_out);
-    st.tau[joint_[static_cast<size_t>(k)]] += tj;
+    st.tau[joint_[static_cast<size_t>(k)]] += tj + st.inputs.value[static_cast<size_t>(2 * k + 1)];
     const auto& o = orth_[static_cast<size_t>(k)];
     if (o[0] >= 0) {
       const auto& a = s_.axes[static_cast<size_t>(k)];

@@ -77,11 +77,37 @@ DriveChain::State::State(const DriveChain& chain) : PlantStateOf(chain) {
   A.setZero(ne, ne);
   rhs.setZero(ne);
   stuck.assign(chain.s_.elements.size(), -1);  // sized once: a copy keeps the size (not a reserved capacity)
+  inputs.resize(chain.ports_.size());
 }
 
-void DriveChain::State::save(ByteWriter& out) const { drive::saveModes(out, modes); }
+void DriveChain::State::save(ByteWriter& out) const {
+  drive::saveModes(out, modes);
+  inputs.save(out);
+}
 
-void DriveChain::State::load(ByteReader& in) { drive::loadModes(in, modes); }
+void DriveChain::State::load(ByteReader& in) {
+  drive::loadModes(in, modes);
+  inputs.load(in);
+}
+
+void DriveChain::setInput(sim::PlantState& state, int port, double value) const {
+  State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  if (st.inputs.set(static_cast<size_t>(port), value, ports_, name())) st.inputsChanged();
+}
+
+double DriveChain::input(const sim::PlantState& state, int port) const {
+  const State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  return st.inputs.value[static_cast<size_t>(port)];
+}
+
+bool DriveChain::inputActive(const sim::PlantState& state, int port) const {
+  const State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  return port >= static_cast<int>(ports_.size()) - static_cast<int>(s_.inertias.size()) ||
+         st.inputs.held[static_cast<size_t>(port)];
+}
 
 const std::vector<FrictionMode>& DriveChain::modes(const sim::PlantState& state) const {
   return own<State>(state).modes;
@@ -98,6 +124,25 @@ DriveChain::DriveChain(DriveChainSetup setup) : s_(std::move(setup)) {
   for (const auto& e : s_.elements)
     normal_slot_.push_back(e.type == ChainElementType::Clutch || e.type == ChainElementType::Brake ? slot++ : -1);
   root_count_ = slot;
+  for (const auto& e : s_.elements) {
+    source_port_.push_back(-1);
+    if (e.type != ChainElementType::TorqueSource) continue;
+    source_port_.back() = static_cast<int>(ports_.size());
+    sim::InputPort p;
+    p.name = e.name;
+    p.unit = "N·m";
+    p.description = "torque of the source '" + e.name + "' on '" + s_.inertias[static_cast<size_t>(e.b)].name +
+                    "' (held in place of its profile)";
+    ports_.push_back(p);
+  }
+  for (const auto& in : s_.inertias) {  // after the sources: inputActive counts on it
+    load_port_.push_back(static_cast<int>(ports_.size()));
+    sim::InputPort p;
+    p.name = in.name + ".load_torque";
+    p.unit = "N·m";
+    p.description = "external torque on the inertia '" + in.name + "'";
+    ports_.push_back(p);
+  }
   for (const auto& in : s_.inertias) {
     signals_.push_back(in.name + ".phi[rad]");
     signals_.push_back(in.name + ".w[rad/s]");
@@ -170,7 +215,9 @@ void DriveChain::solve(const State& st, double t, const Eigen::Ref<const Eigen::
     const int e = static_cast<int>(k);
     double tau = 0.0;
     if (el.type == ChainElementType::TorqueSource) {
-      tau_el[e] = el.torque.value(t);
+      const int port = source_port_[k];
+      tau_el[e] =
+          st.inputs.held[static_cast<size_t>(port)] ? st.inputs.value[static_cast<size_t>(port)] : el.torque.value(t);
       known[el.b] += tau_el[e];
       continue;
     }
@@ -200,6 +247,8 @@ void DriveChain::solve(const State& st, double t, const Eigen::Ref<const Eigen::
     if (el.a >= 0) known[el.a] += tau;
     if (el.b >= 0) known[el.b] -= tau;
   }
+  for (size_t i = 0; i < s_.inertias.size(); ++i)  // external torques at the load ports (0 until set)
+    known[static_cast<Eigen::Index>(i)] += st.inputs.value[static_cast<size_t>(load_port_[i])];
   // Stuck elements: find their torques S with B^T J⁻¹ (known + B S) = 0 (zero relative acceleration).
   const auto m = static_cast<Eigen::Index>(n_stuck);
   auto Jinv = [&](int i) { return 1.0 / s_.inertias[static_cast<size_t>(i)].J; };

@@ -50,6 +50,13 @@ PassiveRobot::PassiveRobot(Model model, PassiveRobotParams params) : model_(std:
   for (size_t i = 0; i < static_cast<size_t>(n); ++i)
     signals_.push_back("qd_" + model_.joint_names[i] + "[" + unit(i, "rad/s", "m/s") + "]");
   for (const char* c : {"kinetic_energy[J]", "potential_energy[J]", "total_energy[J]"}) signals_.emplace_back(c);
+  for (size_t i = 0; i < static_cast<size_t>(n); ++i) {
+    sim::InputPort p;
+    p.name = model_.joint_names[i] + ".torque";
+    p.unit = unit(i, "N·m", "N");
+    p.description = "torque applied at the joint " + model_.joint_names[i];
+    ports_.push_back(p);
+  }
   for (const char* axis : {"x", "y", "z"}) signals_.push_back("tip_" + std::string(axis) + "[m]");
   if (stops_.active()) {
     signals_.emplace_back("end_stop_energy[J]");
@@ -63,6 +70,19 @@ PassiveRobot::State::State(const PassiveRobot& robot)
     : PlantStateOf(robot), data(robot.model_), log_data(robot.model_) {
   tau.setZero(robot.model_.nq);
   tau_stop.setZero(robot.model_.nq);
+  inputs.resize(robot.ports_.size());
+}
+
+void PassiveRobot::setInput(sim::PlantState& state, int port, double value) const {
+  State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  if (st.inputs.set(static_cast<size_t>(port), value, ports_, name())) st.inputsChanged();
+}
+
+double PassiveRobot::input(const sim::PlantState& state, int port) const {
+  const State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  return st.inputs.value[static_cast<size_t>(port)];
 }
 
 std::string PassiveRobot::name() const { return "multibody (" + model_.name + ")"; }
@@ -87,6 +107,7 @@ void PassiveRobot::derivatives(const sim::PlantState& state, double, const Eigen
   const State& st = own<State>(state);
   const Eigen::Index n = model_.nq;
   st.tau.noalias() = -damping_.cwiseProduct(y.tail(n));
+  for (Eigen::Index i = 0; i < n; ++i) st.tau[i] += st.inputs.value[static_cast<size_t>(i)];  // 0 until set
   if (stops_.active()) {
     stops_.torques(y.head(n), y.tail(n), st.tau_stop);
     st.tau += st.tau_stop;

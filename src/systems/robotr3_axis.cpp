@@ -62,16 +62,47 @@ RobotR3Axis::RobotR3Axis(RobotR3AxisSetup setup)
               "energy.resistor_loss[J]",
               "energy.damper_loss[J]",
               "energy.friction_loss[J]"};
+  sim::InputPort c;
+  c.name = p + ".current";
+  c.unit = "A";
+  c.description = "current reference of the axis (held in place of its controller's)";
+  sim::InputPort l;
+  l.name = p + ".load_torque";
+  l.unit = "N·m";
+  l.description = "external torque on the load";
+  ports_ = {c, l};
 }
 
-RobotR3Axis::State::State(const RobotR3Axis& axis) : PlantStateOf(axis) {}
+RobotR3Axis::State::State(const RobotR3Axis& axis) : PlantStateOf(axis) { inputs.resize(axis.ports_.size()); }
 
-void RobotR3Axis::State::save(ByteWriter& out) const { drive::saveModes(out, {mode}); }
+void RobotR3Axis::State::save(ByteWriter& out) const {
+  drive::saveModes(out, {mode});
+  inputs.save(out);
+}
+
+void RobotR3Axis::setInput(sim::PlantState& state, int port, double value) const {
+  State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  if (st.inputs.set(static_cast<size_t>(port), value, ports_, name())) st.inputsChanged();
+}
+
+double RobotR3Axis::input(const sim::PlantState& state, int port) const {
+  const State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  return st.inputs.value[static_cast<size_t>(port)];
+}
+
+bool RobotR3Axis::inputActive(const sim::PlantState& state, int port) const {
+  const State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  return port == 1 || st.inputs.held[0] != 0;
+}
 
 void RobotR3Axis::State::load(ByteReader& in) {
   std::vector<FrictionMode> modes(1);
   drive::loadModes(in, modes);
   mode = modes[0];
+  inputs.load(in);
 }
 
 FrictionMode RobotR3Axis::mode(const sim::PlantState& state) const { return own<State>(state).mode; }
@@ -106,11 +137,10 @@ Eigen::VectorXd RobotR3Axis::initialState() const {
 
 RobotR3Axis::Eval RobotR3Axis::evaluate(const sim::PlantState& state, double t,
                                         const Eigen::Ref<const Eigen::VectorXd>& y) const {
-  return evaluateIn(own<State>(state).mode, t, y);
+  return evaluateIn(own<State>(state), t, y);
 }
 
-RobotR3Axis::Eval RobotR3Axis::evaluateIn(FrictionMode mode, double t,
-                                          const Eigen::Ref<const Eigen::VectorXd>& y) const {
+RobotR3Axis::Eval RobotR3Axis::evaluateIn(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   Eval ev{};
   const auto& m = s_.motor;
   const double q = y[0], qd = y[1], phi_rel = y[2], w_rel = y[3], x = y[4], i = y[6];
@@ -135,13 +165,17 @@ RobotR3Axis::Eval RobotR3Axis::evaluateIn(FrictionMode mode, double t,
   in.qm_fb = phi_m;
   in.qdm_fb = ev.wm;
   ev.i_ref = controller_.evaluate(in, &x, &ev.xdot).u;
+  if (st.inputs.held[0]) {  // a held current reference replaces the controller, frozen
+    ev.i_ref = st.inputs.value[0];
+    ev.xdot = 0.0;
+  }
   ev.tau_s = s_.c * phi_rel + s_.d * w_rel;
-  // Load: J_L q̈ = −ratio τ_s (the spring pulls the gear input with −τ_s).
-  ev.qdd = -N * ev.tau_s / s_.load_inertia;
+  // Load: J_L q̈ = −ratio τ_s + τ_L (the spring pulls the gear input with −τ_s; τ_L the load_torque port).
+  ev.qdd = (-N * ev.tau_s + st.inputs.value[1]) / s_.load_inertia;
   const double tau_motor = m.k * i;
   ev.stuck_torque = tau_motor + ev.tau_s;  // the friction that keeps dω_m/dt = 0
-  ev.tau_f = drive::frictionTorque(mode, s_.Rv0 + s_.Rv1 * std::abs(ev.wm), ev.stuck_torque);
-  ev.wm_dot = mode == FrictionMode::Stuck ? 0.0 : (tau_motor - ev.tau_f + ev.tau_s) / m.J;
+  ev.tau_f = drive::frictionTorque(st.mode, s_.Rv0 + s_.Rv1 * std::abs(ev.wm), ev.stuck_torque);
+  ev.wm_dot = st.mode == FrictionMode::Stuck ? 0.0 : (tau_motor - ev.tau_f + ev.tau_s) / m.J;
   return ev;
 }
 
@@ -171,7 +205,7 @@ double RobotR3Axis::storedEnergy(const Eigen::Ref<const Eigen::VectorXd>& y) con
 void RobotR3Axis::roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                         Eigen::Ref<Eigen::VectorXd> g) const {
   const FrictionMode mode = own<State>(state).mode;
-  const Eval ev = evaluateIn(mode, t, y);
+  const Eval ev = evaluateIn(own<State>(state), t, y);
   const double t0 = s_.Rv0, t0max = s_.peak * s_.Rv0;
   double g0 = 1, g1 = 1;
   drive::frictionRoots(mode, ev.stuck_torque, ev.wm, ev.wm_dot, t0, t0max, g0, g1);
@@ -184,7 +218,7 @@ void RobotR3Axis::updateModes(sim::PlantState& state, double t, const Eigen::Ref
   FrictionMode& mode = own<State>(state).mode;
   Eval ev{};
   drive::iterateFrictionModes(
-      &mode, 1, fired, [&] { ev = evaluateIn(mode, t, y); },
+      &mode, 1, fired, [&] { ev = evaluateIn(own<State>(state), t, y); },
       [&](size_t) {
         drive::FrictionElementView v;
         v.S = ev.stuck_torque;
@@ -199,7 +233,7 @@ void RobotR3Axis::updateModes(sim::PlantState& state, double t, const Eigen::Ref
 void RobotR3Axis::signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                           Eigen::Ref<Eigen::VectorXd> row) const {
   const FrictionMode m = own<State>(state).mode;
-  const Eval ev = evaluateIn(m, t, y);
+  const Eval ev = evaluateIn(own<State>(state), t, y);
   const int mode = drive::frictionModeNumber(m);
   row << y[4], y[2], y[3], y[0], y[1], y[5], y[6], mode, m == FrictionMode::StartBackward ? 1.0 : 0.0,
       m == FrictionMode::StartForward ? 1.0 : 0.0, ev.tau_f, ev.i_ref, y[7], storedEnergy(y), y[8], y[9], y[10];

@@ -95,6 +95,19 @@ RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
   for (int j = 1; j <= n_; ++j)
     if (j != 2) signals_.push_back("mechanics.r" + std::to_string(j) + ".w[rad/s]");
   for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".gear.bearingFriction.mode[-]");
+  for (int j = 0; j < n_; ++j) {
+    const std::string& joint = s_.arm.joint_names[static_cast<size_t>(j)];
+    sim::InputPort c;
+    c.name = joint + ".current";
+    c.unit = "A";
+    c.description = "current reference of axis " + std::to_string(j + 1) + " (held in place of its controller's)";
+    ports_.push_back(c);
+    sim::InputPort l;
+    l.name = joint + ".load_torque";
+    l.unit = "N·m";
+    l.description = "external torque at the joint " + joint;
+    ports_.push_back(l);
+  }
 }
 
 RobotR3Full::State::State(const RobotR3Full& robot)
@@ -102,11 +115,36 @@ RobotR3Full::State::State(const RobotR3Full& robot)
   for (Eigen::VectorXd* v : {&q_ref, &qd_ref, &qdd_ref, &tau, &qdd, &wm, &wm_dot, &tau_f, &stuck, &xdot, &iref})
     v->setZero(robot.n_);
   Mbar.setZero(robot.n_, robot.n_);
+  inputs.resize(robot.ports_.size());
 }
 
-void RobotR3Full::State::save(ByteWriter& out) const { drive::saveModes(out, modes); }
+void RobotR3Full::State::save(ByteWriter& out) const {
+  drive::saveModes(out, modes);
+  inputs.save(out);
+}
 
-void RobotR3Full::State::load(ByteReader& in) { drive::loadModes(in, modes); }
+void RobotR3Full::State::load(ByteReader& in) {
+  drive::loadModes(in, modes);
+  inputs.load(in);
+}
+
+void RobotR3Full::setInput(sim::PlantState& state, int port, double value) const {
+  State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  if (st.inputs.set(static_cast<size_t>(port), value, ports_, name())) st.inputsChanged();
+}
+
+double RobotR3Full::input(const sim::PlantState& state, int port) const {
+  const State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  return st.inputs.value[static_cast<size_t>(port)];
+}
+
+bool RobotR3Full::inputActive(const sim::PlantState& state, int port) const {
+  const State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  return port % 2 == 1 || st.inputs.held[static_cast<size_t>(port)] != 0;
+}
 
 const std::vector<FrictionMode>& RobotR3Full::modes(const sim::PlantState& state) const {
   return own<State>(state).modes;
@@ -170,6 +208,7 @@ void RobotR3Full::solve(const State& st, double t, const Eigen::Ref<const Eigen:
     } else {
       st.tau[j] = N * a.motor.k * i;
     }
+    st.tau[j] += st.inputs.value[static_cast<size_t>(2 * j + 1)];  // external torque at the joint (0 until set)
     control::ControllerInputs in;  // the axis controller, its output the current reference [A]
     in.ratio = N;
     in.q_set = st.q_ref[j];
@@ -177,6 +216,10 @@ void RobotR3Full::solve(const State& st, double t, const Eigen::Ref<const Eigen:
     in.qm_fb = phi_m;
     in.qdm_fb = st.wm[j];
     st.iref[j] = controllers_[static_cast<size_t>(j)].evaluate(in, y.data() + c, &st.xdot[j]).u;
+    if (st.inputs.held[static_cast<size_t>(2 * j)]) {  // a held current reference replaces the controller, frozen
+      st.iref[j] = st.inputs.value[static_cast<size_t>(2 * j)];
+      st.xdot[j] = 0.0;
+    }
     const double w = a.type == 1 ? st.wm[j] : qd[j];
     st.tau_f[j] =
         drive::frictionTorque(st.modes[static_cast<size_t>(j)], a.Rv0 + a.Rv1 * std::abs(w), 0.0);  // stuck: below

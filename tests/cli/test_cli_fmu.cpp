@@ -55,7 +55,8 @@ TEST(CliFmu, BadInputExitTwoAndNothingWritten) {
       {ur5 + " -o " + (dir / "m.fmu").string() + " --inputs voltage,elbow_joint:current", "two command ports"},
       {ur5 + " -o " + (dir / "m.fmu").string() + " --outputs no_such_signal", "no_such_signal"},
       {ur5 + " -o " + (dir / "m.fmu").string() + " --set no.such.key=1", "no.such.key"},
-      {kConfig + "msl_friction.yaml -o " + (dir / "m.fmu").string() + " --inputs command", "its modes: none"},
+      {kConfig + "msl_friction.yaml -o " + (dir / "m.fmu").string() + " --inputs command",
+       "no input of mode 'command'"},
       {kConfig + "ur5_swg_joint_velocity.yaml -o " + (dir / "m.fmu").string() + " --inputs voltage", "command"},
       // A step size the FMI schema or any importer would refuse (before: a description FMPy rejects).
       {ur5 + " -o " + (dir / "m.fmu").string() + " --step-size nan", "step size"},

@@ -602,6 +602,30 @@ def test_inputs_are_listed_with_units_and_set_by_name_like_the_ports():
         a.set_input("elbow_joint.volts", 1.0)
 
 
+@pytest.mark.parametrize("experiment,port,unit", [
+    ("msl_friction.yaml", "inertia1.load_torque", "N·m"),
+    ("robotr3_one_axis.yaml", "axis.current", "A"),
+    ("robotr3_full_robot.yaml", "r2.load_torque", "N·m"),
+    ("irb140_clamping.yaml", "joint2.motor_torque", "N·m"),
+    ("ur5_fall.yaml", "elbow_joint.torque", "N·m"),
+])
+def test_every_experiment_type_has_input_ports_in_python(experiment, port, unit):
+    """Input ports reach every model, not only the robot with drives and the rig: listed with units, set by name,
+    in effect (the run differs from one without the input)."""
+    path = jointsim.data_path("experiments/" + experiment)
+    a = jointsim.Simulator.from_experiment(path)
+    b = jointsim.Simulator.from_experiment(path)
+    inputs = {i["name"]: i for i in a.inputs}
+    assert inputs[port]["unit"] == unit
+    a.set_input(port, 0.5)
+    assert a.input(port) == 0.5 and {i["name"]: i for i in a.inputs}[port]["active"]
+    a.advance(0.05)
+    b.advance(0.05)
+    assert not np.array_equal(a.state, b.state)
+    with pytest.raises(jointsim.InputError, match=port.split(".")[0]):
+        a.set_input(port, float("nan"))
+
+
 def test_drive_parameter_tables_and_the_drives_key_that_changes_them():
     path = jointsim.data_path("experiments/ur5_pick_and_place.yaml")
     nominal = jointsim.Simulator.from_experiment(path).drive_parameters("elbow_joint")

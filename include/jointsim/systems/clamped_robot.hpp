@@ -42,6 +42,7 @@
 #include "jointsim/drive/transmissions.hpp"
 #include "jointsim/multibody/data.hpp"
 #include "jointsim/multibody/model.hpp"
+#include "jointsim/sim/held_inputs.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/sim/simulate.hpp"
 
@@ -110,6 +111,7 @@ class ClampedRobot : public sim::Plant {
     explicit State(const ClampedRobot& robot);
     /// MSL friction mode of each axis's motor bearing.
     std::vector<FrictionMode> modes;
+    sim::HeldInputs inputs;  ///< the input ports' values (saved)
     // Workspace (mutable: the right-hand side is const; not saved, holds nothing between calls).
     mutable multibody::Data data;       ///< kinematics and dynamics of model()
     mutable multibody::Matrix6Xd fext;  ///< clamp wrench per joint body [N·m; N]
@@ -144,6 +146,13 @@ class ClampedRobot : public sim::Plant {
   int motorTorqueSignal(int k) const { return 10 * k + 2; }
 
   std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
+  /// Input ports (sim::InputPort): per axis `<joint>.motor_torque` [N·m], the motor torque held in place of the axis
+  /// controller's output (its integrator frozen; in effect once set), and `<joint>.load_torque` [N·m], an external
+  /// torque at the joint (0 until set).
+  std::vector<sim::InputPort> inputPorts() const override { return ports_; }
+  void setInput(sim::PlantState& state, int port, double value) const override;
+  double input(const sim::PlantState& state, int port) const override;
+  bool inputActive(const sim::PlantState& state, int port) const override;
   std::string name() const override;
   int stateSize() const override { return n_states_; }
   Eigen::VectorXd initialState() const override;
@@ -184,6 +193,7 @@ class ClampedRobot : public sim::Plant {
   Eigen::Vector3d p0_;
   Eigen::Matrix3d R0_;
   std::vector<std::string> signals_;
+  std::vector<sim::InputPort> ports_;
 };
 
 }  // namespace jointsim::systems

@@ -25,6 +25,7 @@
 #include "jointsim/control/profile.hpp"
 #include "jointsim/drive/msl_friction.hpp"
 #include "jointsim/drive/transmissions.hpp"
+#include "jointsim/sim/held_inputs.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/sim/simulate.hpp"
 
@@ -97,6 +98,7 @@ class DriveChain : public sim::Plant {
     mutable Eigen::VectorXd rhs;     ///< its right-hand side, then the constraint torques [N·m]
     mutable std::vector<int> stuck;  ///< elements of the active constraints (first n_stuck entries; sized once)
     mutable int n_stuck = 0;
+    sim::HeldInputs inputs;  ///< the input ports' values (saved)
     void save(ByteWriter& out) const override;
     void load(ByteReader& in) override;
   };
@@ -129,6 +131,13 @@ class DriveChain : public sim::Plant {
   const std::vector<std::string>& signalNames() const override { return signals_; }
   void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                Eigen::Ref<Eigen::VectorXd> row) const override;
+  /// Input ports (sim::InputPort): per torque source `<source>` [N·m], its torque held in place of its profile (in
+  /// effect once set); per inertia `<inertia>.load_torque` [N·m], an external torque on it (0 until set).
+  std::vector<sim::InputPort> inputPorts() const override { return ports_; }
+  void setInput(sim::PlantState& state, int port, double value) const override;
+  double input(const sim::PlantState& state, int port) const override;
+  bool inputActive(const sim::PlantState& state, int port) const override;
+
   /// Friction/compliant torque of element e at the modes in `state` [N·m].
   double elementTorque(const sim::PlantState& state, int e, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
 
@@ -144,6 +153,9 @@ class DriveChain : public sim::Plant {
   /// Per element: its contact law when it is an elasto-backlash element (made once, not in the right-hand side).
   std::vector<std::shared_ptr<const drive::ElastoBacklash>> backlash_;
   std::vector<int> normal_slot_;  ///< per element: the root slot of its normal force, −1: none
+  std::vector<sim::InputPort> ports_;
+  std::vector<int> source_port_;  ///< per element: its input port when it is a torque source, −1 otherwise
+  std::vector<int> load_port_;    ///< per inertia: its load-torque port
   int root_count_ = 0;
 };
 

@@ -12,6 +12,7 @@
 
 #include "jointsim/multibody/data.hpp"
 #include "jointsim/multibody/model.hpp"
+#include "jointsim/sim/held_inputs.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/sim/simulate.hpp"
 #include "jointsim/systems/joint_limits.hpp"
@@ -45,6 +46,9 @@ class PassiveRobot : public sim::Plant {
     explicit State(const PassiveRobot& robot);
     mutable multibody::Data data, log_data;  // right-hand side; signals()
     mutable Eigen::VectorXd tau, tau_stop;   // joint torques, end-stop torques [N·m or N]
+    sim::HeldInputs inputs;                  ///< the joint torques set at the input ports (saved)
+    void save(ByteWriter& out) const override { inputs.save(out); }
+    void load(ByteReader& in) override { inputs.load(in); }
   };
   std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
 
@@ -64,6 +68,11 @@ class PassiveRobot : public sim::Plant {
   void roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
              Eigen::Ref<Eigen::VectorXd> g) const override;
   const EndStops& endStops() const { return stops_; }
+  /// Input ports (sim::InputPort): per joint `<joint>.torque` [N·m, or N for a prismatic joint], a torque applied at
+  /// the joint (0 until set; its work is not in the logged energies).
+  std::vector<sim::InputPort> inputPorts() const override { return ports_; }
+  void setInput(sim::PlantState& state, int port, double value) const override;
+  double input(const sim::PlantState& state, int port) const override;
   /// q_i, qd_i per joint (joint names), kinetic, potential and total energy [J], tip frame position [m]; with
   /// end stops also the energy stored in them (end_stop_energy [J], included in total_energy) and the torque
   /// of each stop (end_stop_torque_<joint> [N·m or N]).
@@ -78,6 +87,7 @@ class PassiveRobot : public sim::Plant {
   EndStops stops_;
   int tip_ = 0;
   std::vector<std::string> signals_;
+  std::vector<sim::InputPort> ports_;
 };
 
 }  // namespace jointsim::systems

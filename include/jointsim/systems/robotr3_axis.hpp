@@ -21,6 +21,7 @@
 #include "jointsim/control/joint_controller.hpp"
 #include "jointsim/control/kinematic_ptp.hpp"
 #include "jointsim/drive/opamp_motor.hpp"
+#include "jointsim/sim/held_inputs.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/systems/drive_chain.hpp"
 
@@ -58,12 +59,20 @@ class RobotR3Axis : public sim::Plant {
   struct State : sim::PlantStateOf<State> {
     explicit State(const RobotR3Axis& axis);
     FrictionMode mode = FrictionMode::Stuck;
+    sim::HeldInputs inputs;  ///< the input ports' values (saved)
     void save(ByteWriter& out) const override;
     void load(ByteReader& in) override;
   };
   std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
 
   const RobotR3AxisSetup& setup() const { return s_; }
+  /// Input ports (sim::InputPort): `<prefix>.current` [A], the current reference held in place of the controller's
+  /// (its PI frozen; in effect once set), and `<prefix>.load_torque` [N·m], an external torque on the load (0 until
+  /// set; its work is not in the energy columns).
+  std::vector<sim::InputPort> inputPorts() const override { return ports_; }
+  void setInput(sim::PlantState& state, int port, double value) const override;
+  double input(const sim::PlantState& state, int port) const override;
+  bool inputActive(const sim::PlantState& state, int port) const override;
   /// t_end = endTime(), outputs every log_interval (also the max step when the solver sets none).
   sim::SimulateOptions simulateOptions() const;
   static constexpr int kStates = 11;  // q, qd, phi_rel, w_rel, x, v_C, i, W_el, E_R, E_d, E_f
@@ -101,12 +110,13 @@ class RobotR3Axis : public sim::Plant {
   Eval evaluate(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
 
  private:
-  Eval evaluateIn(FrictionMode mode, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  Eval evaluateIn(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // at st.mode
   RobotR3AxisSetup s_;
   drive::OpAmpMotor motor_;
   control::JointController controller_;  ///< the TorqueCascade (kp, ks, Ts), its output the current reference [A]
   control::KinematicPtpTrajectory path_;
   std::vector<std::string> signals_;
+  std::vector<sim::InputPort> ports_;
 };
 
 }  // namespace jointsim::systems

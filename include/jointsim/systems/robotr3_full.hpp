@@ -23,6 +23,7 @@
 #include "jointsim/drive/parameters.hpp"
 #include "jointsim/multibody/data.hpp"
 #include "jointsim/multibody/model.hpp"
+#include "jointsim/sim/held_inputs.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/systems/drive_chain.hpp"
 
@@ -65,6 +66,7 @@ class RobotR3Full : public sim::Plant {
   struct State : sim::PlantStateOf<State> {
     explicit State(const RobotR3Full& robot);
     std::vector<FrictionMode> modes;  ///< per axis, base to tip
+    sim::HeldInputs inputs;           ///< the input ports' values (saved)
     // Workspace (holds nothing between calls; not saved).
     mutable multibody::Data data;
     mutable Eigen::VectorXd q_ref, qd_ref, qdd_ref, tau, qdd, wm, wm_dot, tau_f, stuck, xdot, iref;
@@ -81,6 +83,13 @@ class RobotR3Full : public sim::Plant {
   /// The friction mode of each axis in `state` (a state of this plant).
   const std::vector<FrictionMode>& modes(const sim::PlantState& state) const;
 
+  /// Input ports (sim::InputPort): per joint `<joint>.current` [A], the current reference held in place of the axis
+  /// controller's (its PI frozen; in effect once set), and `<joint>.load_torque` [N·m], an external torque at the
+  /// joint (0 until set).
+  std::vector<sim::InputPort> inputPorts() const override { return ports_; }
+  void setInput(sim::PlantState& state, int port, double value) const override;
+  double input(const sim::PlantState& state, int port) const override;
+  bool inputActive(const sim::PlantState& state, int port) const override;
   std::string name() const override;
   int stateSize() const override { return n_states_; }
   Eigen::VectorXd initialState() const override;
@@ -110,6 +119,7 @@ class RobotR3Full : public sim::Plant {
   control::KinematicPtpTrajectory path_;
   std::vector<control::JointController> controllers_;  ///< per axis: the TorqueCascade (kp, ks, Ts)
   std::vector<std::string> signals_;
+  std::vector<sim::InputPort> ports_;
 };
 
 }  // namespace jointsim::systems

@@ -1,0 +1,59 @@
+#include "jointsim/sim/held_inputs.hpp"
+
+#include <cmath>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
+
+namespace jointsim::sim {
+
+void HeldInputs::resize(std::size_t n) {
+  value.assign(n, 0.0);
+  held.assign(n, 0);
+}
+
+void HeldInputs::checkIndex(int k, const std::string& plant) const {
+  if (k < 0 || static_cast<std::size_t>(k) >= value.size())
+    throw InputError(plant + ": input " + std::to_string(k) + " out of range (it has " + std::to_string(value.size()) +
+                     " inputs)");
+}
+
+bool HeldInputs::set(std::size_t k, double v, const std::vector<InputPort>& ports, const std::string& plant) {
+  checkIndex(static_cast<int>(k), plant);
+  const InputPort& p = ports[k];
+  if (!std::isfinite(v) || v < p.min || v > p.max)
+    throw InputError(plant + ": input " + p.name + ": expected a finite value in [" + formatNumber(p.min) + ", " +
+                     formatNumber(p.max) + "] " + p.unit + ", got " + formatNumber(v));
+  const bool changed = !held[k] || value[k] != v;
+  value[k] = v;
+  held[k] = 1;
+  return changed;
+}
+
+bool HeldInputs::release(std::size_t k) {
+  if (k >= held.size() || !held[k]) return false;
+  held[k] = 0;
+  value[k] = 0.0;
+  return true;
+}
+
+void HeldInputs::save(ByteWriter& out) const {
+  out.u64(value.size());
+  for (std::size_t k = 0; k < value.size(); ++k) {
+    out.boolean(held[k] != 0);
+    out.f64(value[k]);
+  }
+}
+
+void HeldInputs::load(ByteReader& in) {
+  const std::uint64_t n = in.u64("input count");
+  if (n != value.size())
+    in.fail("input count: expected " + std::to_string(value.size()) + ", got " + std::to_string(n));
+  for (std::size_t k = 0; k < value.size(); ++k) {
+    held[k] = in.boolean("input held") ? 1 : 0;
+    value[k] = in.f64("input value");
+    if (!std::isfinite(value[k])) in.fail("input value: not finite");
+  }
+}
+
+}  // namespace jointsim::sim
