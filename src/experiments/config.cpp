@@ -316,6 +316,16 @@ std::string profileKeyUnit(const std::string& pattern, const std::string& prefix
   return {};
 }
 
+std::string patternKeyUnit(const std::string& key, const std::vector<std::pair<std::string, std::string>>& units,
+                           const std::vector<std::pair<std::string, std::string>>& profiles) {
+  const std::string p = keyPattern(key);
+  for (const auto& [k, u] : units)
+    if (p == k) return u;
+  for (const auto& [prefix, u] : profiles)
+    if (std::string unit = profileKeyUnit(p, prefix, u); !unit.empty()) return unit;
+  return commonKeyUnit(key);
+}
+
 std::string commonKeyUnit(const std::string& key) {
   static const std::pair<const char*, const char*> units[] = {{"duration", "s"},
                                                               {"log_rate", "Hz"},

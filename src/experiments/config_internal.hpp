@@ -23,6 +23,10 @@ std::string keyPattern(const std::string& key);
 /// The unit of the keys every experiment type shares (duration, log_rate, solver.*, limits.*, joint_limits.*), ""
 /// for another key.
 std::string commonKeyUnit(const std::string& key);
+/// The unit of `key` from a table of key patterns (keyPattern: indices blanked) and units, then the profiles at the
+/// given prefixes (profileKeyUnit, with their value units), then the common keys; "" for a key none of them knows.
+std::string patternKeyUnit(const std::string& key, const std::vector<std::pair<std::string, std::string>>& units,
+                           const std::vector<std::pair<std::string, std::string>>& profiles = {});
 /// The unit of the key pattern `pattern` (keyPattern) inside a profile mapping at `prefix` ("input.profile.") whose
 /// values are in `unit`: value, initial, final, offset, amplitude, values[] in `unit`, slope in unit/s, times in s,
 /// frequency in Hz, phase in rad; "" for another key.

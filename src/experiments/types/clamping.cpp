@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "experiments/config_internal.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/drive/transmissions.hpp"
@@ -243,6 +244,57 @@ class ClampingExperiment : public PlantExperiment<systems::ClampedRobot> {
       out.push_back(std::move(t));
     }
     return out;
+  }
+  std::string keyUnit(const std::string& key) const override {
+    static const std::vector<std::pair<std::string, std::string>> units{{"axes[].ratio", "1"},
+                                                                        {"axes[].inertia", "kg·m²"},
+                                                                        {"axes[].c", "N·m/rad"},
+                                                                        {"axes[].d", "N·m·s/rad"},
+                                                                        {"axes[].b", "rad"},
+                                                                        {"axes[].friction.peak", "1"},
+                                                                        {"axes[].orthogonal.c", "N·m/rad"},
+                                                                        {"axes[].orthogonal.d", "N·m·s/rad"},
+                                                                        {"axes[].controller.kp", "1/s"},
+                                                                        {"axes[].controller.ks", "N·m·s/rad"},
+                                                                        {"axes[].controller.Ts", "s"},
+                                                                        {"axes[].controller.ratio", "1"},
+                                                                        {"axes[].path.q_pos", "rad"},
+                                                                        {"axes[].path.qd_max", "rad/s"},
+                                                                        {"axes[].path.qdd_max", "rad/s²"},
+                                                                        {"axes[].path.segment_time", "s"},
+                                                                        {"axis_defaults.ratio", "1"},
+                                                                        {"axis_defaults.inertia", "kg·m²"},
+                                                                        {"axis_defaults.c", "N·m/rad"},
+                                                                        {"axis_defaults.d", "N·m·s/rad"},
+                                                                        {"axis_defaults.b", "rad"},
+                                                                        {"axis_defaults.friction.peak", "1"},
+                                                                        {"axis_defaults.orthogonal.c", "N·m/rad"},
+                                                                        {"axis_defaults.orthogonal.d", "N·m·s/rad"},
+                                                                        {"axis_defaults.controller.kp", "1/s"},
+                                                                        {"axis_defaults.controller.ks", "N·m·s/rad"},
+                                                                        {"axis_defaults.controller.Ts", "s"},
+                                                                        {"axis_defaults.controller.ratio", "1"},
+                                                                        {"axis_defaults.path.q_pos", "rad"},
+                                                                        {"axis_defaults.path.qd_max", "rad/s"},
+                                                                        {"axis_defaults.path.qdd_max", "rad/s²"},
+                                                                        {"axis_defaults.path.segment_time", "s"},
+                                                                        {"clamp.c_lin", "N/m"},
+                                                                        {"clamp.c_lin[]", "N/m"},
+                                                                        {"clamp.c_lin[][]", "N/m"},
+                                                                        {"clamp.d_lin", "N·s/m"},
+                                                                        {"clamp.d_lin[]", "N·s/m"},
+                                                                        {"clamp.d_lin[][]", "N·s/m"},
+                                                                        {"clamp.c_rot", "N·m/rad"},
+                                                                        {"clamp.c_rot[]", "N·m/rad"},
+                                                                        {"clamp.c_rot[][]", "N·m/rad"},
+                                                                        {"clamp.d_rot", "N·m·s/rad"},
+                                                                        {"clamp.d_rot[]", "N·m·s/rad"},
+                                                                        {"clamp.d_rot[][]", "N·m·s/rad"},
+                                                                        {"initial_posture[]", "rad"}};
+    const std::string p = detail::keyPattern(key);  // friction table rows [w rad/s, tau N·m]
+    if (p == "axes[].friction.tau_pos[][]" || p == "axis_defaults.friction.tau_pos[][]")
+      return key.substr(key.size() - 3) == "[0]" ? "rad/s" : "N·m";
+    return detail::patternKeyUnit(key, units);
   }
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult& r) const override {
     const auto& s = plant_.setup();

@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "experiments/config_internal.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/config.hpp"
 #include "jointsim/experiments/types.hpp"
@@ -119,6 +120,23 @@ namespace {
 class DriveChainExperiment : public PlantExperiment<systems::DriveChain> {
  public:
   using PlantExperiment::PlantExperiment;
+  std::string keyUnit(const std::string& key) const override {
+    const std::string p = detail::keyPattern(key);  // table rows [v rad/s, μ (clutch, brake) or f N·m (bearing)]
+    if (p == "elements[].mu[][]") return key.substr(key.size() - 3) == "[0]" ? "rad/s" : "1";
+    if (p == "elements[].tau_pos[][]") return key.substr(key.size() - 3) == "[0]" ? "rad/s" : "N·m";
+    return detail::patternKeyUnit(key,
+                                  {{"inertias[].J", "kg·m²"},
+                                   {"inertias[].phi", "rad"},
+                                   {"inertias[].w", "rad/s"},
+                                   {"elements[].c", "N·m/rad"},
+                                   {"elements[].d", "N·m·s/rad"},
+                                   {"elements[].backlash", "rad"},
+                                   {"elements[].fn_max", "N"},
+                                   {"elements[].peak", "1"},
+                                   {"elements[].cgeo", "m"},
+                                   {"elements[].ratio", "1"}},
+                                  {{"elements[].profile.", "N·m"}, {"elements[].normalized_force.", "1"}});
+  }
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult& r) const override {
     const auto& s = plant_.setup();
     w["events"] = r.events;

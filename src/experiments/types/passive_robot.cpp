@@ -24,6 +24,22 @@ class PassiveRobotExperiment : public PlantExperiment<systems::PassiveRobot> {
       : PlantExperiment(std::move(s.model), std::move(s.params)), robot_file_(std::move(s.robot_file)) {
     setJointLimits(jointLimitMonitor(plant_.model(), plant_, plant_.params().joint_limits));
   }
+  std::string keyUnit(const std::string& key) const override {
+    // Per joint: rad for a revolute, m for a prismatic one.
+    const std::string p = detail::keyPattern(key);
+    const auto open = key.find('['), close = key.find(']');
+    if (open != std::string::npos && close != std::string::npos &&
+        (p == "initial_state.q[]" || p == "initial_state.qd[]" || p == "joint_damping[]")) {
+      const auto j = static_cast<size_t>(std::stoul(key.substr(open + 1, close - open - 1)));
+      const auto& types = plant_.model().joint_types;
+      if (j >= types.size()) return {};
+      const bool rev = types[j] == multibody::JointType::Revolute;
+      if (p == "initial_state.q[]") return rev ? "rad" : "m";
+      if (p == "initial_state.qd[]") return rev ? "rad/s" : "m/s";
+      return rev ? "N·m·s/rad" : "N·s/m";
+    }
+    return detail::commonKeyUnit(key);
+  }
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult&) const override {
     const auto& model = plant_.model();
     const auto& p = plant_.params();

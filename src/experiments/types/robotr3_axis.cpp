@@ -1,6 +1,7 @@
 // `type: robotr3_axis`: one RobotR3 axis on a 1-D load ([MSL, RobotR3.OneAxis]; systems/robotr3_axis.hpp).
 #include <nlohmann/json.hpp>
 
+#include "experiments/config_internal.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/config.hpp"
 #include "jointsim/experiments/types.hpp"
@@ -82,6 +83,31 @@ namespace {
 class RobotR3AxisExperiment : public PlantExperiment<systems::RobotR3Axis> {
  public:
   using PlantExperiment::PlantExperiment;
+  std::string keyUnit(const std::string& key) const override {
+    return detail::patternKeyUnit(key, {{"motor.J", "kg·m²"},
+                                        {"motor.k", "N·m/A"},
+                                        {"motor.w", "rad/s"},
+                                        {"motor.D", "1"},
+                                        {"gear.ratio", "1"},
+                                        {"gear.c", "N·m/rad"},
+                                        {"gear.d", "N·m·s/rad"},
+                                        {"gear.Rv0", "N·m"},
+                                        {"gear.Rv1", "N·m·s/rad"},
+                                        {"gear.peak", "1"},
+                                        {"controller.kp", "1/s"},
+                                        {"controller.ks", "A·s/rad"},
+                                        {"controller.Ts", "s"},
+                                        {"load.inertia", "kg·m²"},
+                                        {"path.q_begin", "rad"},
+                                        {"path.q_end", "rad"},
+                                        {"path.qd_max", "rad/s"},
+                                        {"path.qdd_max", "rad/s²"},
+                                        {"path.start_time", "s"},
+                                        {"path.swing_time", "s"},
+                                        {"stop_time", "s"},
+                                        {"log_interval", "s"},
+                                        {"initial_friction_torque", "N·m"}});
+  }
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult& r) const override {
     w["end_time"] = plant_.endTime();
     w["events"] = r.events;

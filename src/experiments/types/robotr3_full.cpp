@@ -3,6 +3,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "experiments/config_internal.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/config.hpp"
 #include "jointsim/experiments/types.hpp"
@@ -60,6 +61,16 @@ namespace {
 class RobotR3FullExperiment : public PlantExperiment<systems::RobotR3Full> {
  public:
   using PlantExperiment::PlantExperiment;
+  std::string keyUnit(const std::string& key) const override {
+    return detail::patternKeyUnit(key, {{"path.q_begin[]", "rad"},
+                                        {"path.q_end[]", "rad"},
+                                        {"path.qd_max[]", "rad/s"},
+                                        {"path.qdd_max[]", "rad/s²"},
+                                        {"path.start_time", "s"},
+                                        {"path.swing_time", "s"},
+                                        {"stop_time", "s"},
+                                        {"log_interval", "s"}});
+  }
   void describe(nlohmann::ordered_json& w, const sim::SimulationResult& r) const override {
     w["end_time"] = plant_.endTime();
     w["events"] = r.events;
