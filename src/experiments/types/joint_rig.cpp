@@ -6,6 +6,8 @@
 #include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/experiments/config.hpp"
 #include "jointsim/experiments/types.hpp"
+#include "jointsim/systems/faults.hpp"
+#include "jointsim/systems/robot_system.hpp"
 
 namespace jointsim::experiments {
 
@@ -298,13 +300,43 @@ std::optional<KeySignal> jointRigKeySignal(const RunData& run) {
 
 }  // namespace
 
+namespace {
+
+/// A constant parameter fault on the rig's drive, named `rig` (systems/faults.hpp): the drive's components through
+/// their parameter tables, as for a robot with drives (applyFault on a drive made of the rig's components).
+void applyRigFault(systems::JointRigSetup& s, const systems::Fault& f) {
+  const std::string what = "fault " + systems::describe(f) + ": ";
+  if (f.joint != "rig") throw InputError(what + "a joint rig's drive is called 'rig', not '" + f.joint + "'");
+  if (!f.parameterFault() || f.type == systems::FaultType::SensorBias)
+    throw InputError(what + "does not apply to a joint rig (" + systems::toString(f.type) +
+                     " needs the sensors and controllers of a robot with drives, experiment type tracking)");
+  if (f.timeVarying())
+    throw InputError(what + "does not apply to a joint rig with a time law (it takes constant faults, acting from "
+                            "t = 0; onsets and progressions need a robot with drives, experiment type tracking)");
+  systems::DriveSpec d;
+  d.joint = "rig";
+  d.electrics = s.motor.has_value();
+  if (s.motor) d.motor = *s.motor;
+  d.transmission = s.transmission;
+  d.friction = s.friction;
+  systems::applyFault(d, f);  // InputError naming the fault when the components have no parameter of its role
+  s.transmission = d.transmission;
+  s.friction = d.friction;
+  if (s.motor) s.motor = d.motor;
+}
+
+}  // namespace
+
 ExperimentType jointRigExperimentType() {
   ExperimentType t;
   t.name = "joint_rig";
   t.description = "one drive (motor, transmission, friction) on a test rig: clamping bench, friction map, steps";
   t.load = [](const YamlValue& root, const LoadContext& c) -> std::unique_ptr<Experiment> {
-    return std::make_unique<JointRigExperiment>(readJointRigSetup(root, c.name));
+    systems::JointRigSetup s = readJointRigSetup(root, c.name);
+    for (const systems::Fault& f : c.faults) applyRigFault(s, f);
+    return std::make_unique<JointRigExperiment>(std::move(s));
   };
+  t.accepts_faults = true;
   t.figures = jointRigFigures;
   t.key_signal = jointRigKeySignal;
   return t;
