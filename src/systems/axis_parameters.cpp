@@ -1,10 +1,11 @@
-// Parameter tables of the axes of the clamping and RobotR3 models (drive/parameters.hpp), through which faults and
+// Parameter tables of the axes of the clamping and RobotR3 models and of the drive chain's elements (drive/parameters.hpp), through which faults and
 // other front ends change them as they change the drive components of a robot with drives.
 #include <string>
 #include <vector>
 
 #include "jointsim/drive/parameters.hpp"
 #include "jointsim/systems/clamped_robot.hpp"
+#include "jointsim/systems/drive_chain.hpp"
 #include "jointsim/systems/robotr3_full.hpp"
 
 namespace jointsim::systems {
@@ -57,7 +58,42 @@ std::vector<ParameterRef> robotR3Refs(RobotR3AxisParams& a) {
   return r;
 }
 
+std::vector<ParameterRef> chainRefs(ChainElement& e) {
+  std::vector<ParameterRef> r;
+  if (e.type == ChainElementType::SpringDamper || e.type == ChainElementType::ElastoBacklash) {
+    r.push_back(ref("c", "N·m/rad", ParameterRange::nonNegative(), ParameterRole::Stiffness, "stiffness c", &e.c));
+    r.push_back(ref("d", "N·m·s/rad", ParameterRange::nonNegative(), ParameterRole::None, "damping d", &e.d));
+  }
+  if (e.type == ChainElementType::ElastoBacklash)
+    r.push_back(ref("backlash", "rad", ParameterRange::nonNegative(), ParameterRole::Backlash, "total backlash b",
+                    &e.backlash));
+  if (e.isFriction()) {
+    const bool bearing = e.type == ChainElementType::BearingFriction;
+    for (size_t i = 0; i < e.table.size(); ++i)
+      r.push_back(ref(std::string(bearing ? "tau_pos" : "mu") + "[" + std::to_string(i) + "][1]", bearing ? "N·m" : "1",
+                      ParameterRange::nonNegative(), ParameterRole::Coulomb,
+                      bearing ? "friction torque at the row's speed" : "friction coefficient at the row's speed",
+                      &e.table[i][1]));
+    if (!bearing)
+      r.push_back(
+          ref("fn_max", "N", ParameterRange::nonNegative(), ParameterRole::None, "maximum normal force", &e.fn_max));
+    r.push_back(ref("peak", "1", ParameterRange::atLeast(1.0), ParameterRole::None, "stiction factor", &e.peak));
+  }
+  return r;
+}
+
 }  // namespace
+
+std::vector<ParameterInfo> ChainElement::parameters() const {
+  ChainElement copy = *this;
+  return drive::describeParameters(chainRefs(copy));
+}
+
+ChainElement ChainElement::withParameters(const ParameterChanges& changes) const {
+  ChainElement copy = *this;
+  drive::assignParameters(chainRefs(copy), changes, "drive chain element '" + name + "'");
+  return copy;
+}
 
 std::vector<ParameterInfo> ClampingAxisParams::parameters() const {
   ClampingAxisParams copy = *this;

@@ -24,6 +24,7 @@
 
 #include "jointsim/control/profile.hpp"
 #include "jointsim/drive/msl_friction.hpp"
+#include "jointsim/drive/parameters.hpp"
 #include "jointsim/drive/transmissions.hpp"
 #include "jointsim/sim/held_inputs.hpp"
 #include "jointsim/sim/plant.hpp"
@@ -63,6 +64,13 @@ struct ChainElement {
   // Gear: ideal, lossless, φ_a = ratio·φ_b; its torque is the constraint torque on the input flange [N·m]
   double ratio = 1.0;
   bool isFriction() const;
+  /// Parameter table (drive/parameters.hpp; keys as in a drive_chain file's element): c (role stiffness) and d of a
+  /// spring–damper or elasto-backlash element, its backlash (role backlash), a friction element's table values
+  /// (`mu[i][1]` of a clutch or brake, `tau_pos[i][1]` of a bearing: role coulomb), fn_max, peak; empty for a torque
+  /// source or gear.
+  std::vector<drive::ParameterInfo> parameters() const;
+  /// A copy with `changes` applied by the keys of parameters(). InputError naming the element and the key.
+  ChainElement withParameters(const drive::ParameterChanges& changes) const;
 };
 
 struct DriveChainSetup {

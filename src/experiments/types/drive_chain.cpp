@@ -1,5 +1,6 @@
 // `type: drive_chain`: a 1-D rotational chain of inertias and elements with exact MSL friction
 // (systems/drive_chain.hpp); the Modelica Rotational examples of docs/validation.md.
+#include <algorithm>
 #include <map>
 
 #include <nlohmann/json.hpp>
@@ -8,6 +9,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/config.hpp"
 #include "jointsim/experiments/types.hpp"
+#include "jointsim/systems/faults.hpp"
 
 namespace jointsim::experiments {
 
@@ -180,8 +182,18 @@ ExperimentType driveChainExperimentType() {
   t.name = "drive_chain";
   t.description = "a 1-D chain of inertias, springs, backlash, clutches and brakes with exact stick-slip friction";
   t.load = [](const YamlValue& root, const LoadContext& c) -> std::unique_ptr<Experiment> {
-    return std::make_unique<DriveChainExperiment>(readDriveChainSetup(root, c.name));
+    systems::DriveChainSetup s = readDriveChainSetup(root, c.name);
+    // Faults: constant parameter faults on an element, named by its name, through its parameter table.
+    for (const systems::Fault& f : c.faults) {
+      auto e = std::find_if(s.elements.begin(), s.elements.end(),
+                            [&](const systems::ChainElement& el) { return el.name == f.joint; });
+      if (e == s.elements.end())
+        throw InputError("fault " + systems::describe(f) + ": the drive chain has no element '" + f.joint + "'");
+      *e = e->withParameters(systems::tableFaultChanges(e->parameters(), f, "drive chain element '" + f.joint + "'"));
+    }
+    return std::make_unique<DriveChainExperiment>(std::move(s));
   };
+  t.accepts_faults = true;
   t.figures = driveChainFigures;
   t.key_signal = [](const RunData& run) -> std::optional<KeySignal> {
     const auto w = run.where([](const std::string& n) { return endsWith(n, ".w"); });

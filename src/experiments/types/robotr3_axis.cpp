@@ -5,6 +5,8 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/experiments/config.hpp"
 #include "jointsim/experiments/types.hpp"
+#include "jointsim/systems/faults.hpp"
+#include "jointsim/systems/robotr3_full.hpp"
 
 namespace jointsim::experiments {
 
@@ -176,8 +178,31 @@ ExperimentType robotR3AxisExperimentType() {
   t.name = "robotr3_axis";
   t.description = "one RobotR3 axis (op-amp motor, stick-slip friction, elastic gear) on a load: MSL OneAxis";
   t.load = [](const YamlValue& root, const LoadContext& c) -> std::unique_ptr<Experiment> {
-    return std::make_unique<RobotR3AxisExperiment>(readRobotR3AxisSetup(root, c.name));
+    systems::RobotR3AxisSetup s = readRobotR3AxisSetup(root, c.name);
+    // Faults: constant parameter faults on the axis's drive (named by its prefix, `axis` for OneAxis), through the
+    // parameter table of a RobotR3 type-1 axis with these values.
+    for (const systems::Fault& f : c.faults) {
+      if (f.joint != s.prefix)
+        throw InputError("fault " + systems::describe(f) + ": the axis's drive is called '" + s.prefix + "', not '" +
+                         f.joint + "'");
+      systems::RobotR3AxisParams a;
+      a.type = 1;
+      a.ratio = s.ratio;
+      a.motor = s.motor;
+      a.c = s.c;
+      a.d = s.d;
+      a.Rv0 = s.Rv0;
+      a.Rv1 = s.Rv1;
+      a.peak = s.peak;
+      const std::string what = "RobotR3 axis '" + s.prefix + "'";
+      a = a.withParameters(systems::tableFaultChanges(a.parameters(), f, what), what);
+      s.motor = a.motor;
+      s.c = a.c;
+      s.Rv0 = a.Rv0;
+    }
+    return std::make_unique<RobotR3AxisExperiment>(std::move(s));
   };
+  t.accepts_faults = true;
   t.figures = robotR3AxisFigures;
   t.key_signal = [](const RunData& run) -> std::optional<KeySignal> {
     const auto c = run.where([](const std::string& n) { return endsWith(n, "phi_flange"); });
