@@ -736,6 +736,11 @@ class Simulator:
         at `value` from now on; an input of a group (a joint) selects its mode there (e.g. the voltage port)."""
         self._s.set_input(name, _float(value, "value"))
 
+    def release_input(self, name: str) -> None:
+        """Input `name` no longer held: back to the model's own source (its profile from the file, its controller, or
+        0 for a load torque). A robot's command ports switch with set_port instead."""
+        self._s.release_input(name)
+
     def input(self, name: str) -> float:
         """The value held at input `name`."""
         return self._s.input(name)

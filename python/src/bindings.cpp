@@ -907,6 +907,13 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("name"), py::arg("value"))
       .def(
+          "release_input",
+          [](PySimulator& s, const std::string& name) {
+            const Use use(s.gate, "Simulator");
+            s.plant->releaseInput(s.state(), sim::inputIndex(*s.plant, name));
+          },
+          py::arg("name"))
+      .def(
           "input",
           [](PySimulator& s, const std::string& name) {
             const Use use(s.gate, "Simulator");

@@ -110,7 +110,27 @@ std::unique_ptr<Experiment> buildExperiment(const YamlValue& root, const std::st
     if (limits.wall_time < 0) l["wall_time"].failExpected("a time >= 0 s (0: no limit)");
     detail::removeKey(root, "limits");
   }
+  // Input profiles (common to every type): `inputs: {PORT: PROFILE}` drives the plant's input ports over time; read
+  // here, taken out of the document the type's loader sees, applied to the plant it builds.
+  struct InputProfile {
+    std::string port;
+    YamlValue node;
+    control::Profile profile;
+  };
+  std::vector<InputProfile> input_profiles;
+  if (const YamlValue in = root["inputs"]; in.defined()) {
+    in.expectMap("a mapping {PORT: PROFILE} of the model's input ports (see its inputs) to profiles of time");
+    for (const std::string& k : in.keys()) input_profiles.push_back({k, in[k], readProfile(in[k], "the port's unit")});
+    detail::removeKey(root, "inputs");
+  }
   std::unique_ptr<Experiment> e = type->load(root, LoadContext{name, path, faults});
+  for (const InputProfile& p : input_profiles) {
+    try {
+      e->plant().setInputProfile(sim::inputIndex(e->plant(), p.port), p.profile);
+    } catch (const InputError& err) {
+      p.node.fail(err.what());
+    }
+  }
   e->setIdentity(name, t, path);
   e->setConfig(config);
   e->setInputs(inputs.files());

@@ -56,4 +56,23 @@ void HeldInputs::load(ByteReader& in) {
   }
 }
 
+void InputProfiles::set(int k, const control::Profile& p, const std::vector<InputPort>& ports,
+                        const std::string& plant) {
+  if (k < 0 || static_cast<std::size_t>(k) >= profile.size())
+    throw InputError(plant + ": input " + std::to_string(k) + " out of range (it has " +
+                     std::to_string(profile.size()) + " inputs)");
+  const InputPort& port = ports[static_cast<std::size_t>(k)];
+  if (!port.group.empty())
+    throw InputError(plant + ": input " + port.name + ": one of the group " + port.group + " takes no profile");
+  profile[static_cast<std::size_t>(k)] = std::make_shared<const control::Profile>(p);
+}
+
+std::vector<double> InputProfiles::breakpoints(double t_end) const {
+  std::vector<double> out;
+  for (const auto& p : profile)
+    if (p)
+      for (double b : p->breakpoints(t_end)) out.push_back(b);
+  return out;
+}
+
 }  // namespace jointsim::sim

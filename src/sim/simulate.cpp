@@ -88,6 +88,14 @@ void Plant::setInput(PlantState& /*state*/, int port, double /*value*/) const {
   throw InputError(name() + ": no input " + std::to_string(port) + " (the plant has no inputs)");
 }
 
+void Plant::releaseInput(PlantState& /*state*/, int port) const {
+  throw InputError(name() + ": input " + std::to_string(port) + ": this model's inputs cannot be released");
+}
+
+void Plant::setInputProfile(int port, const control::Profile& /*profile*/) {
+  throw InputError(name() + ": input " + std::to_string(port) + ": this model takes no input profiles");
+}
+
 double Plant::input(const PlantState& /*state*/, int port) const {
   throw InputError(name() + ": no input " + std::to_string(port) + " (the plant has no inputs)");
 }

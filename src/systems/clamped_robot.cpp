@@ -157,6 +157,7 @@ ClampedRobot::ClampedRobot(ClampingSetup setup) : s_((setup.validate(), std::mov
     l.description = "external torque at the joint " + a.joint;
     ports_.push_back(l);
   }
+  profiles_.resize(ports_.size());
 }
 
 ClampedRobot::State::State(const ClampedRobot& robot) : PlantStateOf(robot), data(robot.model_) {
@@ -198,7 +199,18 @@ double ClampedRobot::input(const sim::PlantState& state, int port) const {
 bool ClampedRobot::inputActive(const sim::PlantState& state, int port) const {
   const State& st = own<State>(state);
   st.inputs.checkIndex(port, name());
-  return st.inputs.held[static_cast<size_t>(port)] != 0 || port % 2 == 1;
+  return profiles_.active(st.inputs, static_cast<size_t>(port)) || port % 2 == 1;
+}
+
+void ClampedRobot::releaseInput(sim::PlantState& state, int port) const {
+  State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  if (st.inputs.release(static_cast<size_t>(port))) st.inputsChanged();
+}
+
+void ClampedRobot::setInputProfile(int port, const control::Profile& profile) {
+  checkConfigurable("setInputProfile");
+  profiles_.set(port, profile, ports_, name());
 }
 
 const std::vector<FrictionMode>& ClampedRobot::modes(const sim::PlantState& state) const {
@@ -284,8 +296,8 @@ void ClampedRobot::solve(const State& st, double t, const Eigen::Ref<const Eigen
     in.qdm_fb = w_m;
     st.tau_m[k] = controllers_[static_cast<size_t>(k)].evaluate(in, &x, &st.xdot[k]).u;
     const auto port = static_cast<size_t>(2 * k);  // a held motor torque replaces the controller, frozen
-    if (st.inputs.held[port]) {
-      st.tau_m[k] = st.inputs.value[port];
+    if (profiles_.active(st.inputs, port)) {
+      st.tau_m[k] = profiles_.value(st.inputs, port, t);
       st.xdot[k] = 0.0;
     }
     st.stuck[k] = st.tau_m[k] - st.tau_s[k];
@@ -301,7 +313,7 @@ void ClampedRobot::solve(const State& st, double t, const Eigen::Ref<const Eigen
   for (int k = 0; k < n_; ++k) {
     double tj = tau_out[k];
     if (coupled_) tj = GfullInv_.col(k).dot(tau_out);
-    st.tau[joint_[static_cast<size_t>(k)]] += tj + st.inputs.value[static_cast<size_t>(2 * k + 1)];
+    st.tau[joint_[static_cast<size_t>(k)]] += tj + profiles_.value(st.inputs, static_cast<size_t>(2 * k + 1), t);
     const auto& o = orth_[static_cast<size_t>(k)];
     if (o[0] >= 0) {
       const auto& a = s_.axes[static_cast<size_t>(k)];

@@ -63,6 +63,19 @@ void DriveChainSetup::validate() const {
       if (e.type != ChainElementType::BearingFriction) check::nonNegative(c, key + ".fn_max", e.fn_max, "N");
     }
   }
+  // Names name the log columns and the input ports (<source>, <inertia>.load_torque): each once.
+  std::vector<std::string> names;
+  for (const auto& in : inertias) names.push_back(in.name + ".load_torque");
+  for (size_t k = 0; k < elements.size(); ++k) {
+    const std::string& n = elements[k].name;
+    check::that(std::find(names.begin(), names.end(), n) == names.end(), c, "elements[" + std::to_string(k) + "].name",
+                "'" + n + "' is the name of another element or input");
+    names.push_back(n);
+  }
+  for (size_t i = 0; i < inertias.size(); ++i)
+    for (size_t j = 0; j < i; ++j)
+      check::that(inertias[i].name != inertias[j].name, c, "inertias[" + std::to_string(i) + "].name",
+                  "'" + inertias[i].name + "' names another inertia");
   check::positive(c, "duration", duration, "s");
   check::positive(c, "log_rate", log_rate, "Hz");
 }
@@ -106,7 +119,18 @@ bool DriveChain::inputActive(const sim::PlantState& state, int port) const {
   const State& st = own<State>(state);
   st.inputs.checkIndex(port, name());
   return port >= static_cast<int>(ports_.size()) - static_cast<int>(s_.inertias.size()) ||
-         st.inputs.held[static_cast<size_t>(port)];
+         profiles_.active(st.inputs, static_cast<size_t>(port));
+}
+
+void DriveChain::releaseInput(sim::PlantState& state, int port) const {
+  State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  if (st.inputs.release(static_cast<size_t>(port))) st.inputsChanged();
+}
+
+void DriveChain::setInputProfile(int port, const control::Profile& profile) {
+  checkConfigurable("setInputProfile");
+  profiles_.set(port, profile, ports_, name());
 }
 
 const std::vector<FrictionMode>& DriveChain::modes(const sim::PlantState& state) const {
@@ -143,6 +167,7 @@ DriveChain::DriveChain(DriveChainSetup setup) : s_(std::move(setup)) {
     p.description = "external torque on the inertia '" + in.name + "'";
     ports_.push_back(p);
   }
+  profiles_.resize(ports_.size());
   for (const auto& in : s_.inertias) {
     signals_.push_back(in.name + ".phi[rad]");
     signals_.push_back(in.name + ".w[rad/s]");
@@ -216,8 +241,9 @@ void DriveChain::solve(const State& st, double t, const Eigen::Ref<const Eigen::
     double tau = 0.0;
     if (el.type == ChainElementType::TorqueSource) {
       const int port = source_port_[k];
-      tau_el[e] =
-          st.inputs.held[static_cast<size_t>(port)] ? st.inputs.value[static_cast<size_t>(port)] : el.torque.value(t);
+      tau_el[e] = profiles_.active(st.inputs, static_cast<size_t>(port))
+                      ? profiles_.value(st.inputs, static_cast<size_t>(port), t)
+                      : el.torque.value(t);
       known[el.b] += tau_el[e];
       continue;
     }
@@ -248,7 +274,7 @@ void DriveChain::solve(const State& st, double t, const Eigen::Ref<const Eigen::
     if (el.b >= 0) known[el.b] -= tau;
   }
   for (size_t i = 0; i < s_.inertias.size(); ++i)  // external torques at the load ports (0 until set)
-    known[static_cast<Eigen::Index>(i)] += st.inputs.value[static_cast<size_t>(load_port_[i])];
+    known[static_cast<Eigen::Index>(i)] += profiles_.value(st.inputs, static_cast<size_t>(load_port_[i]), t);
   // Stuck elements: find their torques S with B^T J⁻¹ (known + B S) = 0 (zero relative acceleration).
   const auto m = static_cast<Eigen::Index>(n_stuck);
   auto Jinv = [&](int i) { return 1.0 / s_.inertias[static_cast<size_t>(i)].J; };
@@ -351,6 +377,7 @@ std::vector<double> DriveChain::timeEvents(double t_end) const {
     for (double b : el.torque.breakpoints(t_end)) events.push_back(b);
     for (double b : el.normalized.breakpoints(t_end)) events.push_back(b);
   }
+  for (double b : profiles_.breakpoints(t_end)) events.push_back(b);
   return events;
 }
 

@@ -173,6 +173,14 @@ bool JointRig::inputActive(const sim::PlantState& state, int port) const {
   return port == 1 || own<State>(state).held;
 }
 
+void JointRig::releaseInput(sim::PlantState& state, int port) const {
+  (void)input(state, port);  // range check
+  if (port == 0)
+    releaseCommand(state);
+  else
+    setLoadTorque(state, 0.0);
+}
+
 void JointRig::setLoadTorque(sim::PlantState& state, double tau) const {
   State& s = own<State>(state);
   if (!std::isfinite(tau))

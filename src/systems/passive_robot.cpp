@@ -57,6 +57,7 @@ PassiveRobot::PassiveRobot(Model model, PassiveRobotParams params) : model_(std:
     p.description = "torque applied at the joint " + model_.joint_names[i];
     ports_.push_back(p);
   }
+  profiles_.resize(ports_.size());
   for (const char* axis : {"x", "y", "z"}) signals_.push_back("tip_" + std::string(axis) + "[m]");
   if (stops_.active()) {
     signals_.emplace_back("end_stop_energy[J]");
@@ -77,6 +78,17 @@ void PassiveRobot::setInput(sim::PlantState& state, int port, double value) cons
   State& st = own<State>(state);
   st.inputs.checkIndex(port, name());
   if (st.inputs.set(static_cast<size_t>(port), value, ports_, name())) st.inputsChanged();
+}
+
+void PassiveRobot::releaseInput(sim::PlantState& state, int port) const {
+  State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  if (st.inputs.release(static_cast<size_t>(port))) st.inputsChanged();
+}
+
+void PassiveRobot::setInputProfile(int port, const control::Profile& profile) {
+  checkConfigurable("setInputProfile");
+  profiles_.set(port, profile, ports_, name());
 }
 
 double PassiveRobot::input(const sim::PlantState& state, int port) const {
@@ -102,12 +114,12 @@ Eigen::VectorXd PassiveRobot::initialState() const {
   return y;
 }
 
-void PassiveRobot::derivatives(const sim::PlantState& state, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+void PassiveRobot::derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                                Eigen::Ref<Eigen::VectorXd> ydot) const {
   const State& st = own<State>(state);
   const Eigen::Index n = model_.nq;
   st.tau.noalias() = -damping_.cwiseProduct(y.tail(n));
-  for (Eigen::Index i = 0; i < n; ++i) st.tau[i] += st.inputs.value[static_cast<size_t>(i)];  // 0 until set
+  for (Eigen::Index i = 0; i < n; ++i) st.tau[i] += profiles_.value(st.inputs, static_cast<size_t>(i), t);
   if (stops_.active()) {
     stops_.torques(y.head(n), y.tail(n), st.tau_stop);
     st.tau += st.tau_stop;

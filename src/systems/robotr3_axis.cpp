@@ -71,6 +71,7 @@ RobotR3Axis::RobotR3Axis(RobotR3AxisSetup setup)
   l.unit = "N·m";
   l.description = "external torque on the load";
   ports_ = {c, l};
+  profiles_.resize(ports_.size());
 }
 
 RobotR3Axis::State::State(const RobotR3Axis& axis) : PlantStateOf(axis) { inputs.resize(axis.ports_.size()); }
@@ -95,7 +96,18 @@ double RobotR3Axis::input(const sim::PlantState& state, int port) const {
 bool RobotR3Axis::inputActive(const sim::PlantState& state, int port) const {
   const State& st = own<State>(state);
   st.inputs.checkIndex(port, name());
-  return port == 1 || st.inputs.held[0] != 0;
+  return port == 1 || profiles_.active(st.inputs, 0);
+}
+
+void RobotR3Axis::releaseInput(sim::PlantState& state, int port) const {
+  State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  if (st.inputs.release(static_cast<size_t>(port))) st.inputsChanged();
+}
+
+void RobotR3Axis::setInputProfile(int port, const control::Profile& profile) {
+  checkConfigurable("setInputProfile");
+  profiles_.set(port, profile, ports_, name());
 }
 
 void RobotR3Axis::State::load(ByteReader& in) {
@@ -113,7 +125,11 @@ sim::SimulateOptions RobotR3Axis::simulateOptions() const {
   return sim::SimulateOptions::everyInterval(endTime(), s_.log_interval, s_.solver);
 }
 
-std::vector<double> RobotR3Axis::timeEvents(double) const { return path_.breakpoints(); }
+std::vector<double> RobotR3Axis::timeEvents(double t_end) const {
+  std::vector<double> events = path_.breakpoints();
+  for (double b : profiles_.breakpoints(t_end)) events.push_back(b);
+  return events;
+}
 
 double RobotR3Axis::endTime() const { return std::min(s_.stop_time, path_.endTime() + s_.swing_time); }
 
@@ -165,13 +181,13 @@ RobotR3Axis::Eval RobotR3Axis::evaluateIn(const State& st, double t, const Eigen
   in.qm_fb = phi_m;
   in.qdm_fb = ev.wm;
   ev.i_ref = controller_.evaluate(in, &x, &ev.xdot).u;
-  if (st.inputs.held[0]) {  // a held current reference replaces the controller, frozen
-    ev.i_ref = st.inputs.value[0];
+  if (profiles_.active(st.inputs, 0)) {  // a current reference in place of the controller, which freezes
+    ev.i_ref = profiles_.value(st.inputs, 0, t);
     ev.xdot = 0.0;
   }
   ev.tau_s = s_.c * phi_rel + s_.d * w_rel;
   // Load: J_L q̈ = −ratio τ_s + τ_L (the spring pulls the gear input with −τ_s; τ_L the load_torque port).
-  ev.qdd = (-N * ev.tau_s + st.inputs.value[1]) / s_.load_inertia;
+  ev.qdd = (-N * ev.tau_s + profiles_.value(st.inputs, 1, t)) / s_.load_inertia;
   const double tau_motor = m.k * i;
   ev.stuck_torque = tau_motor + ev.tau_s;  // the friction that keeps dω_m/dt = 0
   ev.tau_f = drive::frictionTorque(st.mode, s_.Rv0 + s_.Rv1 * std::abs(ev.wm), ev.stuck_torque);

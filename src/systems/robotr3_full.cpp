@@ -108,6 +108,7 @@ RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
     l.description = "external torque at the joint " + joint;
     ports_.push_back(l);
   }
+  profiles_.resize(ports_.size());
 }
 
 RobotR3Full::State::State(const RobotR3Full& robot)
@@ -143,7 +144,18 @@ double RobotR3Full::input(const sim::PlantState& state, int port) const {
 bool RobotR3Full::inputActive(const sim::PlantState& state, int port) const {
   const State& st = own<State>(state);
   st.inputs.checkIndex(port, name());
-  return port % 2 == 1 || st.inputs.held[static_cast<size_t>(port)] != 0;
+  return port % 2 == 1 || profiles_.active(st.inputs, static_cast<size_t>(port));
+}
+
+void RobotR3Full::releaseInput(sim::PlantState& state, int port) const {
+  State& st = own<State>(state);
+  st.inputs.checkIndex(port, name());
+  if (st.inputs.release(static_cast<size_t>(port))) st.inputsChanged();
+}
+
+void RobotR3Full::setInputProfile(int port, const control::Profile& profile) {
+  checkConfigurable("setInputProfile");
+  profiles_.set(port, profile, ports_, name());
 }
 
 const std::vector<FrictionMode>& RobotR3Full::modes(const sim::PlantState& state) const {
@@ -156,7 +168,11 @@ sim::SimulateOptions RobotR3Full::simulateOptions() const {
   return sim::SimulateOptions::everyInterval(endTime(), s_.log_interval, s_.solver);
 }
 
-std::vector<double> RobotR3Full::timeEvents(double) const { return path_.breakpoints(); }
+std::vector<double> RobotR3Full::timeEvents(double t_end) const {
+  std::vector<double> events = path_.breakpoints();
+  for (double b : profiles_.breakpoints(t_end)) events.push_back(b);
+  return events;
+}
 
 double RobotR3Full::endTime() const { return std::min(s_.stop_time, path_.endTime() + s_.swing_time); }
 
@@ -208,7 +224,7 @@ void RobotR3Full::solve(const State& st, double t, const Eigen::Ref<const Eigen:
     } else {
       st.tau[j] = N * a.motor.k * i;
     }
-    st.tau[j] += st.inputs.value[static_cast<size_t>(2 * j + 1)];  // external torque at the joint (0 until set)
+    st.tau[j] += profiles_.value(st.inputs, static_cast<size_t>(2 * j + 1), t);  // external torque at the joint
     control::ControllerInputs in;  // the axis controller, its output the current reference [A]
     in.ratio = N;
     in.q_set = st.q_ref[j];
@@ -216,8 +232,8 @@ void RobotR3Full::solve(const State& st, double t, const Eigen::Ref<const Eigen:
     in.qm_fb = phi_m;
     in.qdm_fb = st.wm[j];
     st.iref[j] = controllers_[static_cast<size_t>(j)].evaluate(in, y.data() + c, &st.xdot[j]).u;
-    if (st.inputs.held[static_cast<size_t>(2 * j)]) {  // a held current reference replaces the controller, frozen
-      st.iref[j] = st.inputs.value[static_cast<size_t>(2 * j)];
+    if (profiles_.active(st.inputs, static_cast<size_t>(2 * j))) {  // in place of the controller, which freezes
+      st.iref[j] = profiles_.value(st.inputs, static_cast<size_t>(2 * j), t);
       st.xdot[j] = 0.0;
     }
     const double w = a.type == 1 ? st.wm[j] : qd[j];

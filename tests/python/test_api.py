@@ -7,6 +7,7 @@ import inspect
 import os
 import pathlib
 import pickle
+import re
 import signal
 import threading
 import time
@@ -622,8 +623,10 @@ def test_every_experiment_type_has_input_ports_in_python(experiment, port, unit)
     a.advance(0.05)
     b.advance(0.05)
     assert not np.array_equal(a.state, b.state)
-    with pytest.raises(jointsim.InputError, match=port.split(".")[0]):
+    with pytest.raises(jointsim.InputError, match=re.escape(port)):
         a.set_input(port, float("nan"))
+    a.release_input(port)  # back to the model's own source
+    assert a.input(port) == 0.0 and ("load_torque" in port or not {i["name"]: i for i in a.inputs}[port]["active"])
 
 
 def test_drive_parameter_tables_and_the_drives_key_that_changes_them():

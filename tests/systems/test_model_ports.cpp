@@ -70,6 +70,11 @@ TEST(ModelPorts, DriveChainSourceAndLoadTorquesAgainstTheClosedForm) {
   EXPECT_DOUBLE_EQ(chain.input(r.plantState(), 0), 4.0);
   r.advanceTo(2.0);
   EXPECT_NEAR(r.signal("shaft.w"), 2.0, 1e-9);
+  chain.releaseInput(s.plantState(), 0);  // back to the profile's 1 N·m, the load still −1 N·m
+  EXPECT_FALSE(chain.inputActive(s.plantState(), 0));
+  s.advanceTo(3.0);
+  EXPECT_NEAR(s.signal("shaft.w"), 2.0, 1e-9);
+  EXPECT_DOUBLE_EQ(s.signal("motor.tau"), 1.0);
   EXPECT_THROW(chain.setInput(s.plantState(), 0, NAN), InputError);
   EXPECT_THROW(chain.setInput(s.plantState(), 2, 1.0), InputError);
 }

@@ -90,19 +90,24 @@ int iterateFrictionModes(FrictionMode* modes, std::size_t n, const std::vector<i
                          View&& view) {
   const std::size_t cap = 4 * n + 8;
   std::size_t changes = 0;
-  std::uint64_t changed_once = 0;  // elements whose crossings have been used (first 64 elements)
+  std::uint64_t changed_once = 0;    // elements whose crossings have been used: the first 64 here,
+  std::vector<char> changed_beyond;  // the others here (allocated only for chains of more than 64 elements)
+  if (n > 64) changed_beyond.assign(n - 64, 0);
   while (changes < cap) {
     evaluate();
     bool changed = false;
     for (std::size_t k = 0; k < n; ++k) {
       const FrictionElementView v = view(k);
       if (!v.friction) continue;
-      const bool fresh = k >= 64 || ((changed_once >> k) & 1U) == 0;
+      const bool fresh = k < 64 ? ((changed_once >> k) & 1U) == 0 : changed_beyond[k - 64] == 0;
       const FrictionEventFlags f = fresh ? frictionEventFlags(fired, k, v.normal_slot) : FrictionEventFlags{};
       const FrictionMode m = nextFrictionMode(modes[k], frictionFree(v.fn, f), v.S, v.w, v.a, v.tau0, v.tau0max, f);
       if (m == modes[k]) continue;
       modes[k] = m;
-      if (k < 64) changed_once |= std::uint64_t{1} << k;
+      if (k < 64)
+        changed_once |= std::uint64_t{1} << k;
+      else
+        changed_beyond[k - 64] = 1;
       changed = true;
       break;
     }

@@ -6,10 +6,12 @@
 /// disturbance input adds to the model's forces. The one place that checks a value against its port.
 
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "jointsim/common/bytes.hpp"
+#include "jointsim/control/profile.hpp"
 #include "jointsim/sim/plant.hpp"
 
 namespace jointsim::sim {
@@ -26,13 +28,30 @@ struct HeldInputs {
   bool set(std::size_t k, double v, const std::vector<InputPort>& ports, const std::string& plant);
   /// Port `k` no longer held (its value back to 0); whether that changed anything.
   bool release(std::size_t k);
-  /// The held value of port k, or `otherwise` when it is not held.
-  double valueOr(std::size_t k, double otherwise) const { return held[k] ? value[k] : otherwise; }
   /// InputError naming `plant` when k is no port index.
   void checkIndex(int k, const std::string& plant) const;
   void save(ByteWriter& out) const;
   /// Reads what save() wrote; the count must equal this object's (InputError otherwise, or for a non-finite value).
   void load(ByteReader& in);
+};
+
+/// Profiles of time that drive input ports from the start of a run (Plant::setInputProfile): part of a plant's
+/// configuration (constant during runs), read with the run's HeldInputs: a value set at a port holds it instead.
+struct InputProfiles {
+  std::vector<std::shared_ptr<const control::Profile>> profile;  ///< per port; null: none
+
+  /// `n` ports, none with a profile.
+  void resize(std::size_t n) { profile.assign(n, nullptr); }
+  /// Port k (of `ports`) driven by `p`: InputError naming `plant` for a port out of range or of a group.
+  void set(int k, const control::Profile& p, const std::vector<InputPort>& ports, const std::string& plant);
+  /// Whether port k is in effect: held, or driven by a profile.
+  bool active(const HeldInputs& in, std::size_t k) const { return in.held[k] || profile[k] != nullptr; }
+  /// The value of port k at t: the held value, else its profile's, else 0 [the port's unit].
+  double value(const HeldInputs& in, std::size_t k, double t) const {
+    return in.held[k] ? in.value[k] : (profile[k] ? profile[k]->value(t) : 0.0);
+  }
+  /// The profiles' breakpoints in (0, t_end), to add to a plant's time events.
+  std::vector<double> breakpoints(double t_end) const;
 };
 
 }  // namespace jointsim::sim

@@ -35,6 +35,7 @@
 #include <Eigen/Core>
 
 #include "jointsim/common/bytes.hpp"
+#include "jointsim/control/profile.hpp"
 #include "jointsim/sim/cvode_integrator.hpp"
 
 namespace jointsim::sim {
@@ -183,6 +184,15 @@ class Plant {
   virtual double input(const PlantState& state, int port) const;
   /// Whether input `port` is in effect in `state`: its mode is its group's active one (an independent input: true).
   virtual bool inputActive(const PlantState& /*state*/, int /*port*/) const { return true; }
+  /// Drives input `port` by a profile of time [the port's unit] from the start of every run, until a value set at the
+  /// port holds it instead (a disturbance torque over time, a current reference from a file: the experiment files'
+  /// `inputs:` key). A configuration of the plant: only before a simulator uses it. The profile's breakpoints become
+  /// time events. \throws InputError for a plant whose ports take no profiles (the default), a port out of range or
+  /// one of a group.
+  virtual void setInputProfile(int port, const control::Profile& profile);
+  /// Input `port` no longer held in `state`: back to the model's own source (its profile, controller or 0).
+  /// \throws InputError for a port out of range or one that cannot be released (the default).
+  virtual void releaseInput(PlantState& state, int port) const;
 
   /// Output signals as `name[unit]` (the CSV column names after "time[s]").
   virtual const std::vector<std::string>& signalNames() const = 0;

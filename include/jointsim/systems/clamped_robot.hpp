@@ -153,6 +153,8 @@ class ClampedRobot : public sim::Plant {
   void setInput(sim::PlantState& state, int port, double value) const override;
   double input(const sim::PlantState& state, int port) const override;
   bool inputActive(const sim::PlantState& state, int port) const override;
+  void setInputProfile(int port, const control::Profile& profile) override;
+  void releaseInput(sim::PlantState& state, int port) const override;
   std::string name() const override;
   int stateSize() const override { return n_states_; }
   Eigen::VectorXd initialState() const override;
@@ -194,6 +196,7 @@ class ClampedRobot : public sim::Plant {
   Eigen::Matrix3d R0_;
   std::vector<std::string> signals_;
   std::vector<sim::InputPort> ports_;
+  sim::InputProfiles profiles_;  ///< profiles driving the ports (setInputProfile)
 };
 
 }  // namespace jointsim::systems

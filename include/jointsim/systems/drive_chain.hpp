@@ -145,6 +145,8 @@ class DriveChain : public sim::Plant {
   void setInput(sim::PlantState& state, int port, double value) const override;
   double input(const sim::PlantState& state, int port) const override;
   bool inputActive(const sim::PlantState& state, int port) const override;
+  void setInputProfile(int port, const control::Profile& profile) override;
+  void releaseInput(sim::PlantState& state, int port) const override;
 
   /// Friction/compliant torque of element e at the modes in `state` [N·m].
   double elementTorque(const sim::PlantState& state, int e, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
@@ -162,6 +164,7 @@ class DriveChain : public sim::Plant {
   std::vector<std::shared_ptr<const drive::ElastoBacklash>> backlash_;
   std::vector<int> normal_slot_;  ///< per element: the root slot of its normal force, −1: none
   std::vector<sim::InputPort> ports_;
+  sim::InputProfiles profiles_;   ///< profiles driving the ports (setInputProfile)
   std::vector<int> source_port_;  ///< per element: its input port when it is a torque source, −1 otherwise
   std::vector<int> load_port_;    ///< per inertia: its load-torque port
   int root_count_ = 0;

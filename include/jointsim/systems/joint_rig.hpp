@@ -114,6 +114,8 @@ class JointRig : public sim::Plant {
   double input(const sim::PlantState& state, int port) const override;
   /// `command` is in effect while held (until releaseCommand); `load_torque` always.
   bool inputActive(const sim::PlantState& state, int port) const override;
+  /// `command`: releaseCommand; `load_torque`: back to 0.
+  void releaseInput(sim::PlantState& state, int port) const override;
 
   std::string name() const override;
   int stateSize() const override { return n_; }

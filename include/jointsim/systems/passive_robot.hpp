@@ -73,6 +73,9 @@ class PassiveRobot : public sim::Plant {
   std::vector<sim::InputPort> inputPorts() const override { return ports_; }
   void setInput(sim::PlantState& state, int port, double value) const override;
   double input(const sim::PlantState& state, int port) const override;
+  void setInputProfile(int port, const control::Profile& profile) override;
+  void releaseInput(sim::PlantState& state, int port) const override;
+  std::vector<double> timeEvents(double t_end) const override { return profiles_.breakpoints(t_end); }
   /// q_i, qd_i per joint (joint names), kinetic, potential and total energy [J], tip frame position [m]; with
   /// end stops also the energy stored in them (end_stop_energy [J], included in total_energy) and the torque
   /// of each stop (end_stop_torque_<joint> [N·m or N]).
@@ -88,6 +91,7 @@ class PassiveRobot : public sim::Plant {
   int tip_ = 0;
   std::vector<std::string> signals_;
   std::vector<sim::InputPort> ports_;
+  sim::InputProfiles profiles_;  ///< profiles driving the ports (setInputProfile)
 };
 
 }  // namespace jointsim::systems

@@ -73,6 +73,8 @@ class RobotR3Axis : public sim::Plant {
   void setInput(sim::PlantState& state, int port, double value) const override;
   double input(const sim::PlantState& state, int port) const override;
   bool inputActive(const sim::PlantState& state, int port) const override;
+  void setInputProfile(int port, const control::Profile& profile) override;
+  void releaseInput(sim::PlantState& state, int port) const override;
   /// t_end = endTime(), outputs every log_interval (also the max step when the solver sets none).
   sim::SimulateOptions simulateOptions() const;
   static constexpr int kStates = 11;  // q, qd, phi_rel, w_rel, x, v_C, i, W_el, E_R, E_d, E_f
@@ -117,6 +119,7 @@ class RobotR3Axis : public sim::Plant {
   control::KinematicPtpTrajectory path_;
   std::vector<std::string> signals_;
   std::vector<sim::InputPort> ports_;
+  sim::InputProfiles profiles_;  ///< profiles driving the ports (setInputProfile)
 };
 
 }  // namespace jointsim::systems

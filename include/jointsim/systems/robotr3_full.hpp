@@ -90,6 +90,8 @@ class RobotR3Full : public sim::Plant {
   void setInput(sim::PlantState& state, int port, double value) const override;
   double input(const sim::PlantState& state, int port) const override;
   bool inputActive(const sim::PlantState& state, int port) const override;
+  void setInputProfile(int port, const control::Profile& profile) override;
+  void releaseInput(sim::PlantState& state, int port) const override;
   std::string name() const override;
   int stateSize() const override { return n_states_; }
   Eigen::VectorXd initialState() const override;
@@ -120,6 +122,7 @@ class RobotR3Full : public sim::Plant {
   std::vector<control::JointController> controllers_;  ///< per axis: the TorqueCascade (kp, ks, Ts)
   std::vector<std::string> signals_;
   std::vector<sim::InputPort> ports_;
+  sim::InputProfiles profiles_;  ///< profiles driving the ports (setInputProfile)
 };
 
 }  // namespace jointsim::systems

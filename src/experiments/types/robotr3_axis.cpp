@@ -196,9 +196,12 @@ ExperimentType robotR3AxisExperimentType() {
       a.peak = s.peak;
       const std::string what = "RobotR3 axis '" + s.prefix + "'";
       a = a.withParameters(systems::tableFaultChanges(a.parameters(), f, what), what);
-      s.motor = a.motor;
+      s.motor = a.motor;  // every parameter of the table back
       s.c = a.c;
+      s.d = a.d;
       s.Rv0 = a.Rv0;
+      s.Rv1 = a.Rv1;
+      s.peak = a.peak;
     }
     return std::make_unique<RobotR3AxisExperiment>(std::move(s));
   };
