@@ -13,6 +13,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "jointsim/experiments/sampling.hpp"
+#include "jointsim/io/input_files.hpp"
 #include "jointsim/io/yaml.hpp"
 
 namespace jointsim::experiments {
