@@ -21,6 +21,7 @@ void addRunCommand(CLI::App& app);
 void addIdentifyCommand(CLI::App& app);
 void addBatchCommand(CLI::App& app);
 void addCompareCommand(CLI::App& app);
+void addAgreementCommand(CLI::App& app);
 void addPlotCommand(CLI::App& app);
 void addFmuCommand(CLI::App& app);
 void addValidateCommand(CLI::App& app);

@@ -42,6 +42,7 @@ int main(int argc, char** argv) {
   jointsim::cli::addIdentifyCommand(app);
   jointsim::cli::addBatchCommand(app);
   jointsim::cli::addCompareCommand(app);
+  jointsim::cli::addAgreementCommand(app);
   jointsim::cli::addPlotCommand(app);
   jointsim::cli::addFmuCommand(app);
   jointsim::cli::addValidateCommand(app);

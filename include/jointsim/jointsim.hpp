@@ -45,6 +45,7 @@
 #include "jointsim/multibody/orthogonal_compliance.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
 #include "jointsim/multibody/spatial.hpp"
+#include "jointsim/report/agreement.hpp"
 #include "jointsim/report/compare.hpp"
 #include "jointsim/report/dataset.hpp"
 #include "jointsim/report/plot.hpp"

@@ -46,7 +46,7 @@ __all__ = [
     "ConcurrentUseError",
     "data_path", "load_robot", "rnea", "aba", "crba", "gravity_torques", "rnea_derivatives", "aba_derivatives",
     "frame_placement", "frame_jacobian", "load_experiment", "run_experiment", "run_experiment_file", "validate_file",
-    "run_batch", "write_dataset", "read_dataset", "export_fmu", "identify_clamping", "fit_friction_map",
+    "run_batch", "write_dataset", "read_dataset", "export_fmu", "identify_clamping", "fit_friction_map", "agreement",
 ]
 
 #: The command ports of a drive (Simulator.set_port).
@@ -513,6 +513,71 @@ def export_fmu(config: PathLike, fmu_path: PathLike, inputs: Union[str, Sequence
 
 
 # ------------------------------------------------------------------------------------------------ identification
+def _table(source: Any, what: str) -> Tuple[List[str], np.ndarray, str]:
+    """(header, values, name) of a CSV path, a run folder, a RunResult or a mapping of equal-length columns."""
+    if isinstance(source, RunResult):
+        header = list(source.columns)
+        names = [_split(c)[0] for c in header]
+        return header, np.column_stack([np.asarray(source[n], dtype=float) for n in names]), f"{what} (RunResult)"
+    if isinstance(source, Mapping):
+        header = [str(k) for k in source.keys()]
+        try:
+            cols = [np.asarray(v, dtype=float).reshape(-1) for v in source.values()]
+        except (TypeError, ValueError) as e:
+            raise InputTypeError(f"{what}: every column must be an array of numbers ({e})") from None
+        if not cols or any(len(c) != len(cols[0]) for c in cols):
+            raise InputTypeError(f"{what}: expected columns of equal length")
+        return header, np.column_stack(cols), f"{what} (mapping)"
+    path = pathlib.Path(_input_file(source, what)) if not pathlib.Path(_path(source, what)).is_dir() else None
+    if path is None:  # a run folder: its CSV log
+        folder = pathlib.Path(_path(source, what))
+        summary = folder / "summary.json"
+        if not summary.is_file():
+            raise InputFileNotFoundError(f"{folder}: a folder without summary.json: give the run's CSV log or a run folder",
+                                         file=str(summary), reason="no summary.json")
+        csv = pathlib.Path(json.loads(summary.read_text())["csv"])
+        path = csv if csv.is_file() else folder / csv.name
+    header, values = _core.read_csv(str(path))
+    return list(header), np.asarray(values), str(path)
+
+
+def agreement(predicted: Any, measured: Any, pairs: Union[str, Sequence[Any]],
+              joint_names: Optional[Sequence[str]] = None, time_offset: float = 0.0, max_lag: float = 0.05,
+              t_begin: float = -math.inf, t_end: float = math.inf) -> Dict[str, Any]:
+    """How well a run reproduces a measured log (docs/replay.md; the CLI's ``jointsim agreement``).
+
+    predicted, measured: a CSV path, a run folder, a RunResult (in memory) or a mapping column -> array (with a time
+    column: ``time``, ``t_s`` or the first). pairs: "PREDICTED=MEASURED" strings or (predicted, measured) tuples;
+    ``{joint}``, ``{j}`` (1..n) and ``{i}`` (0..n-1) expand over ``joint_names``. time_offset [s]: log time of the
+    run's t = 0; max_lag [s]: lags searched; t_begin, t_end [s]: the window in log time.
+    Returns {"pairs": [{"predicted", "measured", "samples", "range", "rms", "rms_percent", "bias", "max_abs",
+    "correlation", "lag_s", "rms_percent_at_lag"}, ...], "t_begin_s", "t_end_s", ...}. Raises InputError."""
+    if isinstance(pairs, str):
+        pairs = [pairs]
+    names = _names(joint_names, "joint_names") if joint_names is not None else []
+    expanded: List[Tuple[str, str]] = []
+    for p in pairs:
+        text = f"{p[0]}={p[1]}" if isinstance(p, (tuple, list)) and len(p) == 2 else p
+        if not isinstance(text, str):
+            raise InputTypeError(f"pairs: expected 'PREDICTED=MEASURED' strings or (predicted, measured) tuples, got {p!r}")
+        placeholders = any(k in text for k in ("{joint}", "{j}", "{i}"))
+        if placeholders and not names:
+            raise InputError(f"pairs: '{text}' has {{joint}}, {{j}} or {{i}} placeholders: give joint_names too")
+        texts = ([text.replace("{joint}", n).replace("{j}", str(k + 1)).replace("{i}", str(k))
+                  for k, n in enumerate(names)] if placeholders else [text])
+        for t in texts:
+            parts = [x.strip() for x in t.split("=")]
+            if len(parts) != 2 or not parts[0] or not parts[1]:
+                raise InputError(f"pairs: expected PREDICTED=MEASURED (a column of the run, one of the measured log), "
+                                 f"got '{t}'")
+            expanded.append((parts[0], parts[1]))
+    ph, pv, pn = _table(predicted, "predicted")
+    mh, mv, mn = _table(measured, "measured")
+    raw = _core.agreement(ph, pv, pn, mh, mv, mn, expanded, _float(time_offset, "time_offset"),
+                          _float(max_lag, "max_lag"), float(t_begin), float(t_end))
+    return json.loads(raw)
+
+
 def identify_clamping(time: Any, angle: Any, torque: Any, fixed_backlash: Optional[float] = None) -> Dict[str, Any]:
     """Identifies stiffness, backlash and Coulomb friction from a clamping curve ([KR300Thesis, Algorithm II] with
     Ceres): time [s], motor-side angle [rad] and torque [N*m], each of shape (n,). fixed_backlash [rad] fixes the

@@ -31,8 +31,10 @@
 #include "jointsim/fmi/fmu.hpp"
 #include "jointsim/identify/clamping_fit.hpp"
 #include "jointsim/identify/friction_fit.hpp"
+#include "jointsim/io/csv_reader.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
+#include "jointsim/report/agreement.hpp"
 #include "jointsim/report/dataset.hpp"
 #include "jointsim/sim/simulate.hpp"
 #include "jointsim/sim/simulator.hpp"
@@ -970,6 +972,45 @@ PYBIND11_MODULE(_core, m) {
             s.robot().setExternalWrench(s.state(), frame, Eigen::Matrix<double, 6, 1>(vec(w, 6, "wrench")));
           },
           py::arg("frame"), py::arg("wrench"));
+
+  // ------------------------------------------------------------------------------------------ agreement
+  m.def(
+      "read_csv",
+      [](const std::string& path) {
+        const io::CsvTable t = io::readCsv(path);
+        return py::make_tuple(t.header, Eigen::MatrixXd(t.data));
+      },
+      py::arg("path"));
+  m.def(
+      "agreement",
+      [](const std::vector<std::string>& ph, const Eigen::MatrixXd& pv, const std::string& pname,
+         const std::vector<std::string>& mh, const Eigen::MatrixXd& mv, const std::string& mname,
+         const std::vector<std::pair<std::string, std::string>>& pairs, double time_offset, double max_lag,
+         double t_begin, double t_end) {
+        auto table = [](const std::vector<std::string>& h, const Eigen::MatrixXd& v, const std::string& name) {
+          if (static_cast<Eigen::Index>(h.size()) != v.cols())
+            throw InputError(name + ": " + std::to_string(h.size()) + " column names for " + std::to_string(v.cols()) +
+                             " columns");
+          if (!v.allFinite()) throw InputError(name + ": every value must be finite");
+          io::CsvTable t;
+          t.path = name;
+          t.header = h;
+          t.data = v;
+          for (Eigen::Index r = 0; r < v.rows(); ++r) t.lines.push_back(static_cast<int>(r) + 2);
+          return t;
+        };
+        std::vector<report::SignalPair> sp;
+        for (const auto& [a, b] : pairs) sp.push_back({a, b});
+        report::AgreementOptions o;
+        o.time_offset = time_offset;
+        o.max_lag = max_lag;
+        o.t_begin = t_begin;
+        o.t_end = t_end;
+        return report::agreementJson(report::agreement(table(ph, pv, pname), table(mh, mv, mname), sp, o));
+      },
+      py::arg("predicted_header"), py::arg("predicted_values"), py::arg("predicted_name"), py::arg("measured_header"),
+      py::arg("measured_values"), py::arg("measured_name"), py::arg("pairs"), py::arg("time_offset"),
+      py::arg("max_lag"), py::arg("t_begin"), py::arg("t_end"));
 
   // ------------------------------------------------------------------------------------------ identification
   m.def(

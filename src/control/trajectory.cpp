@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -21,6 +22,36 @@ std::string trajectoryNum(double v) {
 }
 
 bool allFinite(const Eigen::VectorXd& v) { return v.allFinite(); }
+
+/// The times of column `col` of a log, checked: at least 2 rows, strictly increasing, and (gap_factor > 0) no step
+/// larger than gap_factor × the median step. `where(r)` is the location of data row r for messages.
+std::vector<double> checkedTimes(const io::CsvTable& table, int col, double gap_factor,
+                                 const std::function<std::string(Eigen::Index)>& where) {
+  std::vector<double> times;
+  for (Eigen::Index r = 0; r < table.rows(); ++r) {
+    const double t = table.data(r, col);
+    if (!times.empty() && !(t > times.back()))
+      throw InputError(where(r) + ": time " + trajectoryNum(t) + " s is not after the previous row's " +
+                       trajectoryNum(times.back()) + " s (time must increase strictly)");
+    times.push_back(t);
+  }
+  if (times.size() < 2)
+    throw InputError(table.path + ": expected at least 2 data rows, got " + std::to_string(times.size()));
+  if (gap_factor > 0.0) {
+    std::vector<double> dt(times.size() - 1);
+    for (size_t k = 1; k < times.size(); ++k) dt[k - 1] = times[k] - times[k - 1];
+    std::vector<double> sorted = dt;
+    std::sort(sorted.begin(), sorted.end());
+    const size_t m = sorted.size();
+    const double median = (m % 2 == 1) ? sorted[m / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
+    for (size_t k = 0; k < dt.size(); ++k)
+      if (dt[k] > gap_factor * median)
+        throw InputError(where(static_cast<Eigen::Index>(k + 1)) + ": time step " + trajectoryNum(dt[k]) +
+                         " s is more than " + trajectoryNum(gap_factor) + "x the median " + trajectoryNum(median) +
+                         " s (a gap)");
+  }
+  return times;
+}
 
 }  // namespace
 
@@ -355,9 +386,6 @@ SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, c
     throw InputError(path + ": " + std::to_string(columns.size()) + " column names given for " + std::to_string(dof) +
                      " joints");
   const io::CsvTable table = io::readCsv(path);
-  auto rowError = [&](Eigen::Index r, const std::string& msg) {
-    return InputError(path + ":" + std::to_string(table.lines[static_cast<size_t>(r)]) + ": " + msg);
-  };
   const std::vector<std::string>& header = table.header;
   std::vector<size_t> cols;
   if (columns.empty()) {
@@ -375,39 +403,226 @@ SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, c
       cols.push_back(static_cast<size_t>(it - header.begin()));
     }
   }
-  std::vector<double> times;
-  std::vector<Eigen::Index> rows;
+  const std::vector<double> times = checkedTimes(table, 0, gap_factor, [&](Eigen::Index r) {
+    return path + ":" + std::to_string(table.lines[static_cast<size_t>(r)]);
+  });
   std::vector<double> values;  // row-major, dof per sample
-  for (Eigen::Index r = 0; r < table.rows(); ++r) {
-    const double t = table.data(r, 0);
-    if (!times.empty() && !(t > times.back()))
-      throw rowError(r, "time " + trajectoryNum(t) + " s is not after the previous row's " +
-                            trajectoryNum(times.back()) + " s (time must increase strictly)");
-    times.push_back(t);
-    rows.push_back(r);
+  for (Eigen::Index r = 0; r < table.rows(); ++r)
     for (size_t c : cols) values.push_back(table.data(r, static_cast<Eigen::Index>(c)));
-  }
-  if (times.size() < 2) throw InputError(path + ": expected at least 2 data rows, got " + std::to_string(times.size()));
-
-  if (gap_factor > 0.0) {
-    std::vector<double> dt(times.size() - 1);
-    for (size_t k = 1; k < times.size(); ++k) dt[k - 1] = times[k] - times[k - 1];
-    std::vector<double> sorted = dt;
-    std::sort(sorted.begin(), sorted.end());
-    const size_t m = sorted.size();
-    const double median = (m % 2 == 1) ? sorted[m / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
-    for (size_t k = 0; k < dt.size(); ++k)
-      if (dt[k] > gap_factor * median)
-        throw rowError(rows[k + 1], "time step " + trajectoryNum(dt[k]) + " s is more than " +
-                                        trajectoryNum(gap_factor) + "x the median " + trajectoryNum(median) +
-                                        " s (a gap)");
-  }
 
   Eigen::MatrixXd y(dof, static_cast<Eigen::Index>(times.size()));
   for (size_t k = 0; k < times.size(); ++k)
     for (int i = 0; i < dof; ++i)
       y(i, static_cast<Eigen::Index>(k)) = values[k * static_cast<size_t>(dof) + static_cast<size_t>(i)];
   return SampledTrajectory(std::move(times), std::move(y), path);
+}
+
+// ---------------------------------------------------------------------------------------------------
+
+LogColumns LogColumns::urRtde(int dof) {
+  LogColumns c;
+  c.time = "timestamp";
+  c.q = expand("target_q_{i}", dof, "q");
+  c.qd = expand("target_qd_{i}", dof, "qd");
+  c.qdd = expand("target_qdd_{i}", dof, "qdd");
+  c.q_measured = expand("actual_q_{i}", dof, "q_measured");
+  return c;
+}
+
+std::vector<std::string> LogColumns::expand(const std::string& pattern, int dof, const std::string& what) {
+  const bool one = pattern.find("{j}") != std::string::npos, zero = pattern.find("{i}") != std::string::npos;
+  if (one == zero)
+    throw InputError(what + ": expected a column-name pattern with {j} (joint 1..n) or {i} (index 0..n-1), got '" +
+                     pattern + "'");
+  std::vector<std::string> out;
+  for (int k = 0; k < dof; ++k) {
+    std::string name = pattern;
+    const std::string key = one ? "{j}" : "{i}", num = std::to_string(one ? k + 1 : k);
+    for (size_t p = name.find(key); p != std::string::npos; p = name.find(key, p + num.size()))
+      name.replace(p, key.size(), num);
+    out.push_back(name);
+  }
+  return out;
+}
+
+LoggedTrajectory::LoggedTrajectory(std::vector<double> times, Eigen::MatrixXd q, Eigen::MatrixXd qd,
+                                   Eigen::MatrixXd qdd, double start, std::string source, bool from_derivatives)
+    : t_(std::move(times)),
+      q_(std::move(q)),
+      qd_(std::move(qd)),
+      qdd_(std::move(qdd)),
+      start_(start),
+      source_(std::move(source)) {
+  const auto K = static_cast<Eigen::Index>(t_.size());
+  if (K < 2) throw InputError(source_ + ": a logged trajectory needs at least 2 samples, got " + std::to_string(K));
+  auto shape = [&](const Eigen::MatrixXd& m, const char* what) {
+    if (m.rows() != q_.rows() || m.cols() != K || q_.rows() < 1)
+      throw InputError(source_ + ": " + what + " must be n x " + std::to_string(K) + " (one column per sample), got " +
+                       std::to_string(m.rows()) + " x " + std::to_string(m.cols()));
+    if (!m.allFinite()) throw InputError(source_ + ": " + what + " must be finite");
+  };
+  shape(q_, "q");
+  shape(qd_, "qd");
+  if (qdd_.size() > 0) shape(qdd_, "qdd");
+  for (size_t k = 0; k < t_.size(); ++k) {
+    if (!std::isfinite(t_[k])) throw InputError(source_ + ": sample " + std::to_string(k) + ": time must be finite");
+    if (k > 0 && !(t_[k] > t_[k - 1]))
+      throw InputError(source_ + ": sample " + std::to_string(k) + ": time must increase strictly");
+  }
+  if (!(start_ >= t_.front() && start_ < t_.back()))
+    throw InputError(source_ + ": start time " + trajectoryNum(start_) + " s is outside the log [" +
+                     trajectoryNum(t_.front()) + ", " + trajectoryNum(t_.back()) + ") s");
+  if (from_derivatives && qdd_.size() > 0)
+    for (Eigen::Index j = 0; j < q_.rows(); ++j) positionsFromDerivatives(j);
+}
+
+void LoggedTrajectory::evaluate(double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
+                                Eigen::Ref<Eigen::VectorXd> qdd) const {
+  const double tl = std::max(t, 0.0) + start_;  // log time; before t = 0: rest at q(0)
+  if (tl >= t_.back()) {
+    q = q_.col(q_.cols() - 1);
+    qd.setZero();
+    qdd.setZero();
+    return;
+  }
+  const auto it = std::upper_bound(t_.begin(), t_.end(), tl);
+  const Eigen::Index k = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(it - t_.begin()) - 1, 0, q_.cols() - 2);
+  const double h = t_[static_cast<size_t>(k + 1)] - t_[static_cast<size_t>(k)];
+  const double s = (tl - t_[static_cast<size_t>(k)]) / h;
+  const bool quintic = qdd_.size() > 0;
+  for (Eigen::Index j = 0; j < q_.rows(); ++j) {
+    const double q0 = q_(j, k), q1 = q_(j, k + 1), v0 = h * qd_(j, k), v1 = h * qd_(j, k + 1);
+    double c2 = 0.0, c3 = 0.0, c4 = 0.0, c5 = 0.0;  // q(s) = q0 + v0 s + c2 s² + ... (v in rad per interval)
+    if (quintic) {
+      const double a0 = h * h * qdd_(j, k), a1 = h * h * qdd_(j, k + 1);
+      const double D = q1 - q0 - v0 - 0.5 * a0, V = v1 - v0 - a0, A = a1 - a0;
+      c2 = 0.5 * a0;
+      c3 = 10.0 * D - 4.0 * V + 0.5 * A;
+      c4 = -15.0 * D + 7.0 * V - A;
+      c5 = 6.0 * D - 3.0 * V + 0.5 * A;
+    } else {  // cubic Hermite: q(s) = q0 + v0 s + (3Δq − 2v0 − v1) s² + (−2Δq + v0 + v1) s³
+      const double dq = q1 - q0;
+      c2 = 3.0 * dq - 2.0 * v0 - v1;
+      c3 = -2.0 * dq + v0 + v1;
+    }
+    q[j] = q0 + s * (v0 + s * (c2 + s * (c3 + s * (c4 + s * c5))));
+    qd[j] = (v0 + s * (2.0 * c2 + s * (3.0 * c3 + s * (4.0 * c4 + s * 5.0 * c5)))) / h;
+    qdd[j] = (2.0 * c2 + s * (6.0 * c3 + s * (12.0 * c4 + s * 20.0 * c5))) / (h * h);
+  }
+  if (t < 0.0) {
+    qd.setZero();
+    qdd.setZero();
+  }
+}
+
+std::vector<double> LoggedTrajectory::breakpoints() const {
+  std::vector<double> b;
+  if (qdd_.size() == 0)  // cubic Hermite: q̈ jumps at every sample
+    for (double t : t_)
+      if (t > start_ && t < t_.back()) b.push_back(t - start_);
+  b.push_back(t_.back() - start_);
+  return b;
+}
+
+bool LoggedTrajectory::startPositions(Eigen::Ref<Eigen::VectorXd> q) const {
+  if (measured_start_.size() == 0) return false;
+  q = measured_start_;
+  return true;
+}
+
+std::string LoggedTrajectory::describe() const {
+  std::ostringstream os;
+  os << "log(" << source_ << ", " << dof() << " joints, " << t_.size() << " samples, "
+     << (qdd_.size() > 0 ? "quintic" : "cubic") << " Hermite, from " << start_ << " s, duration " << duration()
+     << " s)";
+  return os.str();
+}
+
+void LoggedTrajectory::positionsFromDerivatives(Eigen::Index j) {
+  const Eigen::Index K = q_.cols();
+  const Eigen::RowVectorXd logged = q_.row(j);
+  auto rest = [&](Eigen::Index k) { return qd_(j, k) == 0.0 && qdd_(j, k) == 0.0; };
+  auto time = [&](Eigen::Index k) { return t_[static_cast<size_t>(k)]; };
+  for (Eigen::Index k = 0; k < K;) {
+    if (rest(k)) {  // a rest k..m: hold the logged position the next move starts from
+      Eigen::Index m = k;
+      while (m + 1 < K && rest(m + 1)) ++m;
+      for (Eigen::Index r = k; r <= m; ++r) q_(j, r) = logged[m];
+      k = m + 1;
+      continue;
+    }
+    // A move from sample s (the last rest sample, or the first sample) to e (the first rest sample after it, or K).
+    const Eigen::Index s = k == 0 ? 0 : k - 1;
+    if (k == 0) q_(j, 0) = logged[0];
+    Eigen::Index e = k;
+    while (e < K && !rest(e)) ++e;
+    const Eigen::Index last = std::min(e, K - 1);
+    for (Eigen::Index i = s + 1; i <= last; ++i) {
+      const double h = time(i) - time(i - 1);
+      const double a0 = qdd_(j, i - 1), a1 = qdd_(j, i), v0 = qd_(j, i - 1), v1 = qd_(j, i);
+      const bool jump = std::abs(v1 - v0 - 0.5 * h * (a0 + a1)) > h * std::max(std::abs(a0), std::abs(a1)) + 1e-4;
+      q_(j, i) = jump ? logged[i] : q_(j, i - 1) + 0.5 * h * (v0 + v1) + h * h / 12.0 * (a0 - a1);
+    }
+    if (e < K) {  // meet the rest's held position: the mismatch E blended in over the move (w: quintic smoothstep)
+      Eigen::Index m = e;
+      while (m + 1 < K && rest(m + 1)) ++m;
+      const double E = logged[m] - q_(j, e), T = time(e) - time(s);
+      for (Eigen::Index i = s + 1; i < e; ++i) {
+        const double u = (time(i) - time(s)) / T;
+        q_(j, i) += E * u * u * u * (10.0 + u * (-15.0 + 6.0 * u));
+        qd_(j, i) += E * u * u * (30.0 + u * (-60.0 + 30.0 * u)) / T;
+        qdd_(j, i) += E * u * (60.0 + u * (-180.0 + 120.0 * u)) / (T * T);
+      }
+    }
+    k = e;
+  }
+}
+
+LoggedTrajectory LoggedTrajectory::fromCsv(const std::string& path, int dof, const LogColumns& columns, double start,
+                                           double gap_factor, bool from_derivatives) {
+  if (dof < 1) throw InputError(path + ": the number of joints must be >= 1");
+  if (!(gap_factor == 0.0 || (gap_factor > 1.0 && std::isfinite(gap_factor))))
+    throw InputError(path + ": gap_factor must be > 1 (or 0 to disable the gap check), got " +
+                     trajectoryNum(gap_factor));
+  const io::CsvTable table = io::readCsv(path);
+  const int tc = columns.time.empty() ? 0 : table.require(columns.time, "the log's time in s");
+  auto pick = [&](const std::vector<std::string>& names, const char* what, bool optional) {
+    std::vector<int> idx;
+    if (names.empty() && optional) return idx;
+    if (names.size() != static_cast<size_t>(dof))
+      throw InputError(path + ": " + std::to_string(names.size()) + " " + what + " column names given for " +
+                       std::to_string(dof) + " joints");
+    for (const std::string& n : names) idx.push_back(table.require(n, what));
+    return idx;
+  };
+  const std::vector<int> cq = pick(columns.q, "commanded positions in rad", false);
+  const std::vector<int> cqd = pick(columns.qd, "commanded velocities in rad/s", false);
+  const std::vector<int> cqdd = pick(columns.qdd, "commanded accelerations in rad/s^2", true);
+  const std::vector<int> cm = pick(columns.q_measured, "measured positions in rad", true);
+  const std::string tname = table.header[static_cast<size_t>(tc)];
+  const std::vector<double> times = checkedTimes(table, tc, gap_factor, [&](Eigen::Index r) {
+    return table.where(r, tc) + ": column '" + tname + "'";
+  });
+  const Eigen::Index K = table.rows();
+  auto gather = [&](const std::vector<int>& idx) {
+    Eigen::MatrixXd m(dof, idx.empty() ? 0 : K);
+    for (size_t j = 0; j < idx.size(); ++j) m.row(static_cast<Eigen::Index>(j)) = table.data.col(idx[j]).transpose();
+    return m;
+  };
+  const double t0 = start < 0.0 ? times.front() : start;
+  if (!(t0 >= times.front() && t0 < times.back()))
+    throw InputError(path + ": start time " + trajectoryNum(t0) + " s is outside the log's times [" +
+                     trajectoryNum(times.front()) + ", " + trajectoryNum(times.back()) + ") s");
+  LoggedTrajectory traj(times, gather(cq), gather(cqd), gather(cqdd), t0, path, from_derivatives);
+  if (!cm.empty()) {  // the measured positions at the start, linear between the samples around it
+    const Eigen::MatrixXd m = gather(cm);
+    const auto it = std::upper_bound(times.begin(), times.end(), t0);
+    const auto k = static_cast<Eigen::Index>(it - times.begin()) - 1;
+    const double w =
+        (t0 - times[static_cast<size_t>(k)]) / (times[static_cast<size_t>(k + 1)] - times[static_cast<size_t>(k)]);
+    traj.setMeasuredStart((1.0 - w) * m.col(k) + w * m.col(k + 1));
+  }
+  return traj;
 }
 
 }  // namespace jointsim::control

@@ -166,22 +166,93 @@ std::unique_ptr<JointTrajectory> readKinematicPtp(const YamlValue& node, int dof
   return std::make_unique<KinematicPtpTrajectory>(qb, qe, v, a, t0);
 }
 
+// type: log — LoggedTrajectory (trajectory.hpp): a robot log's commanded q, qd (, qdd) by Hermite interpolation.
+std::unique_ptr<JointTrajectory> readLog(const YamlValue& node, int dof, const std::string& base_dir) {
+  node.allowKeys({"type", "file", "format", "columns", "start_time", "gap_factor", "positions"});
+  const YamlValue file_node = node.required("file", "robot log CSV file, relative to this file");
+  std::filesystem::path file = file_node.asString("a file path");
+  if (file.is_relative()) file = std::filesystem::path(base_dir) / file;
+  LogColumns cols;
+  if (const YamlValue f = node["format"]; f.defined()) {
+    const std::string name = f.asString("a log format (ur_rtde)");
+    if (name != "ur_rtde") f.failExpected("a log format: ur_rtde (or name the columns under `columns`)");
+    cols = LogColumns::urRtde(dof);
+  }
+  const std::string what = "a column-name pattern with {j} (joint 1..n) or {i} (index 0..n-1), or a list of " +
+                           std::to_string(dof) + " column names";
+  auto names = [&](const YamlValue& v) {
+    if (v.isSequence()) {
+      if (v.size() != static_cast<size_t>(dof)) v.failExpected(what);
+      std::vector<std::string> out;
+      for (size_t i = 0; i < v.size(); ++i) out.push_back(v.at(i).asString("a column name"));
+      return out;
+    }
+    try {
+      return LogColumns::expand(v.asString(what), dof, "columns");
+    } catch (const InputError&) {
+      v.failExpected(what);
+    }
+  };
+  if (const YamlValue c = node["columns"]; c.defined()) {
+    c.expectMap("a mapping {time, q, qd, qdd, q_measured} of column names");
+    c.allowKeys({"time", "q", "qd", "qdd", "q_measured"});
+    if (c.has("time")) cols.time = c["time"].asString("the time column's name");
+    if (c.has("q")) cols.q = names(c["q"]);
+    if (c.has("qd")) cols.qd = names(c["qd"]);
+    // qdd and q_measured may be switched off with an empty list (e.g. under a preset).
+    auto optional = [&](const YamlValue& v) {
+      return v.isSequence() && v.size() == 0 ? std::vector<std::string>{} : names(v);
+    };
+    if (c.has("qdd")) cols.qdd = optional(c["qdd"]);
+    if (c.has("q_measured")) cols.q_measured = optional(c["q_measured"]);
+  }
+  if (cols.q.empty()) node["columns"].fail("name the commanded positions: columns.q (or format: ur_rtde)");
+  if (cols.qd.empty()) node["columns"].fail("name the commanded velocities: columns.qd (or format: ur_rtde)");
+  double start = -1.0;
+  if (node.has("start_time")) {
+    start = node["start_time"].asDouble("the log time that becomes t = 0, in s");
+    if (!std::isfinite(start)) node["start_time"].failExpected("a finite time in s");
+  }
+  double gap_factor = 3.0;
+  if (node.has("gap_factor")) {
+    gap_factor = node["gap_factor"].asDouble("a factor > 1 (0 disables the gap check)");
+    if (!(gap_factor == 0.0 || gap_factor > 1.0))
+      node["gap_factor"].failExpected("a factor > 1 (0 disables the gap check)");
+  }
+  bool from_derivatives = true;
+  if (const YamlValue pos = node["positions"]; pos.defined()) {
+    const std::string v = pos.asString("derivatives or logged");
+    if (v != "derivatives" && v != "logged")
+      pos.failExpected("derivatives (integrated from the logged qd, qdd; a held position per rest) or logged");
+    from_derivatives = v == "derivatives";
+  }
+  try {
+    return std::make_unique<LoggedTrajectory>(
+        LoggedTrajectory::fromCsv(file.lexically_normal().string(), dof, cols, start, gap_factor, from_derivatives));
+  } catch (const InputError& e) {
+    (node.has("start_time") && std::string(e.what()).find("start time") != std::string::npos ? node["start_time"]
+                                                                                             : file_node)
+        .fail(e.what());
+  }
+}
+
 }  // namespace
 
 std::unique_ptr<JointTrajectory> trajectoryFromYaml(const YamlValue& node, int dof, const std::string& base_dir) {
   if (dof < 1) throw InputError("trajectoryFromYaml: dof must be >= 1");
-  node.expectMap("a trajectory mapping {type: point_to_point|fourier|csv, ...}");
-  const YamlValue type = node.required("type", "point_to_point, fourier or csv");
+  node.expectMap("a trajectory mapping {type: point_to_point|fourier|csv|log|kinematic_ptp, ...}");
+  const YamlValue type = node.required("type", "point_to_point, fourier, csv, log or kinematic_ptp");
   const std::string t = type.asString("a trajectory type");
   try {
     if (t == "point_to_point") return readPointToPoint(node, dof);
     if (t == "fourier") return readFourier(node, dof);
     if (t == "csv") return readCsv(node, dof, base_dir);
     if (t == "kinematic_ptp") return readKinematicPtp(node, dof);
+    if (t == "log") return readLog(node, dof, base_dir);
   } catch (const InputError& e) {
     node.relocate(e);
   }
-  type.failExpected("a trajectory type (point_to_point, fourier, csv)");
+  type.failExpected("a trajectory type (point_to_point, fourier, csv, log, kinematic_ptp)");
 }
 
 }  // namespace jointsim::control

@@ -49,6 +49,11 @@ Figure translate(const experiments::Figure& f, const std::string& var, int time_
                  std::map<std::string, std::string>& blocks);
 /// The script lines drawing one figure into `output` (+ the suffix variable outsuffix) with `terminal`.
 std::string renderFigure(const Figure& f, const std::string& terminal, const std::string& output, double font_scale);
+/// Runs gnuplot on `body` (a script whose figures are written to their final paths + the variable outsuffix) in
+/// `out_dir`: the figures `finals` appear, renamed into place, only when gnuplot succeeded; Error quoting gnuplot's
+/// stderr otherwise (`what` names what was drawn). The temporary script and outputs are removed in any case.
+void runScript(const std::string& gnuplot, const std::string& body, const std::vector<std::string>& finals,
+               const std::string& out_dir, const std::string& what);
 /// Line colours (matplotlib's tab10) for the top of a script.
 extern const char* const kLineTypes;
 

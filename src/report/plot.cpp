@@ -355,6 +355,31 @@ std::string findGnuplot(const std::string& requested) {
                    (requested.empty() ? std::string() : " (looked for '" + requested + "')"));
 }
 
+void gp::runScript(const std::string& gnuplot, const std::string& body, const std::vector<std::string>& finals,
+                   const std::string& out_dir, const std::string& what) {
+  // Run gnuplot on a temporary copy whose outputs carry a temporary suffix; rename them when it succeeded.
+  const std::string suffix = ".tmp." + std::to_string(static_cast<long>(::getpid()));
+  const std::string script = (fs::path(out_dir) / (".jointsim_plot" + suffix + ".gp")).string();
+  const std::string errors = (fs::path(out_dir) / (".jointsim_plot" + suffix + ".err")).string();
+  Cleanup cleanup;
+  cleanup.paths = {script, errors};
+  for (const auto& f : finals) cleanup.paths.push_back(f + suffix);
+  io::writeFileAtomically(script, "outsuffix = " + quote(suffix) + "\n" + body);
+  const int status = runProcess(gnuplot, {script}, errors);
+  if (status != 0) {
+    std::string err = readTextFile(errors);
+    while (!err.empty() && std::isspace(static_cast<unsigned char>(err.back()))) err.pop_back();
+    if (err.size() > 4000) err = "..." + err.substr(err.size() - 4000);
+    throw Error("gnuplot (" + gnuplot + ") failed with exit status " + std::to_string(status) + " drawing " + what +
+                (err.empty() ? std::string() : ":\n" + err));
+  }
+  for (const auto& f : finals) {
+    if (!io::isRegularFile(f + suffix)) throw Error(f + ": gnuplot did not write this figure");
+    if (std::rename((f + suffix).c_str(), f.c_str()) != 0)
+      throw Error(f + ": cannot move the figure into place: " + std::strerror(errno));
+  }
+}
+
 PlotScript plotScript(const std::string& run_dir, const std::string& fig_dir, const PlotOptions& options) {
   if (options.width < 200 || options.height < 150 || options.width > 10000 || options.height > 10000)
     throw InputError("plot size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
@@ -426,27 +451,7 @@ std::vector<std::string> plotRun(const std::string& run_dir, const std::string& 
   const std::string& name = plan.name;
   io::createDirectories(out_dir.string());
 
-  // Run gnuplot on a temporary copy whose outputs carry a temporary suffix; rename them when it succeeded.
-  const std::string suffix = ".tmp." + std::to_string(static_cast<long>(::getpid()));
-  const std::string script = (out_dir / (".jointsim_plot" + suffix + ".gp")).string();
-  const std::string errors = (out_dir / (".jointsim_plot" + suffix + ".err")).string();
-  Cleanup cleanup;
-  cleanup.paths = {script, errors};
-  for (const auto& f : finals) cleanup.paths.push_back(f + suffix);
-  io::writeFileAtomically(script, "outsuffix = " + quote(suffix) + "\n" + plan.body);
-  const int status = runProcess(gnuplot, {script}, errors);
-  if (status != 0) {
-    std::string err = readTextFile(errors);
-    while (!err.empty() && std::isspace(static_cast<unsigned char>(err.back()))) err.pop_back();
-    if (err.size() > 4000) err = "..." + err.substr(err.size() - 4000);
-    throw Error("gnuplot (" + gnuplot + ") failed with exit status " + std::to_string(status) +
-                " drawing the figures of " + dir + (err.empty() ? std::string() : ":\n" + err));
-  }
-  for (const auto& f : finals) {
-    if (!io::isRegularFile(f + suffix)) throw Error(f + ": gnuplot did not write this figure");
-    if (std::rename((f + suffix).c_str(), f.c_str()) != 0)
-      throw Error(f + ": cannot move the figure into place: " + std::strerror(errno));
-  }
+  gp::runScript(gnuplot, plan.body, finals, out_dir.string(), "the figures of " + dir);
   std::vector<std::string> written = finals;
   if (options.keep_script) {
     const std::string path = (out_dir / (name + "_plots.gp")).string();

@@ -542,8 +542,9 @@ TEST(TrajectoryYaml, ErrorsNameFileLineAndKeyPath) {
   // SI only: no unit switch.
   yamlError("trajectory:\n  type: point_to_point\n  units: deg\n  start: [0, 0]\n", 2,
             "t.yaml:3: trajectory.units: unknown key 'units'")();
-  yamlError("trajectory:\n  type: spline\n", 2,
-            "t.yaml:2: trajectory.type: expected a trajectory type (point_to_point, fourier, csv), got 'spline'")();
+  yamlError(
+      "trajectory:\n  type: spline\n", 2,
+      "t.yaml:2: trajectory.type: expected a trajectory type (point_to_point, fourier, csv, log, kinematic_ptp), got 'spline'")();
   yamlError("trajectory: [1, 2]\n", 2, "t.yaml:1: trajectory: expected a trajectory mapping")();
 
   const std::string fh = "trajectory:\n  type: fourier\n  base_frequency: 0.1\n  offset: [0, 0]\n";

@@ -7,6 +7,7 @@
 ///   with a quintic fade-in so the robot starts at rest.
 /// - `SampledTrajectory` — set-points from a CSV file (e.g. logged at 125 Hz on the real robot),
 ///   interpolated by a natural C² cubic spline.
+/// - `LoggedTrajectory` — a robot log's commanded q, q̇, q̈ replayed by Hermite interpolation.
 /// All quantities are SI: positions [rad], velocities [rad/s], accelerations [rad/s²], times [s].
 /// Trajectories are immutable after construction; evaluate() is pure, thread-safe and allocation-free.
 
@@ -45,6 +46,12 @@ class JointTrajectory {
   virtual std::vector<double> breakpoints() const { return {}; }
   /// One-line description for summaries, e.g. "point_to_point(6 joints, 3 segments, duration 4.2 s)".
   virtual std::string describe() const = 0;
+  /// Where the robot should start [rad] when it does not start on q(0): a replayed log's measured first
+  /// positions. Writes q (size dof()) and returns true, or returns false (the default: start on q(0)).
+  virtual bool startPositions(Eigen::Ref<Eigen::VectorXd> q) const {
+    (void)q;
+    return false;
+  }
 
   /// Convenience (allocates): the set-point at time t [s].
   JointSetpoint setpoint(double t) const;
@@ -209,6 +216,86 @@ class SampledTrajectory final : public JointTrajectory {
   Eigen::MatrixXd m_;  // n × K spline second derivatives [rad/s²]
   double t_start_ = 0.0;
   std::string source_;
+};
+
+// ---------------------------------------------------------------------------------------------------
+
+/// Column names of a robot log (LoggedTrajectory::fromCsv), one list per quantity in joint order.
+struct LogColumns {
+  std::string time;                     ///< time column [s]; empty: the first column
+  std::vector<std::string> q;           ///< commanded positions [rad] (n names, required)
+  std::vector<std::string> qd;          ///< commanded velocities [rad/s] (n names, required)
+  std::vector<std::string> qdd;         ///< commanded accelerations [rad/s²] (n names or none)
+  std::vector<std::string> q_measured;  ///< measured positions [rad] (n names or none): the start state
+  /// The UR RTDE names: `timestamp`, `target_q_0`…, `target_qd_0`…, `target_qdd_0`…, `actual_q_0`….
+  static LogColumns urRtde(int dof);
+  /// Expands a pattern with `{j}` (joint number 1..n) or `{i}` (index 0..n−1) into n names; a name without
+  /// either is an error (InputError naming `what`).
+  static std::vector<std::string> expand(const std::string& pattern, int dof, const std::string& what);
+};
+
+/// A trajectory replayed from a robot log that carries the controller's own derivatives (e.g. UR RTDE's
+/// target_q, target_qd, target_qdd at 125–500 Hz): on each interval [t_k, t_k+1] every joint follows the
+/// quintic Hermite polynomial through q, q̇, q̈ at both ends (C², so no breakpoints inside), or the cubic
+/// Hermite through q, q̇ when the log has no accelerations (C¹: q̈ jumps at every sample, each one a
+/// breakpoint). The logged derivatives are used as they are: quantised positions are never differentiated
+/// (a spline through 1e-6 rad steps turns them into acceleration noise). With
+///   Δ = q₁ − q₀ − h q̇₀ − h² q̈₀/2,  V = h (q̇₁ − q̇₀) − h² q̈₀,  A = h² (q̈₁ − q̈₀),  s = (t − t_k)/h:
+///   q(s) = q₀ + h q̇₀ s + h² q̈₀ s²/2 + (10Δ − 4V + A/2) s³ + (−15Δ + 7V − A) s⁴ + (6Δ − 3V + A/2) s⁵.
+/// Trajectory time t is log time startTime() + t. Before t = 0 it rests at q(0); after the last sample it holds
+/// the last position (q̇, q̈ jump to 0: duration() is a breakpoint).
+///
+/// Positions (`from_derivatives`, the default when the log has accelerations): the replay does not interpolate the
+/// logged positions but integrates the logged derivatives, q_k+1 = q_k + h (q̇_k + q̇_k+1)/2 + h² (q̈_k − q̈_k+1)/12
+/// (the exact integral of the cubic Hermite velocity; the quintic of an interval is then that quartic), because
+/// the logged positions carry two things a twin must not chase:
+/// - their quantisation (1e-6 rad in text logs): interpolated, it becomes q̈ noise of about 6·δ/h²;
+/// - at rest (q̇ = q̈ = 0) a robot controller sets its target to the measured position (the shipped UR5 log: one
+///   sample later, jitter 1e-5 … 4e-4 rad). Chased, that jitter makes the twin hunt in its friction at rest
+///   (about 50,000 solver steps per second of log).
+/// So per joint: over a rest the replay holds the logged position the next move starts from; a move starts there,
+/// follows the integral of the logged derivatives, and the mismatch E with the next rest's position is blended in
+/// over the move by the quintic smoothstep E w(u) (w' = w'' = 0 at both ends; its q̇ and q̈ are added to the
+/// samples): a drift of E/T_move, about 1e-4 rad/s for the shipped log, instead of a jump. Where the logged
+/// velocity itself jumps (|Δq̇ − h (q̈_k + q̈_k+1)/2| > h max |q̈| + 1e-4 rad/s: more than an acceleration switch
+/// inside the interval can make), the integral restarts on the logged position.
+class LoggedTrajectory final : public JointTrajectory {
+ public:
+  /// `times` [s] strictly increasing, at least 2; q, qd (and qdd unless empty) n × times.size() [rad, rad/s,
+  /// rad/s²]; `start` [s] the log time that becomes t = 0, within [times.front(), times.back()).
+  LoggedTrajectory(std::vector<double> times, Eigen::MatrixXd q, Eigen::MatrixXd qd, Eigen::MatrixXd qdd, double start,
+                   std::string source = "log", bool from_derivatives = true);
+
+  /// Reads a log CSV (io::readCsv: any other columns are ignored). `start` < 0: the first sample's time.
+  /// InputError "<path>:<line>:<column>: ..." on a missing column (listing the columns), a non-numeric or
+  /// non-finite cell, a time not after the previous row's, or a gap (a time step > gap_factor × the median;
+  /// gap_factor 0 disables the check), a start time outside the log.
+  static LoggedTrajectory fromCsv(const std::string& path, int dof, const LogColumns& columns, double start = -1.0,
+                                  double gap_factor = 3.0, bool from_derivatives = true);
+
+  int dof() const override { return static_cast<int>(q_.rows()); }
+  double duration() const override { return t_.back() - start_; }
+  void evaluate(double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
+                Eigen::Ref<Eigen::VectorXd> qdd) const override;
+  std::vector<double> breakpoints() const override;
+  std::string describe() const override;
+  bool startPositions(Eigen::Ref<Eigen::VectorXd> q) const override;
+
+  /// Log time of t = 0 [s].
+  double startTime() const { return start_; }
+  /// The measured positions at the start (interpolated linearly between the samples around it), when the log
+  /// had measured-position columns (set by fromCsv).
+  void setMeasuredStart(Eigen::VectorXd q) { measured_start_ = std::move(q); }
+  /// The positions the replay uses at the samples (n × samples) [rad] (see the class comment).
+  const Eigen::MatrixXd& positions() const { return q_; }
+
+ private:
+  void positionsFromDerivatives(Eigen::Index j);
+  std::vector<double> t_;  // log times [s]
+  Eigen::MatrixXd q_, qd_, qdd_;
+  double start_ = 0.0;
+  std::string source_;
+  Eigen::VectorXd measured_start_;
 };
 
 }  // namespace jointsim::control

@@ -115,6 +115,7 @@ TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name,
   sys.setTrajectory(s.trajectory);
   Eigen::VectorXd q0(n), tmp1(n), tmp2(n);
   s.trajectory->evaluate(0.0, q0, tmp1, tmp2);
+  s.trajectory->startPositions(q0);  // a replayed log: the measured first positions, when it has them
   if (const YamlValue init = root["initial_state"]; init.defined()) {
     init.expectMap("a mapping {q}");
     init.allowKeys({"q"});
@@ -170,7 +171,7 @@ class TrackingExperiment : public Experiment {
         {"trajectory.b[][]", "rad/s"},
         {"trajectory.fade_in", "s"},
         {"trajectory.duration", "s"},
-        // csv
+        // csv, log
         {"trajectory.gap_factor", "1"},
         // kinematic_ptp
         {"trajectory.q_begin[]", "rad"},

@@ -1,0 +1,55 @@
+"""A measured robot log from Python: the shipped UR5 log replayed in memory, the agreement of the RunResult with
+the log against the same figures from the files and the CLI, and the errors of bad pairs."""
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import jointsim
+
+JOINTS = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
+          "wrist_3_joint"]
+
+
+def test_replay_in_memory_and_agreement_match_the_files_and_the_cli(tmp_path):
+    log = jointsim.data_path("logs/ur5_kufieta2013_mov6_first30s.csv")
+    exp = jointsim.data_path("experiments/ur5_measured_replay.yaml")
+    result = jointsim.run_experiment(exp, {"duration": 3.0})
+    a = jointsim.agreement(result, log, "current_{joint}=i_actual_{j}", joint_names=JOINTS, max_lag=0.02)
+    assert [p["measured"] for p in a["pairs"]] == [f"i_actual_{j}" for j in range(1, 7)]
+    assert a["t_end_s"] == pytest.approx(3.0)
+    # The same run written to files and judged by the CLI: the same figures.
+    out = tmp_path / "run"
+    jointsim.run_experiment_file(exp, out, {"duration": 3.0})
+    b = jointsim.agreement(out, log, [("current_" + n, f"i_actual_{k + 1}") for k, n in enumerate(JOINTS)],
+                           max_lag=0.02)
+    cli = os.environ.get("JOINTSIM_CLI", "jointsim")
+    js = tmp_path / "a.json"
+    subprocess.run([cli, "agreement", str(out), str(log), "--joint-names", ",".join(JOINTS), "--pair",
+                    "current_{joint}=i_actual_{j}", "--max-lag", "0.02", "--json", str(js)], check=True,
+                   capture_output=True)
+    c = json.loads(js.read_text())
+    for x, y, z in zip(a["pairs"], b["pairs"], c["pairs"]):
+        for key in ("rms_percent", "correlation", "lag_s", "bias"):
+            # in memory vs the CSV log (written with 9 significant digits)
+            assert x[key] == pytest.approx(y[key], rel=1e-5, abs=1e-6), key
+            assert y[key] == z[key], key
+
+
+def test_agreement_of_columns_against_closed_forms_and_errors():
+    t = np.arange(0.0, 2.0, 0.004)
+    m = np.sin(3 * t)
+    run = {"time": t, "p": m + 0.25}
+    r = jointsim.agreement(run, {"t_s": t, "m": m}, "p=m", max_lag=0.0)
+    (pair,) = r["pairs"]
+    assert pair["bias"] == pytest.approx(0.25)
+    assert pair["rms_percent"] == pytest.approx(100 * 0.25 / (m.max() - m.min()))
+    assert pair["correlation"] == pytest.approx(1.0)
+    with pytest.raises(jointsim.InputError, match="expected PREDICTED=MEASURED"):
+        jointsim.agreement(run, {"t_s": t, "m": m}, "p")
+    with pytest.raises(jointsim.InputError, match="give joint_names too"):
+        jointsim.agreement(run, {"t_s": t, "m": m}, "p_{j}=m")
+    with pytest.raises(jointsim.InputError, match="missing column 'q'"):
+        jointsim.agreement(run, {"t_s": t, "m": m}, "q=m")
