@@ -28,5 +28,6 @@ void addValidateCommand(CLI::App& app);
 /// `jointsim identify clamping` and `jointsim identify friction` (added to the `identify` subcommand).
 void addIdentifyClampingCommand(CLI::App& identify);
 void addIdentifyFrictionCommand(CLI::App& identify);
+void addIdentifyCurrentsCommand(CLI::App& identify);
 
 }  // namespace jointsim::cli

@@ -8,6 +8,7 @@ void addIdentifyCommand(CLI::App& app) {
   cmd->require_subcommand(1);
   addIdentifyClampingCommand(*cmd);
   addIdentifyFrictionCommand(*cmd);
+  addIdentifyCurrentsCommand(*cmd);
 }
 
 }  // namespace jointsim::cli

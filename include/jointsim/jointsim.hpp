@@ -34,6 +34,7 @@
 #include "jointsim/identify/clamping_curve.hpp"
 #include "jointsim/identify/clamping_fit.hpp"
 #include "jointsim/identify/current_fit.hpp"
+#include "jointsim/identify/drive_calibration.hpp"
 #include "jointsim/identify/friction_fit.hpp"
 #include "jointsim/io/csv_reader.hpp"
 #include "jointsim/io/input_files.hpp"

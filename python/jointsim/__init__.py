@@ -47,6 +47,7 @@ __all__ = [
     "data_path", "load_robot", "rnea", "aba", "crba", "gravity_torques", "rnea_derivatives", "aba_derivatives",
     "frame_placement", "frame_jacobian", "load_experiment", "run_experiment", "run_experiment_file", "validate_file",
     "run_batch", "write_dataset", "read_dataset", "export_fmu", "identify_clamping", "fit_friction_map", "agreement",
+    "identify_currents",
 ]
 
 #: The command ports of a drive (Simulator.set_port).
@@ -576,6 +577,26 @@ def agreement(predicted: Any, measured: Any, pairs: Union[str, Sequence[Any]],
     raw = _core.agreement(ph, pv, pn, mh, mv, mn, expanded, _float(time_offset, "time_offset"),
                           _float(max_lag, "max_lag"), float(t_begin), float(t_end))
     return json.loads(raw)
+
+
+def identify_currents(robot: PathLike, log: PathLike, output: Optional[PathLike] = None, *, time: str = "",
+                      q: str = "q_actual_{j}", qd: str = "qd_target_{j}", qdd: str = "qdd_target_{j}",
+                      current: str = "i_actual_{j}", ur_rtde: bool = False, t_begin: float = -math.inf,
+                      t_end: float = math.inf, min_speed: float = 0.01, scale_bound: float = 0.4,
+                      fit_offset: bool = False) -> Dict[str, Any]:
+    """Calibrates the drives of a robot-with-drives file from a measured log's motor currents (the CLI's
+    ``jointsim identify currents``; docs/replay.md): per joint the torque-constant scale and the Coulomb and viscous
+    friction of each direction (or, fit_offset, a symmetric Coulomb friction and a current offset). Column patterns
+    with {j} (1..n) or {i} (0..n-1); ur_rtde: the UR RTDE names. Writes the calibrated robot-with-drives file to
+    ``output`` when given. Returns {"samples", "joints": [{"joint", "kt_scale": {"value", "std_error"}, ...}],
+    "drives_yaml": text}. Raises InputError, UnidentifiableError."""
+    raw, yaml = _core.identify_currents(_input_file(robot, "robot"), _input_file(log, "log"),
+                                        _optional_path(output, "output"), time, q, qd, qdd, current, bool(ur_rtde),
+                                        float(t_begin), float(t_end), _float(min_speed, "min_speed"),
+                                        _float(scale_bound, "scale_bound"), bool(fit_offset))
+    out = json.loads(raw)
+    out["drives_yaml"] = yaml
+    return out
 
 
 def identify_clamping(time: Any, angle: Any, torque: Any, fixed_backlash: Optional[float] = None) -> Dict[str, Any]:

@@ -30,8 +30,10 @@
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
 #include "jointsim/identify/clamping_fit.hpp"
+#include "jointsim/identify/drive_calibration.hpp"
 #include "jointsim/identify/friction_fit.hpp"
 #include "jointsim/io/csv_reader.hpp"
+#include "jointsim/io/output.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
 #include "jointsim/report/agreement.hpp"
@@ -1013,6 +1015,30 @@ PYBIND11_MODULE(_core, m) {
       py::arg("max_lag"), py::arg("t_begin"), py::arg("t_end"));
 
   // ------------------------------------------------------------------------------------------ identification
+  m.def(
+      "identify_currents",
+      [](const std::string& robot, const std::string& log, const std::string& output, const std::string& time,
+         const std::string& q, const std::string& qd, const std::string& qdd, const std::string& current, bool ur_rtde,
+         double t_begin, double t_end, double min_speed, double scale_bound, bool fit_offset) {
+        const int dof = systems::loadRobotWithDrives(robot).dof();
+        identify::CurrentLogColumns c = ur_rtde ? identify::CurrentLogColumns::urRtde(dof)
+                                                : identify::CurrentLogColumns::patterns(q, qd, qdd, current, dof);
+        if (!time.empty()) c.time = time;
+        identify::DriveCalibrationOptions o;
+        o.t_begin = t_begin;
+        o.t_end = t_end;
+        o.fit.min_speed = min_speed;
+        o.fit.scale_bound = scale_bound;
+        o.fit.fit_offset = fit_offset;
+        const identify::DriveCalibration cal = interruptible([&] {
+          return identify::calibrateDrives(robot, log, c, o, output.empty() ? std::string("drives.yaml") : output);
+        });
+        if (!output.empty()) io::writeFileAtomically(output, cal.drives_yaml);
+        return py::make_tuple(identify::calibrationJson(cal), cal.drives_yaml);
+      },
+      py::arg("robot"), py::arg("log"), py::arg("output"), py::arg("time"), py::arg("q"), py::arg("qd"), py::arg("qdd"),
+      py::arg("current"), py::arg("ur_rtde"), py::arg("t_begin"), py::arg("t_end"), py::arg("min_speed"),
+      py::arg("scale_bound"), py::arg("fit_offset"));
   m.def(
       "identify_clamping",
       [](const Array& t, const Array& angle, const Array& torque, const py::object& fixed_backlash) {

@@ -1,6 +1,7 @@
 // Drive parameters from measured motor currents along a motion (identify/current_fit.hpp).
 #include "jointsim/identify/current_fit.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -22,13 +23,14 @@ std::string currentFitNum(double v) {
 }
 
 /// i = (τ + τ_f(v)) / (N k_t s) + i₀ − i_measured, parameters x = (s, F_c⁺, F_c⁻, F_v⁺, F_v⁻, i₀).
-/// With `symmetric`, F_c⁻ = F_c⁺ (x[2] unused): the fit with an offset.
+/// With `symmetric`, F_c⁻ = F_c⁺ (x[2] unused): the fit with an offset; with `tied`, also F_v⁻ = F_v⁺ (x[4] unused):
+/// a motion in one direction only.
 struct CurrentResidual {
   double tau, v, i, Nkt;
-  bool symmetric;
+  bool symmetric, tied;
   template <typename T>
   bool operator()(const T* x, T* r) const {
-    const T tf = v > 0.0 ? x[1] + x[3] * v : -((symmetric ? x[1] : x[2]) + x[4] * (-v));
+    const T tf = v > 0.0 ? x[1] + x[3] * v : -((symmetric || tied ? x[1] : x[2]) + (tied ? x[3] : x[4]) * (-v));
     r[0] = (T(tau) + tf) / (T(Nkt) * x[0]) + x[5] - T(i);
     return true;
   }
@@ -95,21 +97,24 @@ CurrentFit fitDriveCurrents(const multibody::Model& model, const std::vector<Dri
     const DriveNominal& d = drives[static_cast<size_t>(j)];
     const double Nkt = d.ratio * d.kt;
     double x[6] = {1.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-    ceres::Problem problem;
     int pos = 0, neg = 0;
     for (Eigen::Index k = 0; k < K; ++k) {
       const double v = log.qd(k, j);
-      if (std::abs(v) < o.min_speed || v == 0.0) continue;
-      (v > 0.0 ? pos : neg) += 1;
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CurrentResidual, 1, 6>(
-                                   new CurrentResidual{tau(k, j), v, log.current(k, j), Nkt, o.fit_offset}),
-                               nullptr, x);
+      if (std::abs(v) >= o.min_speed && v != 0.0) (v > 0.0 ? pos : neg) += 1;
     }
-    if (pos < 20 || neg < 20)
+    if (pos + neg < 40)
       throw UnidentifiableError(log.source + ": joint " + joint + ": " + std::to_string(pos) +
                                 " samples moving forward and " + std::to_string(neg) + " backward faster than " +
-                                currentFitNum(o.min_speed) +
-                                " rad/s: at least 20 of each are needed for the friction of both directions");
+                                currentFitNum(o.min_speed) + " rad/s: at least 40 moving samples are needed");
+    const bool tied = pos < 20 || neg < 20;  // one direction only: one friction law for both
+    ceres::Problem problem;
+    for (Eigen::Index k = 0; k < K; ++k) {
+      const double v = log.qd(k, j);
+      if (std::abs(v) < o.min_speed || v == 0.0) continue;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CurrentResidual, 1, 6>(
+                                   new CurrentResidual{tau(k, j), v, log.current(k, j), Nkt, o.fit_offset, tied}),
+                               nullptr, x);
+    }
     const double lower[6] = {1.0 - o.scale_bound, 0.0, 0.0, 0.0, 0.0, -o.max_offset};
     const double upper[6] = {1.0 + o.scale_bound, 1e6, 1e6, 1e6, 1e6, o.max_offset};
     for (int p = 0; p < 6; ++p) {
@@ -118,7 +123,12 @@ CurrentFit fitDriveCurrents(const multibody::Model& model, const std::vector<Dri
     }
     // An offset and a direction-dependent Coulomb friction are one degree of freedom (without stiction, moving
     // samples see i₀ + F_c⁺/(N k_t s) and i₀ − F_c⁻/(N k_t s)): fit either.
-    problem.SetManifold(x, new ceres::SubsetManifold(6, {o.fit_offset ? 2 : 5}));
+    std::vector<int> fixed{o.fit_offset ? 2 : 5};
+    if (tied) {
+      fixed = {2, 4};
+      if (!o.fit_offset) fixed.push_back(5);
+    }
+    problem.SetManifold(x, new ceres::SubsetManifold(6, fixed));
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::DENSE_QR;
     so.max_num_iterations = o.max_iterations;
@@ -133,6 +143,7 @@ CurrentFit fitDriveCurrents(const multibody::Model& model, const std::vector<Dri
                                 ": Ceres found no usable solution: " + summary.message);
     JointCurrentFit f;
     f.points = pos + neg;
+    f.tied = tied;
     f.rms = std::sqrt(2.0 * summary.final_cost / f.points);
     ceres::Covariance::Options co;
     co.algorithm_type = ceres::DENSE_SVD;
@@ -145,8 +156,9 @@ CurrentFit fitDriveCurrents(const multibody::Model& model, const std::vector<Dri
                                 "this motion (rank-deficient Jacobian)");
     double C[36];
     cov.GetCovarianceBlock(x, x, C);
-    const double s2 = 2.0 * summary.final_cost / static_cast<double>(f.points - 5);
-    if (o.fit_offset) x[2] = x[1];
+    const double s2 = 2.0 * summary.final_cost / static_cast<double>(f.points - (6 - static_cast<int>(fixed.size())));
+    if (o.fit_offset || tied) x[2] = x[1];
+    if (tied) x[4] = x[3];
     ParameterEstimate* out[6] = {&f.kt_scale,    &f.coulomb_pos, &f.coulomb_neg,
                                  &f.viscous_pos, &f.viscous_neg, &f.offset};
     const char* names[6] = {"kt_scale", "coulomb_pos", "coulomb_neg", "viscous_pos", "viscous_neg", "offset"};
@@ -154,10 +166,11 @@ CurrentFit fitDriveCurrents(const multibody::Model& model, const std::vector<Dri
     for (int p = 0; p < 6; ++p) {
       out[p]->value = x[p];
       out[p]->initial = initial[p];
-      out[p]->std_error = std::sqrt(std::max(0.0, C[7 * (p == 2 && o.fit_offset ? 1 : p)] * s2));
+      const int q = p == 2 && (o.fit_offset || tied) ? 1 : (p == 4 && tied ? 3 : p);  // a tied one: its twin's error
+      out[p]->std_error = std::sqrt(std::max(0.0, C[7 * q] * s2));
       auto near = [&](double b) { return std::abs(x[p] - b) <= 1e-8 * std::max(1.0, std::abs(b)); };
-      const bool fixed = p == (o.fit_offset ? 2 : 5);
-      if (!fixed && (near(lower[p]) || near(upper[p]))) f.at_bound.emplace_back(names[p]);
+      const bool is_fixed = std::find(fixed.begin(), fixed.end(), p) != fixed.end();
+      if (!is_fixed && (near(lower[p]) || near(upper[p]))) f.at_bound.emplace_back(names[p]);
     }
     fit.joints.push_back(f);
   }

@@ -2,8 +2,12 @@
 // joint recovered from currents synthesised along the real UR5 log's motion with known parameters, current noise
 // and quantisation; the bounds; the errors.
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -12,6 +16,8 @@
 #include "jointsim/identify/current_fit.hpp"
 #include "jointsim/io/csv_reader.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
+#include "jointsim/systems/robot_with_drives.hpp"
+#include "test_util.hpp"
 
 using namespace jointsim;
 using ::testing::HasSubstr;
@@ -127,7 +133,8 @@ TEST(CurrentFit, BoundsHoldAndErrorsNameTheProblem) {
   identify::CurrentFitOptions o;
   o.min_speed = 10.0;  // no sample moves that fast
   EXPECT_THAT([&] { identify::fitDriveCurrents(ur5, drives, log, o); },
-              ThrowsMessage<UnidentifiableError>(HasSubstr("joint shoulder_pan_joint: 0 samples moving forward")));
+              ThrowsMessage<UnidentifiableError>(
+                  HasSubstr("joint shoulder_pan_joint: 0 samples moving forward and 0 backward")));
   o = {};
   o.scale_bound = 1.5;
   EXPECT_THAT([&] { identify::fitDriveCurrents(ur5, drives, log, o); },
@@ -135,4 +142,44 @@ TEST(CurrentFit, BoundsHoldAndErrorsNameTheProblem) {
   log.current(3, 2) = std::nan("");
   EXPECT_THAT([&] { identify::fitDriveCurrents(ur5, drives, log); },
               ThrowsMessage<InputError>(HasSubstr("synthetic: every value must be finite")));
+}
+
+TEST(CurrentCalibration, TheCommandWritesADrivesFileThatTrackingLoadsWithTheFittedValues) {
+  const jointsim::test::TempDir tmp;
+  const std::string out = (tmp / "drives.yaml").string(), json = (tmp / "cal.json").string();
+  const auto r = jointsim::test::runCli("identify currents " + kDir + "robots/ur5_drives.yaml " + kDir +
+                                        "logs/ur5_kufieta2013_mov6_first30s.csv -o " + out + " --json " + json);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("on a bound: kt_scale"));  // wrist 3 (docs/replay.md)
+  // The written file is a robot-with-drives file: k_t = the nominal × s, friction per direction as fitted.
+  const systems::RobotSystem nominal = systems::loadRobotWithDrives(kDir + "robots/ur5_drives.yaml");
+  const systems::RobotSystem cal = systems::loadRobotWithDrives(out);
+  std::ifstream in(json);
+  const auto j = nlohmann::json::parse(in);
+  for (size_t k = 0; k < 6; ++k) {
+    const double s = j["joints"][k]["kt_scale"]["value"].get<double>();
+    EXPECT_NEAR(cal.drives()[k].motor.kt, s * nominal.drives()[k].motor.kt, 1e-7) << k;
+    EXPECT_NEAR(cal.drives()[k].motor.ke, cal.drives()[k].motor.kt, 1e-12) << k;
+    const auto table = systems::driveParameterTable(cal.drives()[k], "friction");
+    auto value = [&](const std::string& key) {
+      for (const auto& p : table)
+        if (p.key == key) return p.value;
+      ADD_FAILURE() << "no " << key;
+      return 0.0;
+    };
+    EXPECT_NEAR(value("positive.alpha0"), j["joints"][k]["coulomb_pos"]["value"].get<double>(), 1e-6) << k;
+    EXPECT_NEAR(value("negative.alpha2"), j["joints"][k]["viscous_neg"]["value"].get<double>(), 1e-6) << k;
+  }
+  // The shipped calibrated file is what the command writes (same k_t to its 8 digits).
+  const systems::RobotSystem shipped = systems::loadRobotWithDrives(kDir + "robots/ur5_drives_measured.yaml");
+  for (size_t k = 0; k < 6; ++k) EXPECT_NEAR(shipped.drives()[k].motor.kt, cal.drives()[k].motor.kt, 1e-7) << k;
+
+  // A log without the current columns: one line naming the file and the column, exit 2, nothing written.
+  const std::string out2 = (tmp / "none.yaml").string();
+  const auto bad =
+      jointsim::test::runCli("identify currents " + kDir + "robots/ur5_drives.yaml " + kDir +
+                             "logs/ur5_kufieta2013_mov6_first30s.csv -o " + out2 + " --current 'amps_{j}'");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_THAT(bad.err, HasSubstr("ur5_kufieta2013_mov6_first30s.csv:1: missing column 'amps_1'"));
+  EXPECT_FALSE(std::filesystem::exists(out2));
 }

@@ -53,3 +53,24 @@ def test_agreement_of_columns_against_closed_forms_and_errors():
         jointsim.agreement(run, {"t_s": t, "m": m}, "p_{j}=m")
     with pytest.raises(jointsim.InputError, match="missing column 'q'"):
         jointsim.agreement(run, {"t_s": t, "m": m}, "q=m")
+
+
+def test_identify_currents_writes_the_drives_file_the_cli_writes(tmp_path):
+    robot = jointsim.data_path("robots/ur5_drives.yaml")
+    log = jointsim.data_path("logs/ur5_kufieta2013_mov6_first30s.csv")
+    out = tmp_path / "drives.yaml"
+    r = jointsim.identify_currents(robot, log, out)
+    assert out.read_text() == r["drives_yaml"]
+    assert [j["joint"] for j in r["joints"]] == JOINTS
+    assert 0.6 <= min(j["kt_scale"]["value"] for j in r["joints"])
+    cli_out = tmp_path / "cli.yaml"
+    cli = os.environ.get("JOINTSIM_CLI", "jointsim")
+    subprocess.run([cli, "identify", "currents", str(robot), str(log), "-o", str(cli_out)], check=True,
+                   capture_output=True)
+    assert cli_out.read_text().split("\n", 3)[3] == out.read_text().split("\n", 3)[3]  # after the paths' lines
+    # The calibrated twin runs from Python with the new file.
+    res = jointsim.run_experiment(jointsim.data_path("experiments/ur5_measured_replay.yaml"),
+                                  {"duration": 0.5, "robot": str(out)})
+    assert res.summary["status"] == "ok"
+    with pytest.raises(jointsim.InputError, match="missing column 'amps_1'"):
+        jointsim.identify_currents(robot, log, current="amps_{j}")

@@ -56,13 +56,16 @@ struct CurrentFitOptions {
 
 /// Fit of one joint.
 struct JointCurrentFit {
-  ParameterEstimate kt_scale;         ///< s [-]
-  ParameterEstimate coulomb_pos;      ///< F_c⁺ [N·m]
-  ParameterEstimate coulomb_neg;      ///< F_c⁻ [N·m] (a magnitude)
-  ParameterEstimate viscous_pos;      ///< F_v⁺ [N·m·s/rad]
-  ParameterEstimate viscous_neg;      ///< F_v⁻ [N·m·s/rad] (a magnitude)
-  ParameterEstimate offset;           ///< i₀ [A] (0, not fitted, unless fit_offset)
-  int points = 0;                     ///< samples fitted [-]
+  ParameterEstimate kt_scale;     ///< s [-]
+  ParameterEstimate coulomb_pos;  ///< F_c⁺ [N·m]
+  ParameterEstimate coulomb_neg;  ///< F_c⁻ [N·m] (a magnitude)
+  ParameterEstimate viscous_pos;  ///< F_v⁺ [N·m·s/rad]
+  ParameterEstimate viscous_neg;  ///< F_v⁻ [N·m·s/rad] (a magnitude)
+  ParameterEstimate offset;       ///< i₀ [A] (0, not fitted, unless fit_offset)
+  int points = 0;                 ///< samples fitted [-]
+  /// True when the motion moved this joint in one direction only (fewer than 20 samples the other way): one
+  /// Coulomb and one viscous coefficient for both directions (the negative ones equal the positive ones).
+  bool tied = false;
   double rms = 0.0;                   ///< RMS current residual over the fitted samples [A]
   std::vector<std::string> at_bound;  ///< names of the parameters that ended on a bound
 };
@@ -72,8 +75,9 @@ struct CurrentFit {
 };
 
 /// Fits every joint (see the file comment). InputError on inconsistent sizes, non-finite data or bad options;
-/// UnidentifiableError (naming the joint) when a joint has fewer than 20 samples in a direction or a singular
-/// covariance.
+/// UnidentifiableError (naming the joint) when a joint has fewer than 40 moving samples or a singular covariance.
+/// A joint moved in one direction only (fewer than 20 samples the other way) gets one friction law for both
+/// (JointCurrentFit::tied).
 CurrentFit fitDriveCurrents(const multibody::Model& model, const std::vector<DriveNominal>& drives,
                             const CurrentLog& log, const CurrentFitOptions& options = {});
 

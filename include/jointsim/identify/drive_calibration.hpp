@@ -1,0 +1,67 @@
+#pragma once
+/// \file
+/// Calibrating a robot's drives from a measured log (`jointsim identify currents`, docs/replay.md): reads the
+/// motion and the measured motor currents of a robot log, fits the fast inner model of identify/current_fit.hpp
+/// with the nominal drives of a robot-with-drives file, and writes a new robot-with-drives file with the calibrated
+/// values, which `tracking` experiments accept:
+/// - motor: k_t and k_e multiplied by the fitted scale s (a DC motor's k_e = k_t in SI units);
+/// - friction (on the gear output, as before): `{type: lugre, sigma0, sigma1, positive: {alpha0: F_c⁺, alpha1: 0,
+///   alpha2: F_v⁺, v_s}, negative: {...}}`, whose steady state is the fitted Coulomb + viscous law of each direction;
+///   the bristle stiffness and damping are kept from the file's friction when it has them (sigma0, sigma1), else
+///   1e5 N·m/rad and 300 N·m·s/rad;
+/// - a fitted current offset (fit_offset) belongs to the measurement, not the drive: it is reported, not written.
+/// Everything else of the file (multibody, transmissions, controllers, sensors) is copied; the multibody path is
+/// rewritten relative to the new file.
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "jointsim/identify/current_fit.hpp"
+
+namespace jointsim::identify {
+
+/// Column names of a log with measured currents (n names each, joint order).
+struct CurrentLogColumns {
+  std::string time;                              ///< time [s]; empty: the first column
+  std::vector<std::string> q, qd, qdd, current;  ///< [rad], [rad/s], [rad/s²], [A]
+  /// From patterns with {j} (1..n) or {i} (0..n−1), e.g. ("q_actual_{j}", "qd_target_{j}", ...).
+  static CurrentLogColumns patterns(const std::string& q, const std::string& qd, const std::string& qdd,
+                                    const std::string& current, int dof);
+  /// UR RTDE: actual_q_{i}, target_qd_{i}, target_qdd_{i}, actual_current_{i}, timestamp.
+  static CurrentLogColumns urRtde(int dof);
+};
+
+struct DriveCalibrationOptions {
+  CurrentFitOptions fit;
+  double t_begin = -std::numeric_limits<double>::infinity();  ///< use samples from this log time [s]
+  double t_end = std::numeric_limits<double>::infinity();     ///< ... up to this log time [s]
+  double gap_factor = 3.0;  ///< a time step > gap_factor × the median is an error (0: no check)
+};
+
+struct DriveCalibration {
+  std::vector<std::string> joints;    ///< joint names, model order
+  std::vector<DriveNominal> nominal;  ///< the file's drives
+  CurrentFit fit;
+  long samples = 0;                 ///< log samples in the window
+  std::vector<double> rms_percent;  ///< inner model vs measured over every sample of the window, % of range
+  std::string drives_yaml;          ///< the calibrated robot-with-drives file (text)
+};
+
+/// Reads the motion and currents of `log_csv` within [t_begin, t_end] (io::readCsv: InputError naming the file,
+/// line and column for a missing column, a non-number or non-finite cell; a time that does not increase or a gap).
+CurrentLog readCurrentLog(const std::string& log_csv, int dof, const CurrentLogColumns& columns,
+                          const DriveCalibrationOptions& options = {});
+
+/// Calibrates the drives of `robot_file` (a robot-with-drives YAML) from `log_csv`; `output_file` is where the
+/// drives file will be written (for its relative multibody path). InputError / UnidentifiableError as the parts.
+DriveCalibration calibrateDrives(const std::string& robot_file, const std::string& log_csv,
+                                 const CurrentLogColumns& columns, const DriveCalibrationOptions& options,
+                                 const std::string& output_file);
+
+/// A text report: per joint the estimates ± standard errors, the bounds hit and the inner model's RMS.
+std::string formatCalibration(const DriveCalibration& calibration);
+/// The same as JSON text.
+std::string calibrationJson(const DriveCalibration& calibration);
+
+}  // namespace jointsim::identify
