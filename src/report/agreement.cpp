@@ -158,7 +158,8 @@ AgreementResult agreement(const io::CsvTable& predicted, const io::CsvTable& mea
     a.lag = 0.0;
     a.rms_percent_at_lag = a.rms_percent;
     if (o.max_lag > 0.0 && rows_lag.size() >= 3) {
-      const double step = dt / 4.0;
+      // Steps of a quarter sample, at most 1000 each way (a log with a tiny time step or a long max_lag stays quick).
+      const double step = std::max(dt / 4.0, o.max_lag / 1000.0);
       const long K = static_cast<long>(std::floor(o.max_lag / step + 1e-9));
       double best = std::numeric_limits<double>::infinity();
       for (long k = -K; k <= K; ++k) {

@@ -121,6 +121,11 @@ TEST(Agreement, PairPatternsAndErrors) {
         report::agreementOfFiles(run, meas, {{"a", "i"}}, o);
       },
       ThrowsMessage<InputError>(HasSubstr("meas.csv: only 0 measured samples lie inside the run")));
+  // A long lag search on a finely sampled log stays bounded (at most 1000 lags each way).
+  report::AgreementOptions wide;
+  wide.max_lag = 0.4;
+  const auto fine = writeSignal(tmp, "fine.csv", "t_s,i", 0.0, 1e-5, 1.0, [](double t) { return std::vector{m(t)}; });
+  EXPECT_NEAR(report::agreementOfFiles(run, fine, {{"a", "i"}}, wide).pairs[0].lag, 0.0, 1e-12);
   const auto back = writeSignal(tmp, "back.csv", "t_s,i", 0.0, 0.01, 0.05, [](double t) { return std::vector{t}; });
   std::ofstream(back, std::ios::app) << "0.01,3\n";
   EXPECT_THAT(

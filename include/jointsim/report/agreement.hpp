@@ -13,7 +13,8 @@
 /// Per pair, with e_k = p_k − m_k over the N compared samples and R = max m − min m:
 ///   rms = √(Σ e_k²/N), rms_percent = 100 rms/R, bias = Σ e_k/N, max_abs = max |e_k|,
 ///   correlation = Pearson's r of (p, m),
-///   lag = the τ in [−max_lag, max_lag] (steps of a quarter of the measured sample interval) that minimises the
+///   lag = the τ in [−max_lag, max_lag] (steps of a quarter of the measured sample interval, at most 1000 steps each
+///   way) that minimises the
 ///   RMS of p(t − τ) − m(t) over the samples where every shifted prediction exists; τ > 0: the measurement comes
 ///   later than the prediction (a measured current lagging its model by one sample: τ ≈ +8 ms at 125 Hz).
 
