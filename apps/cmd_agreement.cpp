@@ -10,6 +10,7 @@
 #include "cli_common.hpp"
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
+#include "jointsim/io/csv_reader.hpp"
 #include "jointsim/io/input_files.hpp"
 #include "jointsim/io/json.hpp"
 #include "jointsim/io/output.hpp"
@@ -67,12 +68,12 @@ void addAgreementCommand(CLI::App& app) {
     std::vector<report::SignalPair> pairs;
     for (const std::string& p : opt->pairs)
       for (auto& e : report::SignalPair::expand(p, opt->joints, "--pair")) pairs.push_back(std::move(e));
-    const std::string csv = runCsv(opt->predicted);
-    const report::AgreementResult r = report::agreementOfFiles(csv, opt->measured, pairs, opt->agreement);
+    const io::CsvTable pred = io::readCsv(runCsv(opt->predicted)), meas = io::readCsv(opt->measured);
+    const report::AgreementResult r = report::agreement(pred, meas, pairs, opt->agreement);
     std::fputs(report::formatAgreement(r).c_str(), stdout);
     if (!opt->json.empty()) io::writeFileAtomically(opt->json, report::agreementJson(r));
     if (!opt->fig_dir.empty()) {
-      const auto figs = report::plotAgreement(csv, opt->measured, r, opt->agreement, opt->fig_dir, opt->gnuplot);
+      const auto figs = report::plotAgreement(pred, meas, r, opt->agreement, opt->fig_dir, opt->gnuplot);
       std::printf("%zu figure%s written to %s\n", figs.size(), figs.size() == 1 ? "" : "s", opt->fig_dir.c_str());
     }
     std::fflush(stdout);

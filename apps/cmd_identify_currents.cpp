@@ -9,14 +9,13 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/identify/drive_calibration.hpp"
 #include "jointsim/io/output.hpp"
-#include "jointsim/systems/robot_with_drives.hpp"
 
 namespace jointsim::cli {
 
 void addIdentifyCurrentsCommand(CLI::App& identify) {
   struct Options {
-    std::string robot, log, output, json, format, time, q = "q_actual_{j}", qd = "qd_target_{j}",
-                                                        qdd = "qdd_target_{j}", current = "i_actual_{j}";
+    std::string robot, log, output, json, format;
+    identify::CurrentLogColumns columns;  // its defaults: the shipped UR5 log's names
     identify::DriveCalibrationOptions cal;
   };
   auto opt = std::make_shared<Options>();
@@ -28,11 +27,11 @@ void addIdentifyCurrentsCommand(CLI::App& identify) {
   cmd->add_option("-o,--output", opt->output, "The calibrated robot-with-drives file to write")->required();
   cmd->add_option("--format", opt->format, "Column names of a UR RTDE log (actual_q_{i}, target_qd_{i}, ...)")
       ->check(CLI::IsMember({"ur_rtde"}));
-  cmd->add_option("--time", opt->time, "Time column (default: the first column)");
-  cmd->add_option("--q", opt->q, "Measured positions, a pattern with {j} (1..n) or {i} (default q_actual_{j})");
-  cmd->add_option("--qd", opt->qd, "Velocities (default qd_target_{j}: the controller's, noise-free)");
-  cmd->add_option("--qdd", opt->qdd, "Accelerations (default qdd_target_{j})");
-  cmd->add_option("--current", opt->current, "Measured motor currents (default i_actual_{j})");
+  cmd->add_option("--time", opt->columns.time, "Time column (default: the first column)");
+  cmd->add_option("--q", opt->columns.q, "Measured positions, a pattern with {j} (1..n) or {i} (default q_actual_{j})");
+  cmd->add_option("--qd", opt->columns.qd, "Velocities (default qd_target_{j}: the controller's, noise-free)");
+  cmd->add_option("--qdd", opt->columns.qdd, "Accelerations (default qdd_target_{j})");
+  cmd->add_option("--current", opt->columns.current, "Measured motor currents (default i_actual_{j})");
   cmd->add_option("--from", opt->cal.t_begin, "Use samples from this log time [s]");
   cmd->add_option("--to", opt->cal.t_end, "... up to this log time [s]");
   cmd->add_option("--min-speed", opt->cal.fit.min_speed, "Samples slower than this are not fitted [rad/s] (0.01)");
@@ -41,11 +40,11 @@ void addIdentifyCurrentsCommand(CLI::App& identify) {
                 "Fit a current offset and a symmetric Coulomb friction instead of one per direction");
   cmd->add_option("--json", opt->json, "Also write the estimates as JSON to this file");
   cmd->callback([opt] {
-    const int dof = systems::loadRobotWithDrives(opt->robot).dof();
-    identify::CurrentLogColumns c =
-        opt->format == "ur_rtde" ? identify::CurrentLogColumns::urRtde(dof)
-                                 : identify::CurrentLogColumns::patterns(opt->q, opt->qd, opt->qdd, opt->current, dof);
-    if (!opt->time.empty()) c.time = opt->time;
+    identify::CurrentLogColumns c = opt->columns;
+    if (opt->format == "ur_rtde") {
+      c = identify::CurrentLogColumns::urRtde();
+      if (!opt->columns.time.empty()) c.time = opt->columns.time;
+    }
     const identify::DriveCalibration cal = identify::calibrateDrives(opt->robot, opt->log, c, opt->cal, opt->output);
     io::writeFileAtomically(opt->output, cal.drives_yaml);
     if (!opt->json.empty()) io::writeFileAtomically(opt->json, identify::calibrationJson(cal));

@@ -1020,10 +1020,11 @@ PYBIND11_MODULE(_core, m) {
       [](const std::string& robot, const std::string& log, const std::string& output, const std::string& time,
          const std::string& q, const std::string& qd, const std::string& qdd, const std::string& current, bool ur_rtde,
          double t_begin, double t_end, double min_speed, double scale_bound, bool fit_offset) {
-        const int dof = systems::loadRobotWithDrives(robot).dof();
-        identify::CurrentLogColumns c = ur_rtde ? identify::CurrentLogColumns::urRtde(dof)
-                                                : identify::CurrentLogColumns::patterns(q, qd, qdd, current, dof);
-        if (!time.empty()) c.time = time;
+        identify::CurrentLogColumns c{time, q, qd, qdd, current};
+        if (ur_rtde) {
+          c = identify::CurrentLogColumns::urRtde();
+          if (!time.empty()) c.time = time;
+        }
         identify::DriveCalibrationOptions o;
         o.t_begin = t_begin;
         o.t_end = t_end;

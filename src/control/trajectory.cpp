@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -22,36 +21,6 @@ std::string trajectoryNum(double v) {
 }
 
 bool allFinite(const Eigen::VectorXd& v) { return v.allFinite(); }
-
-/// The times of column `col` of a log, checked: at least 2 rows, strictly increasing, and (gap_factor > 0) no step
-/// larger than gap_factor × the median step. `where(r)` is the location of data row r for messages.
-std::vector<double> checkedTimes(const io::CsvTable& table, int col, double gap_factor,
-                                 const std::function<std::string(Eigen::Index)>& where) {
-  std::vector<double> times;
-  for (Eigen::Index r = 0; r < table.rows(); ++r) {
-    const double t = table.data(r, col);
-    if (!times.empty() && !(t > times.back()))
-      throw InputError(where(r) + ": time " + trajectoryNum(t) + " s is not after the previous row's " +
-                       trajectoryNum(times.back()) + " s (time must increase strictly)");
-    times.push_back(t);
-  }
-  if (times.size() < 2)
-    throw InputError(table.path + ": expected at least 2 data rows, got " + std::to_string(times.size()));
-  if (gap_factor > 0.0) {
-    std::vector<double> dt(times.size() - 1);
-    for (size_t k = 1; k < times.size(); ++k) dt[k - 1] = times[k] - times[k - 1];
-    std::vector<double> sorted = dt;
-    std::sort(sorted.begin(), sorted.end());
-    const size_t m = sorted.size();
-    const double median = (m % 2 == 1) ? sorted[m / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
-    for (size_t k = 0; k < dt.size(); ++k)
-      if (dt[k] > gap_factor * median)
-        throw InputError(where(static_cast<Eigen::Index>(k + 1)) + ": time step " + trajectoryNum(dt[k]) +
-                         " s is more than " + trajectoryNum(gap_factor) + "x the median " + trajectoryNum(median) +
-                         " s (a gap)");
-  }
-  return times;
-}
 
 }  // namespace
 
@@ -403,7 +372,7 @@ SampledTrajectory SampledTrajectory::fromCsv(const std::string& path, int dof, c
       cols.push_back(static_cast<size_t>(it - header.begin()));
     }
   }
-  const std::vector<double> times = checkedTimes(table, 0, gap_factor, [&](Eigen::Index r) {
+  const std::vector<double> times = io::checkedTimes(table, 0, gap_factor, [&](Eigen::Index r) {
     return path + ":" + std::to_string(table.lines[static_cast<size_t>(r)]);
   });
   std::vector<double> values;  // row-major, dof per sample
@@ -599,10 +568,7 @@ LoggedTrajectory LoggedTrajectory::fromCsv(const std::string& path, int dof, con
   const std::vector<int> cqd = pick(columns.qd, "commanded velocities in rad/s", false);
   const std::vector<int> cqdd = pick(columns.qdd, "commanded accelerations in rad/s^2", true);
   const std::vector<int> cm = pick(columns.q_measured, "measured positions in rad", true);
-  const std::string tname = table.header[static_cast<size_t>(tc)];
-  const std::vector<double> times = checkedTimes(table, tc, gap_factor, [&](Eigen::Index r) {
-    return table.where(r, tc) + ": column '" + tname + "'";
-  });
+  const std::vector<double> times = io::checkedTimes(table, tc, gap_factor);
   const Eigen::Index K = table.rows();
   auto gather = [&](const std::vector<int>& idx) {
     Eigen::MatrixXd m(dof, idx.empty() ? 0 : K);

@@ -9,6 +9,7 @@
 #include <ceres/ceres.h>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 #include "jointsim/multibody/data.hpp"
 #include "quiet_ceres.hpp"
@@ -16,11 +17,7 @@
 namespace jointsim::identify {
 namespace {
 
-std::string currentFitNum(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.6g", v);
-  return b;
-}
+std::string currentFitNum(double v) { return formatNumber(v, 6); }
 
 /// i = (τ + τ_f(v)) / (N k_t s) + i₀ − i_measured, parameters x = (s, F_c⁺, F_c⁻, F_v⁺, F_v⁻, i₀).
 /// With `symmetric`, F_c⁻ = F_c⁺ (x[2] unused): the fit with an offset; with `tied`, also F_v⁻ = F_v⁺ (x[4] unused):

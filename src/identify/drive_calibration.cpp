@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/control/trajectory.hpp"
 #include "jointsim/io/csv_reader.hpp"
 #include "jointsim/io/input_files.hpp"
@@ -22,18 +23,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string calNum(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.6g", v);
-  return b;
-}
+std::string calNum(double v) { return formatNumber(v, 6); }
 
 /// A number as a YAML scalar with 8 significant digits (plain, not quoted).
-std::string yamlNum(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.8g", v);
-  return b;
-}
+std::string yamlNum(double v) { return formatNumber(v, 8); }
 
 double tableValue(const std::vector<drive::ParameterInfo>& table, const std::string& key, double fallback) {
   for (const auto& p : table)
@@ -43,43 +36,32 @@ double tableValue(const std::vector<drive::ParameterInfo>& table, const std::str
 
 }  // namespace
 
-CurrentLogColumns CurrentLogColumns::patterns(const std::string& q, const std::string& qd, const std::string& qdd,
-                                              const std::string& current, int dof) {
+CurrentLogColumns CurrentLogColumns::urRtde() {
   CurrentLogColumns c;
-  c.q = control::LogColumns::expand(q, dof, "q");
-  c.qd = control::LogColumns::expand(qd, dof, "qd");
-  c.qdd = control::LogColumns::expand(qdd, dof, "qdd");
-  c.current = control::LogColumns::expand(current, dof, "current");
-  return c;
-}
-
-CurrentLogColumns CurrentLogColumns::urRtde(int dof) {
-  CurrentLogColumns c = patterns("actual_q_{i}", "target_qd_{i}", "target_qdd_{i}", "actual_current_{i}", dof);
   c.time = "timestamp";
+  c.q = "actual_q_{i}";
+  c.qd = "target_qd_{i}";
+  c.qdd = "target_qdd_{i}";
+  c.current = "actual_current_{i}";
   return c;
 }
 
 CurrentLog readCurrentLog(const std::string& log_csv, int dof, const CurrentLogColumns& columns,
                           const DriveCalibrationOptions& o) {
-  // The motion through the log trajectory's reader (the same column, time and gap checks), the currents here.
-  control::LogColumns lc;
-  lc.time = columns.time;
-  lc.q = columns.q;
-  lc.qd = columns.qd;
-  lc.qdd = columns.qdd;
-  (void)control::LoggedTrajectory::fromCsv(log_csv, dof, lc, -1.0, o.gap_factor, false);
+  if (!(o.gap_factor == 0.0 || (o.gap_factor > 1.0 && std::isfinite(o.gap_factor))))
+    throw InputError(log_csv + ": gap_factor must be > 1 (or 0 to disable the gap check), got " + calNum(o.gap_factor));
   const io::CsvTable t = io::readCsv(log_csv);
   const int tc = columns.time.empty() ? 0 : t.require(columns.time, "the log's time in s");
-  auto cols = [&](const std::vector<std::string>& names, const char* what) {
-    if (names.size() != static_cast<size_t>(dof))
-      throw InputError(log_csv + ": " + std::to_string(names.size()) + " " + what + " column names for " +
-                       std::to_string(dof) + " joints");
+  auto cols = [&](const std::string& pattern, const char* key, const char* what) {
     std::vector<int> idx;
-    for (const auto& n : names) idx.push_back(t.require(n, what));
+    for (const auto& n : control::LogColumns::expand(pattern, dof, key)) idx.push_back(t.require(n, what));
     return idx;
   };
-  const auto cq = cols(columns.q, "measured positions in rad"), cqd = cols(columns.qd, "velocities in rad/s"),
-             cqdd = cols(columns.qdd, "accelerations in rad/s^2"), ci = cols(columns.current, "measured currents in A");
+  const auto cq = cols(columns.q, "q", "measured positions in rad"),
+             cqd = cols(columns.qd, "qd", "velocities in rad/s"),
+             cqdd = cols(columns.qdd, "qdd", "accelerations in rad/s^2"),
+             ci = cols(columns.current, "current", "measured currents in A");
+  io::checkedTimes(t, tc, o.gap_factor);
   std::vector<Eigen::Index> rows;
   for (Eigen::Index r = 0; r < t.rows(); ++r)
     if (t.data(r, tc) >= o.t_begin && t.data(r, tc) <= o.t_end) rows.push_back(r);

@@ -1,5 +1,6 @@
 #include "jointsim/io/csv_reader.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
@@ -115,6 +116,37 @@ CsvTable readCsv(const std::string& path, bool require_finite) {
     }
   }
   return t;
+}
+
+std::vector<double> checkedTimes(const CsvTable& table, int col, double gap_factor,
+                                 const std::function<std::string(Eigen::Index)>& where_fn) {
+  auto where = [&](Eigen::Index r) {
+    return where_fn ? where_fn(r) : table.where(r, col) + ": column '" + table.header[static_cast<size_t>(col)] + "'";
+  };
+  std::vector<double> times;
+  for (Eigen::Index r = 0; r < table.rows(); ++r) {
+    const double t = table.data(r, col);
+    if (!times.empty() && !(t > times.back()))
+      throw InputError(where(r) + ": time " + formatNumber(t, 6) + " s is not after the previous row's " +
+                       formatNumber(times.back(), 6) + " s (time must increase strictly)");
+    times.push_back(t);
+  }
+  if (times.size() < 2)
+    throw InputError(table.path + ": expected at least 2 data rows, got " + std::to_string(times.size()));
+  if (gap_factor > 0.0) {
+    std::vector<double> dt(times.size() - 1);
+    for (size_t k = 1; k < times.size(); ++k) dt[k - 1] = times[k] - times[k - 1];
+    std::vector<double> sorted = dt;
+    std::sort(sorted.begin(), sorted.end());
+    const size_t m = sorted.size();
+    const double median = (m % 2 == 1) ? sorted[m / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
+    for (size_t k = 0; k < dt.size(); ++k)
+      if (dt[k] > gap_factor * median)
+        throw InputError(where(static_cast<Eigen::Index>(k + 1)) + ": time step " + formatNumber(dt[k], 6) +
+                         " s is more than " + formatNumber(gap_factor, 6) + "x the median " + formatNumber(median, 6) +
+                         " s (a gap)");
+  }
+  return times;
 }
 
 }  // namespace jointsim::io

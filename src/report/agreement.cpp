@@ -21,11 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string fmt(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.6g", v);
-  return b;
-}
+std::string fmt(double v) { return formatNumber(v, 6); }
 
 /// The time column: `time` (any unit) or `t_s`, else the first column.
 int logTimeColumn(const io::CsvTable& t) {
@@ -34,14 +30,6 @@ int logTimeColumn(const io::CsvTable& t) {
     if (c >= 0) return c;
   }
   return 0;
-}
-
-void checkLogTime(const io::CsvTable& t, int c) {
-  for (Eigen::Index r = 1; r < t.rows(); ++r)
-    if (!(t.data(r, c) > t.data(r - 1, c)))
-      throw InputError(t.where(r, c) + ": column '" + t.header[static_cast<size_t>(c)] + "': time " +
-                       fmt(t.data(r, c)) + " s is not after the previous row's " + fmt(t.data(r - 1, c)) + " s");
-  if (t.rows() < 2) throw InputError(t.path + ": expected at least 2 data rows, got " + std::to_string(t.rows()));
 }
 
 /// Linear interpolation of column `c` of `t` (time column `tc`, increasing) at time x inside its range.
@@ -97,8 +85,8 @@ AgreementResult agreement(const io::CsvTable& predicted, const io::CsvTable& mea
     throw InputError("agreement: the largest lag must be >= 0 s, got " + fmt(o.max_lag));
   if (!(o.t_begin < o.t_end)) throw InputError("agreement: the time window must have t_begin < t_end");
   const int tp = logTimeColumn(predicted), tm = logTimeColumn(measured);
-  checkLogTime(predicted, tp);
-  checkLogTime(measured, tm);
+  io::checkedTimes(predicted, tp);
+  io::checkedTimes(measured, tm);
   // Measured samples whose shifted time lies inside the run, for every lag searched.
   const double p0 = predicted.data(0, tp), p1 = predicted.data(predicted.rows() - 1, tp);
   std::vector<Eigen::Index> rows, rows_lag;
@@ -228,11 +216,10 @@ std::string agreementJson(const AgreementResult& r) {
   return j.dump(2) + "\n";
 }
 
-std::vector<std::string> plotAgreement(const std::string& predicted_csv, const std::string& measured_csv,
+std::vector<std::string> plotAgreement(const io::CsvTable& pred, const io::CsvTable& meas,
                                        const AgreementResult& result, const AgreementOptions& options,
                                        const std::string& fig_dir, const std::string& gnuplot) {
   const std::string exe = findGnuplot(gnuplot);
-  const io::CsvTable pred = io::readCsv(predicted_csv), meas = io::readCsv(measured_csv);
   const int tp = logTimeColumn(pred), tm = logTimeColumn(meas);
   const fs::path out = fs::absolute(fig_dir).lexically_normal();
   io::createDirectories(out.string());

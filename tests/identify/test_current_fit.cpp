@@ -161,12 +161,7 @@ TEST(CurrentCalibration, TheCommandWritesADrivesFileThatTrackingLoadsWithTheFitt
     EXPECT_NEAR(cal.drives()[k].motor.kt, s * nominal.drives()[k].motor.kt, 1e-7) << k;
     EXPECT_NEAR(cal.drives()[k].motor.ke, cal.drives()[k].motor.kt, 1e-12) << k;
     const auto table = systems::driveParameterTable(cal.drives()[k], "friction");
-    auto value = [&](const std::string& key) {
-      for (const auto& p : table)
-        if (p.key == key) return p.value;
-      ADD_FAILURE() << "no " << key;
-      return 0.0;
-    };
+    auto value = [&](const std::string& key) { return drive::parameterValue(table, key, "friction"); };
     EXPECT_NEAR(value("positive.alpha0"), j["joints"][k]["coulomb_pos"]["value"].get<double>(), 1e-6) << k;
     EXPECT_NEAR(value("negative.alpha2"), j["joints"][k]["viscous_neg"]["value"].get<double>(), 1e-6) << k;
   }

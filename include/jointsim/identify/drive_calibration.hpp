@@ -21,15 +21,16 @@
 
 namespace jointsim::identify {
 
-/// Column names of a log with measured currents (n names each, joint order).
+/// Columns of a log with measured currents: patterns with {j} (joint 1..n) or {i} (index 0..n−1), expanded for the
+/// robot's joints.
 struct CurrentLogColumns {
-  std::string time;                              ///< time [s]; empty: the first column
-  std::vector<std::string> q, qd, qdd, current;  ///< [rad], [rad/s], [rad/s²], [A]
-  /// From patterns with {j} (1..n) or {i} (0..n−1), e.g. ("q_actual_{j}", "qd_target_{j}", ...).
-  static CurrentLogColumns patterns(const std::string& q, const std::string& qd, const std::string& qdd,
-                                    const std::string& current, int dof);
+  std::string time;                      ///< time [s]; empty: the first column
+  std::string q = "q_actual_{j}";        ///< measured positions [rad]
+  std::string qd = "qd_target_{j}";      ///< velocities [rad/s] (the controller's: noise-free)
+  std::string qdd = "qdd_target_{j}";    ///< accelerations [rad/s²]
+  std::string current = "i_actual_{j}";  ///< measured motor currents [A]
   /// UR RTDE: actual_q_{i}, target_qd_{i}, target_qdd_{i}, actual_current_{i}, timestamp.
-  static CurrentLogColumns urRtde(int dof);
+  static CurrentLogColumns urRtde();
 };
 
 struct DriveCalibrationOptions {
@@ -48,8 +49,9 @@ struct DriveCalibration {
   std::string drives_yaml;          ///< the calibrated robot-with-drives file (text)
 };
 
-/// Reads the motion and currents of `log_csv` within [t_begin, t_end] (io::readCsv: InputError naming the file,
-/// line and column for a missing column, a non-number or non-finite cell; a time that does not increase or a gap).
+/// Reads the motion and currents of the `dof` joints from `log_csv` within [t_begin, t_end] (io::readCsv: InputError
+/// naming the file, line and column for a missing column, a non-number or non-finite cell; io::checkedTimes: a time
+/// that does not increase or a gap).
 CurrentLog readCurrentLog(const std::string& log_csv, int dof, const CurrentLogColumns& columns,
                           const DriveCalibrationOptions& options = {});
 

@@ -5,6 +5,7 @@
 /// are skipped and '#' starts a comment line; cells may be quoted (RFC 4180: "a ""b""" is a "b"). Errors name
 /// the file, the line and the column: "data.csv:59:3: column 'motor_angle[rad]': expected a finite number, got 'nan'".
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,13 @@ struct CsvTable {
 /// Reads a CSV file of text cells (read through io::readInputFile). Throws InputError on an unreadable or
 /// empty file, an empty column name or a row with the wrong number of cells.
 CsvText readCsvText(const std::string& path);
+
+/// The times of column `col` of `table`, checked: at least 2 rows, strictly increasing, and (gap_factor > 0) no step
+/// larger than gap_factor × the median step (a gap). InputError at `where(r)`, the location of data row r (default:
+/// "PATH:LINE:COLUMN: column 'NAME'"): "...: time 0.004 s is not after the previous row's 0.008 s (time must
+/// increase strictly)", "...: time step 0.05 s is more than 3x the median 0.008 s (a gap)".
+std::vector<double> checkedTimes(const CsvTable& table, int col, double gap_factor = 0.0,
+                                 const std::function<std::string(Eigen::Index)>& where = {});
 
 /// Reads a numeric CSV file. As readCsvText, and throws InputError on a cell that is not a number or (when
 /// `require_finite`) a NaN or infinite value — naming the file, line and column.

@@ -78,10 +78,10 @@ std::string formatAgreement(const AgreementResult& result);
 /// The same as JSON text (an object with the files, the time range and a list `pairs`).
 std::string agreementJson(const AgreementResult& result);
 
-/// Writes one figure per pair into `fig_dir` (created): measured and predicted over log time (upper panel) and the
+/// Writes one figure per pair of `result` (made from these tables) into `fig_dir` (created): measured and predicted over log time (upper panel) and the
 /// error p − m (lower panel), named agreement_<k>_<measured column>.png; returns the paths. Needs gnuplot
 /// (report/plot.hpp: findGnuplot); figures appear only when gnuplot succeeded (temporary names, then renamed).
-std::vector<std::string> plotAgreement(const std::string& predicted_csv, const std::string& measured_csv,
+std::vector<std::string> plotAgreement(const io::CsvTable& predicted, const io::CsvTable& measured,
                                        const AgreementResult& result, const AgreementOptions& options,
                                        const std::string& fig_dir, const std::string& gnuplot = {});
 
