@@ -415,13 +415,15 @@ std::vector<std::string> LogColumns::expand(const std::string& pattern, int dof,
 }
 
 LoggedTrajectory::LoggedTrajectory(std::vector<double> times, Eigen::MatrixXd q, Eigen::MatrixXd qd,
-                                   Eigen::MatrixXd qdd, double start, std::string source, bool from_derivatives)
+                                   Eigen::MatrixXd qdd, double start, std::string source, bool from_derivatives,
+                                   double rest_speed)
     : t_(std::move(times)),
       q_(std::move(q)),
       qd_(std::move(qd)),
       qdd_(std::move(qdd)),
       start_(start),
-      source_(std::move(source)) {
+      source_(std::move(source)),
+      rest_speed_(rest_speed) {
   const auto K = static_cast<Eigen::Index>(t_.size());
   if (K < 2) throw InputError(source_ + ": a logged trajectory needs at least 2 samples, got " + std::to_string(K));
   auto shape = [&](const Eigen::MatrixXd& m, const char* what) {
@@ -438,11 +440,15 @@ LoggedTrajectory::LoggedTrajectory(std::vector<double> times, Eigen::MatrixXd q,
     if (k > 0 && !(t_[k] > t_[k - 1]))
       throw InputError(source_ + ": sample " + std::to_string(k) + ": time must increase strictly");
   }
+  if (!(rest_speed_ >= 0.0) || !std::isfinite(rest_speed_))
+    throw InputError(source_ + ": rest speed " + trajectoryNum(rest_speed_) + " rad/s: expected a speed >= 0");
   if (!(start_ >= t_.front() && start_ < t_.back()))
     throw InputError(source_ + ": start time " + trajectoryNum(start_) + " s is outside the log [" +
                      trajectoryNum(t_.front()) + ", " + trajectoryNum(t_.back()) + ") s");
-  if (from_derivatives && qdd_.size() > 0)
+  if (from_derivatives && qdd_.size() > 0) {
+    rests_.resize(static_cast<size_t>(q_.rows()));
     for (Eigen::Index j = 0; j < q_.rows(); ++j) positionsFromDerivatives(j);
+  }
 }
 
 void LoggedTrajectory::evaluate(double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
@@ -499,6 +505,21 @@ bool LoggedTrajectory::startPositions(Eigen::Ref<Eigen::VectorXd> q) const {
   return true;
 }
 
+std::vector<std::vector<std::pair<double, double>>> LoggedTrajectory::rests() const {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  std::vector<std::vector<std::pair<double, double>>> out(rests_.size());
+  const double end = t_.back();
+  for (size_t j = 0; j < rests_.size(); ++j) {
+    for (const auto& [a, b] : rests_[j]) {
+      if (b < start_) continue;  // over before the replay starts
+      // Before t = 0 the replay rests at q(0); after the last sample it holds the last position.
+      out[j].emplace_back(a <= start_ ? -inf : a - start_, b >= end ? inf : b - start_);
+    }
+    if (out[j].empty() || std::isfinite(out[j].back().second)) out[j].emplace_back(end - start_, inf);
+  }
+  return out;
+}
+
 std::string LoggedTrajectory::describe() const {
   std::ostringstream os;
   os << "log(" << source_ << ", " << dof() << " joints, " << t_.size() << " samples, "
@@ -510,13 +531,22 @@ std::string LoggedTrajectory::describe() const {
 void LoggedTrajectory::positionsFromDerivatives(Eigen::Index j) {
   const Eigen::Index K = q_.cols();
   const Eigen::RowVectorXd logged = q_.row(j);
-  auto rest = [&](Eigen::Index k) { return qd_(j, k) == 0.0 && qdd_(j, k) == 0.0; };
   auto time = [&](Eigen::Index k) { return t_[static_cast<size_t>(k)]; };
+  // A sample rests when its speed is at most rest_speed and its acceleration could not take it beyond that within
+  // one (mean) sample period; a resting sample's derivatives become exactly 0.
+  const double a_rest = rest_speed_ * static_cast<double>(K - 1) / (time(K - 1) - time(0));
+  std::vector<char> at_rest(static_cast<size_t>(K));
+  for (Eigen::Index k = 0; k < K; ++k) {
+    at_rest[static_cast<size_t>(k)] = std::abs(qd_(j, k)) <= rest_speed_ && std::abs(qdd_(j, k)) <= a_rest;
+    if (at_rest[static_cast<size_t>(k)]) qd_(j, k) = qdd_(j, k) = 0.0;
+  }
+  auto rest = [&](Eigen::Index k) { return at_rest[static_cast<size_t>(k)] != 0; };
   for (Eigen::Index k = 0; k < K;) {
     if (rest(k)) {  // a rest k..m: hold the logged position the next move starts from
       Eigen::Index m = k;
       while (m + 1 < K && rest(m + 1)) ++m;
       for (Eigen::Index r = k; r <= m; ++r) q_(j, r) = logged[m];
+      rests_[static_cast<size_t>(j)].emplace_back(time(k), time(m));
       k = m + 1;
       continue;
     }
@@ -548,7 +578,7 @@ void LoggedTrajectory::positionsFromDerivatives(Eigen::Index j) {
 }
 
 LoggedTrajectory LoggedTrajectory::fromCsv(const std::string& path, int dof, const LogColumns& columns, double start,
-                                           double gap_factor, bool from_derivatives) {
+                                           double gap_factor, bool from_derivatives, double rest_speed) {
   if (dof < 1) throw InputError(path + ": the number of joints must be >= 1");
   if (!(gap_factor == 0.0 || (gap_factor > 1.0 && std::isfinite(gap_factor))))
     throw InputError(path + ": gap_factor must be > 1 (or 0 to disable the gap check), got " +
@@ -579,7 +609,7 @@ LoggedTrajectory LoggedTrajectory::fromCsv(const std::string& path, int dof, con
   if (!(t0 >= times.front() && t0 < times.back()))
     throw InputError(path + ": start time " + trajectoryNum(t0) + " s is outside the log's times [" +
                      trajectoryNum(times.front()) + ", " + trajectoryNum(times.back()) + ") s");
-  LoggedTrajectory traj(times, gather(cq), gather(cqd), gather(cqdd), t0, path, from_derivatives);
+  LoggedTrajectory traj(times, gather(cq), gather(cqd), gather(cqdd), t0, path, from_derivatives, rest_speed);
   if (!cm.empty()) {  // the measured positions at the start, linear between the samples around it
     const Eigen::MatrixXd m = gather(cm);
     const auto it = std::upper_bound(times.begin(), times.end(), t0);

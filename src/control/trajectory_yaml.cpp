@@ -168,7 +168,7 @@ std::unique_ptr<JointTrajectory> readKinematicPtp(const YamlValue& node, int dof
 
 // type: log — LoggedTrajectory (trajectory.hpp): a robot log's commanded q, qd (, qdd) by Hermite interpolation.
 std::unique_ptr<JointTrajectory> readLog(const YamlValue& node, int dof, const std::string& base_dir) {
-  node.allowKeys({"type", "file", "format", "columns", "start_time", "gap_factor", "positions"});
+  node.allowKeys({"type", "file", "format", "columns", "start_time", "gap_factor", "positions", "rest_speed"});
   const YamlValue file_node = node.required("file", "robot log CSV file, relative to this file");
   std::filesystem::path file = file_node.asString("a file path");
   if (file.is_relative()) file = std::filesystem::path(base_dir) / file;
@@ -226,9 +226,15 @@ std::unique_ptr<JointTrajectory> readLog(const YamlValue& node, int dof, const s
       pos.failExpected("derivatives (integrated from the logged qd, qdd; a held position per rest) or logged");
     from_derivatives = v == "derivatives";
   }
+  double rest_speed = LoggedTrajectory::kRestSpeed;
+  if (node.has("rest_speed")) {
+    rest_speed = node["rest_speed"].asDouble("a speed in rad/s");
+    if (!(rest_speed >= 0.0) || !std::isfinite(rest_speed))
+      node["rest_speed"].failExpected("a speed >= 0 rad/s (below it a logged sample counts as a rest)");
+  }
   try {
-    return std::make_unique<LoggedTrajectory>(
-        LoggedTrajectory::fromCsv(file.lexically_normal().string(), dof, cols, start, gap_factor, from_derivatives));
+    return std::make_unique<LoggedTrajectory>(LoggedTrajectory::fromCsv(
+        file.lexically_normal().string(), dof, cols, start, gap_factor, from_derivatives, rest_speed));
   } catch (const InputError& e) {
     (node.has("start_time") && std::string(e.what()).find("start time") != std::string::npos ? node["start_time"]
                                                                                              : file_node)

@@ -131,10 +131,11 @@ void RobotSystem::multiRateStep(State& st, double t, const Eigen::Ref<const Eige
   st.first_sample = false;
 }
 
-void RobotSystem::setpointStage(const State& st, double t) const {
+void RobotSystem::setpointStage(const State& st, double t, bool anchored) const {
   if (setpoints_) {
     setpoints_(t, st.sig.q_set, st.sig.qd_set, st.sig.qdd_set);
-  } else {  // no reference given: hold the start pose
+    if (relative_ && anchored) st.sig.q_set += st.anchor;  // relative replay (setRelativeReplay)
+  } else {                                                 // no reference given: hold the start pose
     st.sig.q_set = st.q_start;
     st.sig.qd_set.setZero();
     st.sig.qdd_set.setZero();

@@ -169,6 +169,7 @@ RobotSystem::State::State(const RobotSystem& robot)
   fault_applied.assign(robot.faults_.size(), 0.0);
   stuck_episode.assign(robot.faults_.size(), -1);
   stuck_value.assign(robot.faults_.size(), 0.0);
+  anchor.setZero(n);
   for (const DriveSpec& d : drives) motors.emplace_back(d.motor);
   sig.resize(n);
   out_is_voltage.assign(static_cast<size_t>(n), 0);
@@ -246,6 +247,8 @@ void RobotSystem::State::save(ByteWriter& out) const {
   out.u64(stuck_episode.size());
   for (long e : stuck_episode) out.i64(e);
   out.doubles(stuck_value);
+  out.tag("relative replay");
+  out.vector(anchor);
 }
 
 void RobotSystem::State::load(ByteReader& in) {
@@ -321,6 +324,8 @@ void RobotSystem::State::load(ByteReader& in) {
   stuck_value = in.doubles("stuck values", static_cast<long>(stuck_value.size()));
   for (double v : stuck_value)
     if (!std::isfinite(v)) in.fail("stuck values: a value that is not finite");
+  in.tag("relative replay");
+  anchor = finite(in.vector("replay anchors", n), "replay anchors");
   robot.rebuildDrives(*this, {});
 }
 
@@ -341,6 +346,34 @@ void RobotSystem::setSetpoints(SetpointFunction f) {
   checkConfigurable("setSetpoints");
   setpoints_ = std::move(f);
   setpoint_breaks_.clear();
+  rests_.clear();
+}
+
+void RobotSystem::setRelativeReplay(bool on) {
+  checkConfigurable("setRelativeReplay");
+  relative_ = on;
+}
+
+bool RobotSystem::restStartsAt(int k, double t, double tol) const {
+  if (rests_.empty()) return false;
+  const auto& r = rests_[static_cast<size_t>(k)];
+  // The first rest starting at or after t − tol.
+  const auto it = std::lower_bound(r.begin(), r.end(), t - tol,
+                                   [](const std::pair<double, double>& a, double x) { return a.first < x; });
+  return it != r.end() && it->first <= t + tol;
+}
+
+void RobotSystem::reanchor(State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool all) const {
+  setpointStage(st, t, false);
+  const double tol = 1e-9 * std::max(1.0, std::abs(t));
+  for (int k = 0; k < model_.nq; ++k) {
+    if (!all && !restStartsAt(k, t, tol)) continue;
+    // The measured joint angle: under sampled control the last sample's (the controller's view).
+    const double q_meas = sampled()
+                              ? st.held_q_fb[k]
+                              : faultySensor(st, k, t, y[k] + st.drives[static_cast<size_t>(k)].sensors.joint_bias);
+    st.anchor[k] = q_meas - st.sig.q_set[k];
+  }
 }
 
 void RobotSystem::setTrajectory(std::shared_ptr<const control::JointTrajectory> trajectory) {
@@ -350,6 +383,7 @@ void RobotSystem::setTrajectory(std::shared_ptr<const control::JointTrajectory> 
     throw InputError(name() + ": the trajectory has " + std::to_string(trajectory->dof()) + " joints, the robot " +
                      std::to_string(model_.nq));
   setpoint_breaks_ = trajectory->breakpoints();
+  rests_ = trajectory->rests();
   setpoints_ = [trajectory](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
                             Eigen::Ref<Eigen::VectorXd> qdd) { trajectory->evaluate(t, q, qd, qdd); };
 }
@@ -402,6 +436,10 @@ std::vector<double> RobotSystem::timeEvents(double t_end) const {
   // Under sampled control the right-hand side does not read the reference (the held outputs do), and every
   // sample restarts the integrator anyway.
   std::vector<double> events = sampled() ? std::vector<double>{} : setpoint_breaks_;
+  if (relative_)  // the rests' starts re-anchor the reference
+    for (const auto& r : rests_)
+      for (const auto& rest : r)
+        if (std::isfinite(rest.first) && rest.first > 0.0 && rest.first < t_end) events.push_back(rest.first);
   for (const Fault& f : faults_) {
     const std::vector<double> e = faultEvents(f, t_end);
     events.insert(events.end(), e.begin(), e.end());
@@ -412,12 +450,14 @@ std::vector<double> RobotSystem::timeEvents(double t_end) const {
 void RobotSystem::updateModes(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                               const std::vector<int>&) const {
   updateFaults(own<State>(state), t, y, false);
+  if (relative_) reanchor(own<State>(state), t, y, false);
 }
 
 void RobotSystem::start(sim::PlantState& state, double t0, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   State& st = own<State>(state);
   st.q_start = y.head(model_.nq);
   updateFaults(st, t0, y, true);
+  if (relative_) reanchor(st, t0, y, true);
   st.applied_port = st.port;  // the state starts consistent with the ports as they are
   st.applied_cmd = st.cmd;
   if (sampled()) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include <gmock/gmock.h>
@@ -247,6 +248,71 @@ TEST(LoggedTrajectory, FromYamlWithErrorsAtTheirLine) {
               ThrowsMessage<InputError>(HasSubstr("t.yaml:5: trajectory.start_time: ")));
   EXPECT_THAT([&] { yaml("  file: rtde.csv\n  columns:\n    q: target_q_{i}\n    qd: nope_{i}\n"); },
               ThrowsMessage<InputError>(HasSubstr("t.yaml:3: trajectory.file: ")));
+  EXPECT_THAT([&] { yaml("  file: rtde.csv\n  format: ur_rtde\n  rest_speed: -1e-4\n"); },
+              ThrowsMessage<InputError>(HasSubstr("t.yaml:5: trajectory.rest_speed: expected a speed >= 0 rad/s")));
+}
+
+TEST(LoggedTrajectory, SlowTailsBelowTheRestSpeedAreRests) {
+  // An exact rest, a move v = V sin²(π u) over T = 0.2 s, then a controller's slow deceleration tail (3e-5 rad/s
+  // held for 0.3 s: the target creeps by 9e-6 rad), then an exact rest. With the default rest speed (1e-4 rad/s)
+  // the tail is part of the rest: held on the position the next move would start from (the last one), q̇ = 0; with
+  // rest speed 0 the tail is replayed as a move.
+  const double h = 0.01, t0 = 0.1, T = 0.2, V = 0.5, creep = 3e-5, pi = std::acos(-1.0);
+  std::vector<double> t, qv, vv, av;
+  double q = 0.4;
+  for (int k = 0; k <= 80; ++k) {
+    const double s = h * k;
+    t.push_back(s);
+    const double u = (s - t0) / T;
+    const bool moving = u > 1e-12 && u < 1.0 - 1e-12;
+    const bool tail = s > t0 + T + 1e-12 && s < 0.6 - 1e-12;
+    if (k > 0) {
+      const double prev = t[static_cast<size_t>(k - 1)], ua = std::clamp((prev - t0) / T, 0.0, 1.0),
+                   ub = std::clamp(u, 0.0, 1.0);
+      q += V * T * ((ub - ua) / 2 - (std::sin(2 * pi * ub) - std::sin(2 * pi * ua)) / (4 * pi));
+      q += creep * std::max(0.0, std::min(s, 0.6) - std::max(prev, t0 + T));
+    }
+    qv.push_back(q);
+    vv.push_back(moving ? V * std::sin(pi * u) * std::sin(pi * u) : tail ? creep : 0.0);
+    av.push_back(moving ? V * pi / T * std::sin(2 * pi * u) : 0.0);
+  }
+  const auto K = static_cast<Eigen::Index>(t.size());
+  const Eigen::Map<Eigen::RowVectorXd> Q(qv.data(), K), Vq(vv.data(), K), A(av.data(), K);
+  const double inf = std::numeric_limits<double>::infinity();
+  Eigen::VectorXd x(1), xd(1), xdd(1);
+
+  const LoggedTrajectory held(t, Q, Vq, A, 0.0);  // the default rest speed
+  const auto rests = held.rests();
+  ASSERT_EQ(rests.size(), 1u);
+  ASSERT_EQ(rests[0].size(), 2u);
+  EXPECT_EQ(rests[0][0].first, -inf);  // resting since before t = 0, until the move starts
+  EXPECT_NEAR(rests[0][0].second, t0, 1e-12);
+  EXPECT_NEAR(rests[0][1].first, t0 + T, 1e-12);  // the tail and the rest after it: one rest
+  EXPECT_EQ(rests[0][1].second, inf);
+  for (double s : {0.35, 0.45, 0.7}) {
+    held.evaluate(s, x, xd, xdd);
+    EXPECT_DOUBLE_EQ(x[0], qv.back()) << s;
+    EXPECT_EQ(xd[0], 0.0) << s;
+  }
+  const LoggedTrajectory exact(t, Q, Vq, A, 0.0, "log", true, 0.0);  // only exact zeros rest
+  const auto r0 = exact.rests();
+  ASSERT_EQ(r0[0].size(), 3u);  // before the move, the one sample between the move and the tail, after the tail
+  EXPECT_NEAR(r0[0][1].first, t0 + T, 1e-12);
+  EXPECT_NEAR(r0[0][1].second, t0 + T, 1e-12);
+  EXPECT_NEAR(r0[0][2].first, 0.6, 1e-12);
+  exact.evaluate(0.45, x, xd, xdd);
+  EXPECT_NEAR(xd[0], creep, 0.1 * creep);  // (plus the drift blending the tail's first half-interval in)
+  // Starting the replay in the middle of the move (log time 0.25 s) or of the tail (0.35 s) shifts the rests.
+  const auto r1 = LoggedTrajectory(t, Q, Vq, A, 0.25).rests();
+  ASSERT_EQ(r1[0].size(), 1u);
+  EXPECT_NEAR(r1[0][0].first, t0 + T - 0.25, 1e-12);
+  const auto r2 = LoggedTrajectory(t, Q, Vq, A, 0.35).rests();
+  ASSERT_EQ(r2[0].size(), 1u);
+  EXPECT_EQ(r2[0][0].first, -inf);
+  EXPECT_EQ(r2[0][0].second, inf);
+  // Positions taken as logged: no held rests to report.
+  EXPECT_TRUE(LoggedTrajectory(t, Q, Vq, A, 0.0, "log", false).rests().empty());
+  EXPECT_THROW(LoggedTrajectory(t, Q, Vq, A, 0.0, "log", true, -1.0), InputError);
 }
 
 TEST(LoggedTrajectory, AMoveMeetsTheNextRestsPositionSmoothly) {

@@ -26,6 +26,9 @@ TEST(MeasuredLogReplay, TheTwinFollowsTheRealRobotsMeasuredMotion) {
     const int qa = meas.require("q_actual_" + std::to_string(j + 1), "measured position");
     const int qt = meas.require("q_target_" + std::to_string(j + 1), "commanded position");
     EXPECT_EQ(log.values(0, q), meas.data(0, qa)) << joints[j];  // starts on the measured first position
+    // Replayed relative to the twin (the default for logs): its reference starts there too.
+    const int q_set = log.column(std::string("q_set_") + joints[j] + "[rad]");
+    EXPECT_NEAR(log.values(0, q_set), meas.data(0, qa), 1e-12) << joints[j];
     double worst = 0.0, real = 0.0;
     for (Eigen::Index r = 0; r < log.values.rows(); ++r) {
       const double t = log.values(r, 0);
@@ -38,4 +41,32 @@ TEST(MeasuredLogReplay, TheTwinFollowsTheRealRobotsMeasuredMotion) {
     // (7.8e-3 rad on the wrist 3, 1e-4 … 4e-4 rad on the others over these 6 s), within 1e-3 rad.
     EXPECT_LT(worst, real + 1e-3) << joints[j];
   }
+}
+
+TEST(MeasuredLogReplay, AbsoluteReplayOnRequestHoldsTheLoggedPositions) {
+  const std::string dir = std::string(JOINTSIM_SOURCE_DIR) + "/config/";
+  const io::CsvTable meas = io::readCsv(dir + "logs/ur5_kufieta2013_mov6_first30s.csv");
+  auto run = [&](bool relative) {
+    std::vector<std::string> over = {"duration=5"};
+    if (!relative) over.push_back("+relative_replay=false");
+    auto e = experiments::loadExperiment(dir + "experiments/ur5_measured_replay.yaml", over);
+    return experiments::runInMemory(*e).log;
+  };
+  const auto abs = run(false), rel = run(true);
+  const char* joints[] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                          "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
+  double differ = 0.0;
+  for (int j = 0; j < 5; ++j) {  // (the wrist 3 moves at 5 s)
+    const std::string name = std::string("q_set_") + joints[j] + "[rad]";
+    const int qt = meas.require("q_target_" + std::to_string(j + 1), "commanded position");
+    const int v = meas.require("qd_target_" + std::to_string(j + 1), "commanded velocity");
+    // At 5 s joints 1-5 rest (until about 6 s): the absolute replay holds the logged position of the rest's last
+    // sample (where the next move starts); the relative one holds the twin where it stopped.
+    Eigen::Index m = static_cast<Eigen::Index>(std::lround(5.0 / 0.008));
+    while (std::abs(meas.data(m + 1, v)) <= 1e-4) ++m;
+    const Eigen::Index last = abs.values.rows() - 1;
+    EXPECT_NEAR(abs.values(last, abs.column(name)), meas.data(m, qt), 1e-9) << joints[j];
+    differ = std::max(differ, std::abs(rel.values(last, rel.column(name)) - meas.data(m, qt)));
+  }
+  EXPECT_GT(differ, 1e-5);
 }

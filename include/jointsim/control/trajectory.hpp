@@ -12,6 +12,7 @@
 /// Trajectories are immutable after construction; evaluate() is pure, thread-safe and allocation-free.
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -52,6 +53,12 @@ class JointTrajectory {
     (void)q;
     return false;
   }
+
+  /// Per joint (dof() lists), the closed intervals [t_begin, t_end] of trajectory time [s] over which the joint
+  /// rests (q̇ = q̈ = 0, q constant), increasing and disjoint; t_begin may be -inf (resting since before t = 0) and
+  /// t_end +inf. Empty (the default): not known. A replay relative to the robot (systems::RobotSystem::
+  /// setRelativeReplay) re-anchors each move at its start and lets the position loops follow the robot at rest.
+  virtual std::vector<std::vector<std::pair<double, double>>> rests() const { return {}; }
 
   /// Convenience (allocates): the set-point at time t [s].
   JointSetpoint setpoint(double t) const;
@@ -250,9 +257,11 @@ struct LogColumns {
 /// (the exact integral of the cubic Hermite velocity; the quintic of an interval is then that quartic), because
 /// the logged positions carry two things a twin must not chase:
 /// - their quantisation (1e-6 rad in text logs): interpolated, it becomes q̈ noise of about 6·δ/h²;
-/// - at rest (q̇ = q̈ = 0) a robot controller sets its target to the measured position (the shipped UR5 log: one
-///   sample later, jitter 1e-5 … 4e-4 rad). Chased, that jitter makes the twin hunt in its friction at rest
-///   (about 50,000 solver steps per second of log).
+/// - at rest a robot controller sets its target to the measured position (the shipped UR5 log: one sample later,
+///   jitter 1e-5 … 4e-4 rad). Chased, that jitter makes the twin hunt in its friction at rest (about 50,000 solver
+///   steps per second of log).
+/// A sample rests when |q̇| <= rest_speed and |q̈| <= rest_speed / (mean sample period) (kRestSpeed = 1e-4 rad/s by
+/// default; 0: only exact zeros); its q̇, q̈ are then taken as 0 (rests(): the intervals).
 /// So per joint: over a rest the replay holds the logged position the next move starts from; a move starts there,
 /// follows the integral of the logged derivatives, and the mismatch E with the next rest's position is blended in
 /// over the move by the quintic smoothstep E w(u) (w' = w'' = 0 at both ends; its q̇ and q̈ are added to the
@@ -263,15 +272,23 @@ class LoggedTrajectory final : public JointTrajectory {
  public:
   /// `times` [s] strictly increasing, at least 2; q, qd (and qdd unless empty) n × times.size() [rad, rad/s,
   /// rad/s²]; `start` [s] the log time that becomes t = 0, within [times.front(), times.back()).
+  /// `rest_speed` [rad/s] >= 0: a sample rests when |q̇| <= rest_speed and |q̈| <= rest_speed / (mean sample period)
+  /// (its derivatives are then taken as 0; see the class comment).
   LoggedTrajectory(std::vector<double> times, Eigen::MatrixXd q, Eigen::MatrixXd qd, Eigen::MatrixXd qdd, double start,
-                   std::string source = "log", bool from_derivatives = true);
+                   std::string source = "log", bool from_derivatives = true, double rest_speed = kRestSpeed);
+
+  /// The default rest speed [rad/s]: above the 1e-6 rad/s print resolution of text logs and the slow tails of a UR
+  /// controller's decelerations (a few 1e-5 rad/s held for seconds, moving the target by about 1e-4 rad), which,
+  /// replayed as moves, keep a twin's stuck joints hunting in their friction; far below any programmed speed.
+  static constexpr double kRestSpeed = 1e-4;
 
   /// Reads a log CSV (io::readCsv: any other columns are ignored). `start` < 0: the first sample's time.
   /// InputError "<path>:<line>:<column>: ..." on a missing column (listing the columns), a non-numeric or
   /// non-finite cell, a time not after the previous row's, or a gap (a time step > gap_factor × the median;
   /// gap_factor 0 disables the check), a start time outside the log.
   static LoggedTrajectory fromCsv(const std::string& path, int dof, const LogColumns& columns, double start = -1.0,
-                                  double gap_factor = 3.0, bool from_derivatives = true);
+                                  double gap_factor = 3.0, bool from_derivatives = true,
+                                  double rest_speed = kRestSpeed);
 
   int dof() const override { return static_cast<int>(q_.rows()); }
   double duration() const override { return t_.back() - start_; }
@@ -280,6 +297,8 @@ class LoggedTrajectory final : public JointTrajectory {
   std::vector<double> breakpoints() const override;
   std::string describe() const override;
   bool startPositions(Eigen::Ref<Eigen::VectorXd> q) const override;
+  /// The held rests (positions integrated from the derivatives; none with `positions: logged` or without q̈).
+  std::vector<std::vector<std::pair<double, double>>> rests() const override;
 
   /// Log time of t = 0 [s].
   double startTime() const { return start_; }
@@ -296,6 +315,8 @@ class LoggedTrajectory final : public JointTrajectory {
   double start_ = 0.0;
   std::string source_;
   Eigen::VectorXd measured_start_;
+  double rest_speed_ = kRestSpeed;
+  std::vector<std::vector<std::pair<double, double>>> rests_;  // per joint, log-time sample ranges of the rests
 };
 
 }  // namespace jointsim::control

@@ -126,6 +126,18 @@ class RobotSystem : public sim::Plant {
   void setSetpoints(SetpointFunction f);
   /// Reference from a trajectory (its breakpoints become time events under continuous control).
   void setTrajectory(std::shared_ptr<const control::JointTrajectory> trajectory);
+  /// Replay relative to the robot, for a reference recorded on another robot (a measured log): each joint's
+  /// reference is followed relative to where the joint is, q_set(t) = q_ref(t) + a_k with the anchor
+  /// a_k = q_meas(t_a) − q_ref(t_a) taken at the start of the run and at the start t_a of every rest of the joint's
+  /// reference (the trajectory's rests(), control::JointTrajectory; time events). So at a rest the joint is held
+  /// where it stopped, not pulled to where the recorded robot stopped (a stuck joint's position loop would otherwise
+  /// wind its velocity integrator up against the friction for as long as the rest lasts), and the next move starts
+  /// from there, as on a robot controller that sets its target to the measured position at rest. Without it (the
+  /// default) the reference is followed as it is; a trajectory without rests is replayed relative to the start pose.
+  /// q_meas is the measured joint angle (sensor bias and faults included; under sampled control the last sample's).
+  /// Held references (setSetpoint) are followed as they are.
+  void setRelativeReplay(bool on);
+  bool relativeReplay() const { return relative_; }
   void setExternalWrenches(WrenchFunction f);
   /// Joint limits: with mode stop, an end stop at every finite joint limit (systems/joint_limits.hpp) acts on
   /// the joint, its instants of contact become root functions and end_stop_torque_<joint> [N·m] signals are
@@ -159,6 +171,8 @@ class RobotSystem : public sim::Plant {
     std::vector<double> fault_applied;
     std::vector<long> stuck_episode;
     std::vector<double> stuck_value;
+    /// Relative replay: per joint, the measured minus the reference joint angle at the start of the last move [rad].
+    Eigen::VectorXd anchor;
     std::vector<DriveSpec> drives;
     std::vector<drive::DcMotor> motors;
     // Workspace of the right-hand side (holds nothing between calls; not saved).
@@ -328,8 +342,13 @@ class RobotSystem : public sim::Plant {
  private:
   // The right-hand side, stage by stage as the signals flow (each fills the state's signals and its part of ẏ).
   void evaluate(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
-  void setpointStage(const State& st, double t) const;
+  // The reference at t (`anchored`: plus the relative replay's anchors).
+  void setpointStage(const State& st, double t, bool anchored = true) const;
   void measurementStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+  // Relative replay: a rest of joint k's reference starts within `tol` [s] of t.
+  bool restStartsAt(int k, double t, double tol) const;
+  // Relative replay: the anchors of the joints whose reference's rest starts at t (all joints when `all`).
+  void reanchor(State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool all) const;
   // The faults at time t: rebuilds the state's drives whose scheduled parameter values changed, captures stuck
   // sensor values (`restart`: from the nominal drives, as at the start of a run).
   void updateFaults(State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool restart) const;
@@ -382,6 +401,8 @@ class RobotSystem : public sim::Plant {
   int n_states_ = 0;
   SetpointFunction setpoints_;
   std::vector<double> setpoint_breaks_;
+  bool relative_ = false;                                      // setRelativeReplay
+  std::vector<std::vector<std::pair<double, double>>> rests_;  // the trajectory's rests (relative replay)
   WrenchFunction wrenches_;
   EndStops stops_;
   Eigen::VectorXd q0_;

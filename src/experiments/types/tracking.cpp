@@ -62,7 +62,7 @@ TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name,
                                 const std::vector<systems::Fault>& faults) {
   (void)name;
   root.allowKeys({"experiment", "robot", "drives", "trajectory", "initial_state", "duration", "log_rate", "solver",
-                  "check_limits", "joint_limits", "control"});
+                  "check_limits", "joint_limits", "control", "relative_replay"});
   const std::vector<systems::DriveParameterChange> changes = readDriveChanges(root["drives"]);
   TrackingSetup s;
   const std::string base_dir = std::filesystem::path(root.file()).parent_path().string();
@@ -113,6 +113,9 @@ TrackingSetup readTrackingSetup(const YamlValue& root, const std::string& name,
   if (s.solver.max_step == 0.0) s.solver.max_step = 1.0 / s.log_rate;
 
   sys.setTrajectory(s.trajectory);
+  // A measured log is replayed relative to the twin by default (RobotSystem::setRelativeReplay).
+  const bool is_log = root["trajectory"]["type"].asString("a trajectory type") == "log";
+  sys.setRelativeReplay(root["relative_replay"].defined() ? root["relative_replay"].asBool("true or false") : is_log);
   Eigen::VectorXd q0(n), tmp1(n), tmp2(n);
   s.trajectory->evaluate(0.0, q0, tmp1, tmp2);
   s.trajectory->startPositions(q0);  // a replayed log: the measured first positions, when it has them
@@ -178,7 +181,8 @@ class TrackingExperiment : public Experiment {
         {"trajectory.q_end[]", "rad"},
         {"trajectory.qd_max[]", "rad/s"},
         {"trajectory.qdd_max[]", "rad/s²"},
-        {"trajectory.start_time", "s"}};
+        {"trajectory.start_time", "s"},
+        {"trajectory.rest_speed", "rad/s"}};
     for (const auto& [k, u] : units)
       if (p == k) return u;
     return detail::commonKeyUnit(key);
@@ -207,6 +211,7 @@ class TrackingExperiment : public Experiment {
                         {"electrics", d.electrics}});
     w["max_tracking_error_rad"] = detail::vectorJson(max_err_);
     w["control_rate_hz"] = s_.control_rate;
+    w["relative_replay"] = s_.robot->relativeReplay();
     if (s_.robot->sampled() && s_.robot->currentRate() != s_.control_rate)
       w["current_rate_hz"] = s_.robot->currentRate();
     w["duration"] = s_.duration;
