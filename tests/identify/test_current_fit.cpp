@@ -13,8 +13,11 @@
 #include <gtest/gtest.h>
 
 #include "jointsim/common/error.hpp"
+#include "jointsim/control/trajectory_yaml.hpp"
+#include "jointsim/experiments/experiment.hpp"
 #include "jointsim/identify/current_fit.hpp"
 #include "jointsim/io/csv_reader.hpp"
+#include "jointsim/io/yaml.hpp"
 #include "jointsim/multibody/robot_loader.hpp"
 #include "jointsim/systems/robot_with_drives.hpp"
 #include "test_util.hpp"
@@ -177,4 +180,65 @@ TEST(CurrentCalibration, TheCommandWritesADrivesFileThatTrackingLoadsWithTheFitt
   EXPECT_EQ(bad.status, 2);
   EXPECT_THAT(bad.err, HasSubstr("ur5_kufieta2013_mov6_first30s.csv:1: missing column 'amps_1'"));
   EXPECT_FALSE(std::filesystem::exists(out2));
+}
+
+TEST(CurrentCalibration, TheInnerModelExplainsTheFullTwinsCurrentsAndItsFitIsBiasedByItsDynamics) {
+  // The full twin (strain-wave gears, LuGre friction per direction, motor electrics, the cascade) with known drive
+  // parameters follows the Fourier excitation; its measured joint angles (1e-6 rad steps) and motor currents (0.01 A
+  // noise, 1 mA steps), with the commanded q̇, q̈ of the trajectory as a robot controller logs them, are the log.
+  // 1. The inner model with the true parameters explains the twin's currents: regression slope 1 within 0.5 %
+  //    (measured 0.9976 … 1.0025), RMS difference below 0.1 A (0.014 … 0.086 A: the gear's and the bristles' own
+  //    dynamics and the tracking lag, which the inner model has not).
+  // 2. Fitted on these currents, the inner model's estimates are biased by that unmodelled dynamics: the
+  //    torque-constant scale by −1.1 % (shoulder) … −9 % (wrist 3), the friction by up to 18 % (docs/replay.md).
+  //    Checked: within 10 % (s) — the 2 % of the inner model's own currents (CurrentFit.*) is not reached here.
+  const identify::CurrentFit known = truth(false);
+  const systems::RobotSystem nominal = systems::loadRobotWithDrives(kDir + "robots/ur5_drives.yaml");
+  std::vector<std::string> set = {"robot=" + kDir + "robots/ur5_drives_measured.yaml"};
+  std::vector<identify::DriveNominal> drives;
+  for (size_t k = 0; k < 6; ++k) {
+    const auto& d = nominal.drives()[k];
+    drives.push_back({d.transmission->ratio(), d.motor.kt, d.motor.J_M});
+    const auto& p = known.joints[k];
+    const std::string j = "+drives." + d.joint + ".";
+    auto num = [](double v) { return std::to_string(v); };
+    set.push_back(j + "motor.kt=" + num(p.kt_scale.value * d.motor.kt));
+    set.push_back(j + "motor.ke=" + num(p.kt_scale.value * d.motor.kt));
+    set.push_back(j + "friction.positive.alpha0=" + num(p.coulomb_pos.value));
+    set.push_back(j + "friction.negative.alpha0=" + num(p.coulomb_neg.value));
+    set.push_back(j + "friction.positive.alpha2=" + num(p.viscous_pos.value));
+    set.push_back(j + "friction.negative.alpha2=" + num(p.viscous_neg.value));
+  }
+  auto e = experiments::loadExperiment(kDir + "experiments/ur5_excitation.yaml", set);
+  const auto result = experiments::runInMemory(*e);
+  const auto& L = result.log;
+  const auto root = io::YamlValue::loadFile(kDir + "experiments/ur5_excitation.yaml");
+  const auto traj = control::trajectoryFromYaml(root["trajectory"], 6, kDir + "experiments");
+  identify::CurrentLog log;
+  log.source = "full twin";
+  const Eigen::Index K = L.values.rows();
+  for (Eigen::MatrixXd* m : {&log.q, &log.qd, &log.qdd, &log.current}) m->resize(K, 6);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  Eigen::VectorXd q(6), qd(6), qdd(6);
+  for (Eigen::Index r = 0; r < K; ++r) {
+    traj->evaluate(L.values(r, 0), q, qd, qdd);
+    for (Eigen::Index j = 0; j < 6; ++j) {
+      const std::string name = nominal.model().joint_names[static_cast<size_t>(j)];
+      log.q(r, j) = std::round(L.values(r, L.column("q_fb_" + name + "[rad]")) * 1e6) * 1e-6;
+      log.qd(r, j) = qd[j];
+      log.qdd(r, j) = qdd[j];
+      log.current(r, j) = std::round((L.values(r, L.column("current_" + name + "[A]")) + noise(rng)) * 1e3) * 1e-3;
+    }
+  }
+  const Eigen::MatrixXd pred = identify::predictCurrents(nominal.model(), drives, log, known);
+  const identify::CurrentFit fit = identify::fitDriveCurrents(nominal.model(), drives, log);
+  for (int j = 0; j < 6; ++j) {
+    const Eigen::VectorXd a = pred.col(j), b = log.current.col(j);
+    EXPECT_NEAR(a.dot(b) / a.dot(a), 1.0, 0.005) << "joint " << j + 1;
+    EXPECT_LT(std::sqrt((a - b).squaredNorm() / static_cast<double>(K)), 0.1) << "joint " << j + 1;
+    const double s = fit.joints[static_cast<size_t>(j)].kt_scale.value,
+                 s0 = known.joints[static_cast<size_t>(j)].kt_scale.value;
+    EXPECT_NEAR(s, s0, 0.1 * s0) << "joint " << j + 1;
+  }
 }
