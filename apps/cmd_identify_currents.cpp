@@ -38,6 +38,13 @@ void addIdentifyCurrentsCommand(CLI::App& identify) {
   cmd->add_option("--scale-bound", opt->cal.fit.scale_bound, "|k_t scale - 1| <= this (default 0.4)");
   cmd->add_flag("--fit-offset", opt->cal.fit.fit_offset,
                 "Fit a current offset and a symmetric Coulomb friction instead of one per direction");
+  cmd->add_option("--refine", opt->cal.refine_experiment,
+                  "Refine against the full twin: a tracking experiment replaying this log from its first sample "
+                  "(e.g. config/experiments/ur5_measured_replay.yaml; its robot is replaced)");
+  cmd->add_option("--refine-set", opt->cal.refine_overrides,
+                  "Override of that experiment, key.path=value (repeatable)");
+  cmd->add_option("--refine-iterations", opt->cal.refine_iterations, "Iterations of the refinement (default 5)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--json", opt->json, "Also write the estimates as JSON to this file");
   cmd->callback([opt] {
     identify::CurrentLogColumns c = opt->columns;

@@ -583,17 +583,22 @@ def identify_currents(robot: PathLike, log: PathLike, output: Optional[PathLike]
                       q: str = "q_actual_{j}", qd: str = "qd_target_{j}", qdd: str = "qdd_target_{j}",
                       current: str = "i_actual_{j}", ur_rtde: bool = False, t_begin: float = -math.inf,
                       t_end: float = math.inf, min_speed: float = 0.01, scale_bound: float = 0.4,
-                      fit_offset: bool = False) -> Dict[str, Any]:
+                      fit_offset: bool = False, refine: Optional[PathLike] = None, refine_set: Sequence[str] = (),
+                      refine_iterations: int = 5) -> Dict[str, Any]:
     """Calibrates the drives of a robot-with-drives file from a measured log's motor currents (the CLI's
     ``jointsim identify currents``; docs/replay.md): per joint the torque-constant scale and the Coulomb and viscous
     friction of each direction (or, fit_offset, a symmetric Coulomb friction and a current offset). Column patterns
-    with {j} (1..n) or {i} (0..n-1); ur_rtde: the UR RTDE names. Writes the calibrated robot-with-drives file to
-    ``output`` when given. Returns {"samples", "joints": [{"joint", "kt_scale": {"value", "std_error"}, ...}],
+    with {j} (1..n) or {i} (0..n-1); ur_rtde: the UR RTDE names. ``refine``: a tracking experiment file replaying
+    this log from its first sample (e.g. config/experiments/ur5_measured_replay.yaml): the values are then refined
+    against the full twin (``refine_set``: overrides "key.path=value" of that experiment). Writes the calibrated
+    robot-with-drives file to ``output`` when given. Returns {"samples", "joints": [{"joint", "kt_scale": {"value", "std_error"}, ...}],
     "drives_yaml": text}. Raises InputError, UnidentifiableError."""
     raw, yaml = _core.identify_currents(_input_file(robot, "robot"), _input_file(log, "log"),
                                         _optional_path(output, "output"), time, q, qd, qdd, current, bool(ur_rtde),
                                         float(t_begin), float(t_end), _float(min_speed, "min_speed"),
-                                        _float(scale_bound, "scale_bound"), bool(fit_offset))
+                                        _float(scale_bound, "scale_bound"), bool(fit_offset),
+                                        "" if refine is None else _input_file(refine, "refine"),
+                                        [str(x) for x in refine_set], int(refine_iterations))
     out = json.loads(raw)
     out["drives_yaml"] = yaml
     return out

@@ -1019,7 +1019,8 @@ PYBIND11_MODULE(_core, m) {
       "identify_currents",
       [](const std::string& robot, const std::string& log, const std::string& output, const std::string& time,
          const std::string& q, const std::string& qd, const std::string& qdd, const std::string& current, bool ur_rtde,
-         double t_begin, double t_end, double min_speed, double scale_bound, bool fit_offset) {
+         double t_begin, double t_end, double min_speed, double scale_bound, bool fit_offset, const std::string& refine,
+         const std::vector<std::string>& refine_set, int refine_iterations) {
         identify::CurrentLogColumns c{time, q, qd, qdd, current};
         if (ur_rtde) {
           c = identify::CurrentLogColumns::urRtde();
@@ -1031,6 +1032,9 @@ PYBIND11_MODULE(_core, m) {
         o.fit.min_speed = min_speed;
         o.fit.scale_bound = scale_bound;
         o.fit.fit_offset = fit_offset;
+        o.refine_experiment = refine;
+        o.refine_overrides = refine_set;
+        o.refine_iterations = refine_iterations;
         const identify::DriveCalibration cal = interruptible([&] {
           return identify::calibrateDrives(robot, log, c, o, output.empty() ? std::string("drives.yaml") : output);
         });
@@ -1039,7 +1043,8 @@ PYBIND11_MODULE(_core, m) {
       },
       py::arg("robot"), py::arg("log"), py::arg("output"), py::arg("time"), py::arg("q"), py::arg("qd"), py::arg("qdd"),
       py::arg("current"), py::arg("ur_rtde"), py::arg("t_begin"), py::arg("t_end"), py::arg("min_speed"),
-      py::arg("scale_bound"), py::arg("fit_offset"));
+      py::arg("scale_bound"), py::arg("fit_offset"), py::arg("refine"), py::arg("refine_set"),
+      py::arg("refine_iterations"));
   m.def(
       "identify_clamping",
       [](const Array& t, const Array& angle, const Array& torque, const py::object& fixed_backlash) {

@@ -38,6 +38,25 @@ struct DriveCalibrationOptions {
   double t_begin = -std::numeric_limits<double>::infinity();  ///< use samples from this log time [s]
   double t_end = std::numeric_limits<double>::infinity();     ///< ... up to this log time [s]
   double gap_factor = 3.0;  ///< a time step > gap_factor × the median is an error (0: no check)
+  /// Refinement against the full twin (empty: none): a `tracking` experiment file that replays this log from its
+  /// first sample (e.g. config/experiments/ur5_measured_replay.yaml; its `robot` is replaced by the calibrated
+  /// drives). Per joint, factors on the inner model's values of k_t (= k_e) and of the Coulomb and viscous friction of
+  /// each direction (one law for a joint moved one way only) are then fitted so that the replayed twin's currents
+  /// match the measured ones over the window: Levenberg–Marquardt per joint on whole replays (a joint's currents
+  /// depend mostly on its own drive, so one replay perturbs one factor of every joint; 5 % finite-difference steps,
+  /// as stick–slip makes the response rough; up to 7 replays per iteration), within the inner fit's bounds
+  /// (|s − 1| ≤ scale_bound, F ≥ 0; friction factors ≤ 5).
+  std::string refine_experiment;
+  std::vector<std::string> refine_overrides;  ///< further overrides of that experiment ("key.path=value")
+  int refine_iterations = 5;                  ///< iterations of the refinement, >= 1
+};
+
+/// The refinement against the full twin (DriveCalibrationOptions::refine_experiment).
+struct TwinRefinement {
+  /// Per joint, factors on the inner fit's values [-]: k_t (= k_e), Coulomb and viscous friction of each direction.
+  std::vector<double> kt_factor, coulomb_factor, viscous_factor, coulomb_neg_factor, viscous_neg_factor;
+  std::vector<double> rms_before, rms_after;  ///< per joint, the twin against the measurement, % of range
+  int replays = 0;                            ///< replays run
 };
 
 struct DriveCalibration {
@@ -47,6 +66,7 @@ struct DriveCalibration {
   long samples = 0;                 ///< log samples in the window
   std::vector<double> rms_percent;  ///< inner model vs measured over every sample of the window, % of range
   std::string drives_yaml;          ///< the calibrated robot-with-drives file (text)
+  TwinRefinement refinement;        ///< empty unless refined against the full twin
 };
 
 /// Reads the motion and currents of the `dof` joints from `log_csv` within [t_begin, t_end] (io::readCsv: InputError
