@@ -74,3 +74,20 @@ def test_identify_currents_writes_the_drives_file_the_cli_writes(tmp_path):
     assert res.summary["status"] == "ok"
     with pytest.raises(jointsim.InputError, match="missing column 'amps_1'"):
         jointsim.identify_currents(robot, log, current="amps_{j}")
+
+
+def test_identify_currents_refined_against_the_full_twin(tmp_path):
+    # The first 15 s, one refinement iteration (6 replays of 15 s): the twin's RMS may only go down.
+    robot = jointsim.data_path("robots/ur5_drives.yaml")
+    log = jointsim.data_path("logs/ur5_kufieta2013_mov6_first30s.csv")
+    replay = jointsim.data_path("experiments/ur5_measured_replay.yaml")
+    r = jointsim.identify_currents(robot, log, tmp_path / "refined.yaml", t_end=15.0, refine=replay,
+                                   refine_set=["duration=15"], refine_iterations=1)
+    assert r["refinement_replays"] >= 3
+    for j in r["joints"]:
+        ref = j["refinement"]
+        assert ref["twin_rms_percent_after"] <= ref["twin_rms_percent_before"]
+        assert 0.6 - 1e-9 <= j["kt_scale"]["value"] <= 1.4 + 1e-9
+    assert "Refined against the full twin" in (tmp_path / "refined.yaml").read_text()
+    with pytest.raises(jointsim.InputError):
+        jointsim.identify_currents(robot, log, refine=tmp_path / "missing.yaml")
