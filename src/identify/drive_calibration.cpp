@@ -21,6 +21,7 @@
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/io/csv_reader.hpp"
 #include "jointsim/io/input_files.hpp"
+#include "jointsim/sim/simulate.hpp"
 #include "jointsim/systems/robot_with_drives.hpp"
 
 namespace jointsim::identify {
@@ -88,6 +89,20 @@ CurrentLog readCurrentLog(const std::string& log_csv, int dof, const CurrentLogC
 }
 
 namespace {
+
+/// The inner model's RMS against the measured currents over every sample of `log`, per joint, % of range.
+std::vector<double> rmsPercentOf(const multibody::Model& model, const std::vector<DriveNominal>& nominal,
+                                 const CurrentLog& log, const CurrentFit& fit) {
+  const Eigen::MatrixXd pred = predictCurrents(model, nominal, log, fit);
+  std::vector<double> out;
+  for (Eigen::Index j = 0; j < model.nq; ++j) {
+    const Eigen::VectorXd m = log.current.col(j);
+    const double R = m.maxCoeff() - m.minCoeff();
+    const double rms = std::sqrt((pred.col(j) - m).squaredNorm() / static_cast<double>(m.size()));
+    out.push_back(R > 0.0 ? 100.0 * rms / R : 0.0);
+  }
+  return out;
+}
 
 /// The drives file: the robot file's YAML with the calibrated motor constants and friction.
 std::string renderDrives(const std::string& robot_file, const std::string& log_csv, const systems::RobotSystem& robot,
@@ -190,11 +205,13 @@ struct ScratchDir {
   fs::path path;
   ScratchDir() {
     std::random_device rd;
-    for (int attempt = 0; attempt < 100 && path.empty(); ++attempt) {
-      const fs::path p = fs::temp_directory_path() / ("jointsim-refine-" + std::to_string(rd()) + std::to_string(rd()));
-      if (fs::create_directory(p)) path = p;
+    std::error_code ec;
+    const fs::path tmp = fs::temp_directory_path(ec);
+    for (int attempt = 0; attempt < 100 && path.empty() && !ec; ++attempt) {
+      const fs::path p = tmp / ("jointsim-refine-" + std::to_string(rd()) + std::to_string(rd()));
+      if (fs::create_directory(p, ec)) path = p;
     }
-    if (path.empty()) throw InputError("cannot create a scratch folder under " + fs::temp_directory_path().string());
+    if (path.empty()) throw InputError("cannot create a scratch folder under " + tmp.string() + ": " + ec.message());
   }
   ~ScratchDir() {
     std::error_code ec;
@@ -215,12 +232,15 @@ TwinRefinement refineWithTwin(const std::string& robot_file, const std::string& 
   if (o.refine_iterations < 1)
     throw InputError("refine_iterations: expected >= 1, got " + std::to_string(o.refine_iterations));
   const int n = robot.model().nq;
-  const MeasuredCurrents meas = measuredCurrents(log_csv, n, columns, o);
+  MeasuredCurrents meas = measuredCurrents(log_csv, n, columns, o);
+  for (int j = 0; j < n; ++j)  // a fitted current offset belongs to the sensor: the twin has none
+    meas.current.col(j).array() -= cal.fit.joints[static_cast<size_t>(j)].offset.value;
   const ScratchDir scratch;
   const std::string drives_file = (scratch.path / "drives.yaml").string();
   {
     std::ofstream out(drives_file);
     out << renderDrives(robot_file, log_csv, robot, cal, o, drives_file);
+    out.close();
     if (!out) throw InputError("cannot write " + drives_file);
   }
   TwinRefinement r;
@@ -238,9 +258,12 @@ TwinRefinement refineWithTwin(const std::string& robot_file, const std::string& 
     lo[static_cast<size_t>(j)] = {(1.0 - o.fit.scale_bound) / s, 0.1, 0.1, 0.1, 0.1};
     hi[static_cast<size_t>(j)] = {(1.0 + o.fit.scale_bound) / s, 5.0, 5.0, 5.0, 5.0};
   }
+  // One law for both directions where the inner fit has one: a joint moved one way, or a symmetric Coulomb
+  // friction with a current offset (fit_offset).
+  auto oneLaw = [&](int j) { return cal.fit.joints[static_cast<size_t>(j)].tied || o.fit.fit_offset; };
   auto tie = [&](std::vector<P>& q) {
     for (int j = 0; j < n; ++j)
-      if (cal.fit.joints[static_cast<size_t>(j)].tied) {
+      if (oneLaw(j)) {
         q[static_cast<size_t>(j)][2] = q[static_cast<size_t>(j)][1];
         q[static_cast<size_t>(j)][4] = q[static_cast<size_t>(j)][3];
       }
@@ -269,12 +292,19 @@ TwinRefinement refineWithTwin(const std::string& robot_file, const std::string& 
     experiments::ExperimentResult res;
     try {
       res = experiments::runInMemory(*e);
+    } catch (const sim::Interrupted&) {
+      throw;  // a stop request ends the calibration, nothing is written
     } catch (const SolverError&) {
       if (budget == 0) throw;  // the calibrated drives themselves: an error to report
       return std::nullopt;
     }
     if (budget == 0) budget = std::max(10L * static_cast<long>(res.result.stats.steps), 1000000L);
     const sim::SignalTable& L = res.log;
+    if (L.values.rows() < 2 || L.values(L.values.rows() - 1, 0) < meas.t.back() - 1e-9)
+      throw InputError(o.refine_experiment + ": the replay ends at " +
+                       formatNumber(L.values.rows() > 0 ? L.values(L.values.rows() - 1, 0) : 0.0) +
+                       " s, before the log's window (" + formatNumber(meas.t.back()) +
+                       " s after its first sample): set its duration");
     Eigen::MatrixXd resid(static_cast<Eigen::Index>(meas.t.size()), n);
     for (int j = 0; j < n; ++j) {
       const int c = L.column("current_" + cal.joints[static_cast<size_t>(j)] + "[A]");
@@ -305,7 +335,7 @@ TwinRefinement refineWithTwin(const std::string& robot_file, const std::string& 
     for (size_t m = 0; m < M; ++m) {  // every joint's factor m at once: the other joints' currents barely move
       if (m == 2 || m == 4) {         // a tied joint's negative factors follow the positive ones
         bool any_free = false;
-        for (int j = 0; j < n; ++j) any_free = any_free || !cal.fit.joints[static_cast<size_t>(j)].tied;
+        for (int j = 0; j < n; ++j) any_free = any_free || !oneLaw(j);
         if (!any_free) {
           d[m] = Eigen::MatrixXd::Zero(base.rows(), n);
           continue;
@@ -331,7 +361,7 @@ TwinRefinement refineWithTwin(const std::string& robot_file, const std::string& 
     std::vector<P> trial = p;
     for (int j = 0; j < n; ++j) {
       const auto J = static_cast<size_t>(j);
-      const bool tied = cal.fit.joints[J].tied;
+      const bool tied = oneLaw(j);
       Eigen::MatrixXd Jm(base.rows(), static_cast<Eigen::Index>(M));
       for (size_t m = 0; m < M; ++m)
         Jm.col(static_cast<Eigen::Index>(m)) =
@@ -346,21 +376,44 @@ TwinRefinement refineWithTwin(const std::string& robot_file, const std::string& 
     }
     tie(trial);
     const auto tr = replay(trial);
-    bool any = false;
+    const std::vector<P> previous = p;
+    std::vector<char> moved(static_cast<size_t>(n), 0);
     for (int j = 0; j < n; ++j) {
       const auto J = static_cast<size_t>(j);
       if (tr && rmsPercent(*tr, j) < rmsPercent(base, j)) {
         p[J] = trial[J];
-        lambda[J] = std::max(lambda[J] / 3.0, 1e-6);
-        any = true;
+        moved[J] = 1;
       } else {
         lambda[J] *= 8.0;
       }
     }
-    if (!any) continue;
-    const auto b = replay(p);  // the accepted factors together (the joints' currents interact a little)
-    if (!b) throw SolverError("refinement: the replay with the accepted factors failed", 0.0, "REFINE");
-    base = *b;
+    // The accepted steps together (the joints' currents interact a little): a joint that came out worse goes back
+    // (and once more if any did); a replay that fails restores the previous factors.
+    for (int pass = 0; pass < 2; ++pass) {
+      if (std::none_of(moved.begin(), moved.end(), [](char m) { return m != 0; })) break;
+      const auto b = replay(p);
+      bool reverted = false;
+      for (int j = 0; j < n; ++j) {
+        const auto J = static_cast<size_t>(j);
+        if (!moved[J]) continue;
+        if (b && rmsPercent(*b, j) <= rmsPercent(base, j)) continue;
+        p[J] = previous[J];
+        moved[J] = 0;
+        lambda[J] *= 8.0;
+        reverted = true;
+      }
+      if (!reverted && b) {
+        base = *b;
+        break;
+      }
+      if (pass == 1 || !b) {  // give up this iteration's steps
+        p = previous;
+        std::fill(moved.begin(), moved.end(), 0);
+      }
+    }
+    for (int j = 0; j < n; ++j)
+      if (moved[static_cast<size_t>(j)])
+        lambda[static_cast<size_t>(j)] = std::max(lambda[static_cast<size_t>(j)] / 3.0, 1e-6);
   }
   for (int j = 0; j < n; ++j) {
     const auto J = static_cast<size_t>(j);
@@ -388,13 +441,7 @@ DriveCalibration calibrateDrives(const std::string& robot_file, const std::strin
   const CurrentLog log = readCurrentLog(log_csv, model.nq, columns, o);
   cal.samples = static_cast<long>(log.q.rows());
   cal.fit = fitDriveCurrents(model, cal.nominal, log, o.fit);
-  const Eigen::MatrixXd pred = predictCurrents(model, cal.nominal, log, cal.fit);
-  for (Eigen::Index j = 0; j < model.nq; ++j) {
-    const Eigen::VectorXd m = log.current.col(j);
-    const double R = m.maxCoeff() - m.minCoeff();
-    const double rms = std::sqrt((pred.col(j) - m).squaredNorm() / static_cast<double>(m.size()));
-    cal.rms_percent.push_back(R > 0.0 ? 100.0 * rms / R : 0.0);
-  }
+  cal.rms_percent = rmsPercentOf(model, cal.nominal, log, cal.fit);
 
   cal.drives_yaml = renderDrives(robot_file, log_csv, robot, cal, o, output_file);
   if (!o.refine_experiment.empty()) {
@@ -406,7 +453,12 @@ DriveCalibration calibrateDrives(const std::string& robot_file, const std::strin
       f.coulomb_neg.value *= cal.refinement.coulomb_neg_factor[j];
       f.viscous_pos.value *= cal.refinement.viscous_factor[j];
       f.viscous_neg.value *= cal.refinement.viscous_neg_factor[j];
+      // The bounds the refined scale ends on.
+      auto& b = f.at_bound;
+      b.erase(std::remove(b.begin(), b.end(), "kt_scale"), b.end());
+      if (std::abs(std::abs(f.kt_scale.value - 1.0) - o.fit.scale_bound) < 1e-9) b.insert(b.begin(), "kt_scale");
     }
+    cal.rms_percent = rmsPercentOf(model, cal.nominal, log, cal.fit);  // the inner model with the refined values
     cal.drives_yaml = renderDrives(robot_file, log_csv, robot, cal, o, output_file);
   }
   return cal;

@@ -364,14 +364,16 @@ bool RobotSystem::restStartsAt(int k, double t, double tol) const {
 }
 
 void RobotSystem::reanchor(State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, bool all) const {
-  setpointStage(st, t, false);
+  // The trajectory itself (not the references held through the ports), against the measured angle of the state y
+  // (also under sampled control, where the held measurement may be unset at a start or a sample old at an event).
+  if (setpoints_)
+    setpoints_(t, st.sig.q_set, st.sig.qd_set, st.sig.qdd_set);
+  else
+    st.sig.q_set = st.q_start;
   const double tol = 1e-9 * std::max(1.0, std::abs(t));
   for (int k = 0; k < model_.nq; ++k) {
     if (!all && !restStartsAt(k, t, tol)) continue;
-    // The measured joint angle: under sampled control the last sample's (the controller's view).
-    const double q_meas = sampled()
-                              ? st.held_q_fb[k]
-                              : faultySensor(st, k, t, y[k] + st.drives[static_cast<size_t>(k)].sensors.joint_bias);
+    const double q_meas = faultySensor(st, k, t, y[k] + st.drives[static_cast<size_t>(k)].sensors.joint_bias);
     st.anchor[k] = q_meas - st.sig.q_set[k];
   }
 }
@@ -384,6 +386,16 @@ void RobotSystem::setTrajectory(std::shared_ptr<const control::JointTrajectory> 
                      std::to_string(model_.nq));
   setpoint_breaks_ = trajectory->breakpoints();
   rests_ = trajectory->rests();
+  if (!rests_.empty()) {
+    if (rests_.size() != static_cast<size_t>(model_.nq))
+      throw InputError(name() + ": the trajectory lists rests of " + std::to_string(rests_.size()) +
+                       " joints, the robot has " + std::to_string(model_.nq));
+    for (const auto& r : rests_)
+      for (size_t i = 0; i < r.size(); ++i)
+        if (std::isnan(r[i].first) || std::isnan(r[i].second) || r[i].first > r[i].second ||
+            (i > 0 && r[i].first < r[i - 1].second))
+          throw InputError(name() + ": the trajectory's rests must be increasing, disjoint intervals");
+  }
   setpoints_ = [trajectory](double t, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> qd,
                             Eigen::Ref<Eigen::VectorXd> qdd) { trajectory->evaluate(t, q, qd, qdd); };
 }
@@ -550,6 +562,8 @@ Eigen::VectorXd RobotSystem::initialFull(const Eigen::VectorXd& q0, double t0) c
     st.sig.qd_set.setZero();
     st.sig.qdd_set.setZero();
   }
+  if (relative_)  // the relative replay starts on the measured angles (start() anchors there)
+    for (int k = 0; k < n; ++k) st.sig.q_set[k] = q0[k] + st.drives[static_cast<size_t>(k)].sensors.joint_bias;
   // Gravity preload: each drive starts holding its share of the static joint torques.
   const Eigen::VectorXd g = multibody::gravityTorques(model_, st.data, q0);
   const Eigen::VectorXd tau_out_needed = coupled_ ? Eigen::VectorXd(G_.transpose() * g) : g;

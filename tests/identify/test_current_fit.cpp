@@ -356,3 +356,17 @@ TEST(CurrentCalibration, TheShippedDrivesFileIsTheRefinedCalibrationsOutput) {
       EXPECT_GE(drive::parameterValue(table, key, "friction"), 0.0) << k << " " << key;
   }
 }
+
+TEST(CurrentCalibration, ARefinementReplayShorterThanTheLogIsAnError) {
+  const jointsim::test::TempDir tmp;
+  identify::DriveCalibrationOptions o;
+  o.refine_experiment = kDir + "experiments/ur5_measured_replay.yaml";
+  o.refine_overrides = {"duration=2"};
+  EXPECT_THAT(
+      [&] {
+        identify::calibrateDrives(kDir + "robots/ur5_drives.yaml", kDir + "logs/ur5_kufieta2013_mov6_first30s.csv", {},
+                                  o, (tmp / "drives.yaml").string());
+      },
+      ThrowsMessage<InputError>(
+          HasSubstr("ur5_measured_replay.yaml: the replay ends at 2 s, before the log's window")));
+}

@@ -43,9 +43,14 @@ struct DriveCalibrationOptions {
   /// drives). Per joint, factors on the inner model's values of k_t (= k_e) and of the Coulomb and viscous friction of
   /// each direction (one law for a joint moved one way only) are then fitted so that the replayed twin's currents
   /// match the measured ones over the window: Levenberg–Marquardt per joint on whole replays (a joint's currents
-  /// depend mostly on its own drive, so one replay perturbs one factor of every joint; 5 % finite-difference steps,
-  /// as stick–slip makes the response rough; up to 7 replays per iteration), within the inner fit's bounds
-  /// (|s − 1| ≤ scale_bound, F ≥ 0; friction factors ≤ 5).
+  /// depend mostly on its own drive, so one replay perturbs one factor of every joint; finite-difference steps of 5 %
+  /// of max(factor, 0.2), as stick–slip makes the response rough; up to 8 replays per iteration; a joint whose
+  /// accepted step comes out worse with the others' goes back), within the inner fit's bounds (|s − 1| ≤
+  /// scale_bound) and friction factors in [0.1, 5] (a vanishing LuGre Coulomb level is a degenerate, very stiff
+  /// model; a friction value the inner fit put at 0 stays there). The replay's t = 0 must be the log's first sample.
+  /// A trial replay that fails or takes more than max(10 × the first replay's steps, 10⁶) steps counts as worse;
+  /// a stop request (sim::Interrupted) ends the calibration. With fit_offset the fitted current offset is taken
+  /// off the measured currents and the friction keeps one law for both directions.
   std::string refine_experiment;
   std::vector<std::string> refine_overrides;  ///< further overrides of that experiment ("key.path=value")
   int refine_iterations = 5;                  ///< iterations of the refinement, >= 1

@@ -134,7 +134,7 @@ class RobotSystem : public sim::Plant {
   /// wind its velocity integrator up against the friction for as long as the rest lasts), and the next move starts
   /// from there, as on a robot controller that sets its target to the measured position at rest. Without it (the
   /// default) the reference is followed as it is; a trajectory without rests is replayed relative to the start pose.
-  /// q_meas is the measured joint angle (sensor bias and faults included; under sampled control the last sample's).
+  /// q_meas is the measured joint angle of the state (sensor bias and faults included, without noise).
   /// Held references (setSetpoint) are followed as they are.
   void setRelativeReplay(bool on);
   bool relativeReplay() const { return relative_; }
@@ -171,7 +171,8 @@ class RobotSystem : public sim::Plant {
     std::vector<double> fault_applied;
     std::vector<long> stuck_episode;
     std::vector<double> stuck_value;
-    /// Relative replay: per joint, the measured minus the reference joint angle at the start of the last move [rad].
+    /// Relative replay: per joint, the measured minus the reference joint angle at the run's start or the start of
+    /// the joint's last rest [rad].
     Eigen::VectorXd anchor;
     std::vector<DriveSpec> drives;
     std::vector<drive::DcMotor> motors;
