@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <string>
 
@@ -72,6 +73,34 @@ identify::CurrentFit truth(bool with_offset) {
     f.joints.push_back(p);
   }
   return f;
+}
+
+/// The full twin with the drives of `known` (k_t scales on the nominal ur5_drives.yaml, LuGre friction per
+/// direction) following the Fourier excitation: its log, and the excitation trajectory itself.
+struct TwinExcitation {
+  sim::SignalTable log;
+  std::unique_ptr<control::JointTrajectory> trajectory;
+};
+TwinExcitation twinExcitation(const systems::RobotSystem& nominal, const identify::CurrentFit& known) {
+  std::vector<std::string> set = {"robot=" + kDir + "robots/ur5_drives_measured.yaml"};
+  for (size_t k = 0; k < 6; ++k) {
+    const auto& d = nominal.drives()[k];
+    const auto& p = known.joints[k];
+    const std::string j = "+drives." + d.joint + ".";
+    auto num = [](double v) { return std::to_string(v); };
+    set.push_back(j + "motor.kt=" + num(p.kt_scale.value * d.motor.kt));
+    set.push_back(j + "motor.ke=" + num(p.kt_scale.value * d.motor.kt));
+    set.push_back(j + "friction.positive.alpha0=" + num(p.coulomb_pos.value));
+    set.push_back(j + "friction.negative.alpha0=" + num(p.coulomb_neg.value));
+    set.push_back(j + "friction.positive.alpha2=" + num(p.viscous_pos.value));
+    set.push_back(j + "friction.negative.alpha2=" + num(p.viscous_neg.value));
+  }
+  auto e = experiments::loadExperiment(kDir + "experiments/ur5_excitation.yaml", set);
+  TwinExcitation out;
+  out.log = experiments::runInMemory(*e).log;
+  const auto root = io::YamlValue::loadFile(kDir + "experiments/ur5_excitation.yaml");
+  out.trajectory = control::trajectoryFromYaml(root["trajectory"], 6, kDir + "experiments");
+  return out;
 }
 
 }  // namespace
@@ -193,26 +222,11 @@ TEST(CurrentCalibration, TheInnerModelExplainsTheFullTwinsCurrentsAndItsFitIsBia
   //    Checked: within 10 % (s). The refinement against the full twin (the next test) removes that bias.
   const identify::CurrentFit known = truth(false);
   const systems::RobotSystem nominal = systems::loadRobotWithDrives(kDir + "robots/ur5_drives.yaml");
-  std::vector<std::string> set = {"robot=" + kDir + "robots/ur5_drives_measured.yaml"};
   std::vector<identify::DriveNominal> drives;
-  for (size_t k = 0; k < 6; ++k) {
-    const auto& d = nominal.drives()[k];
-    drives.push_back({d.transmission->ratio(), d.motor.kt, d.motor.J_M});
-    const auto& p = known.joints[k];
-    const std::string j = "+drives." + d.joint + ".";
-    auto num = [](double v) { return std::to_string(v); };
-    set.push_back(j + "motor.kt=" + num(p.kt_scale.value * d.motor.kt));
-    set.push_back(j + "motor.ke=" + num(p.kt_scale.value * d.motor.kt));
-    set.push_back(j + "friction.positive.alpha0=" + num(p.coulomb_pos.value));
-    set.push_back(j + "friction.negative.alpha0=" + num(p.coulomb_neg.value));
-    set.push_back(j + "friction.positive.alpha2=" + num(p.viscous_pos.value));
-    set.push_back(j + "friction.negative.alpha2=" + num(p.viscous_neg.value));
-  }
-  auto e = experiments::loadExperiment(kDir + "experiments/ur5_excitation.yaml", set);
-  const auto result = experiments::runInMemory(*e);
-  const auto& L = result.log;
-  const auto root = io::YamlValue::loadFile(kDir + "experiments/ur5_excitation.yaml");
-  const auto traj = control::trajectoryFromYaml(root["trajectory"], 6, kDir + "experiments");
+  for (const auto& d : nominal.drives()) drives.push_back({d.transmission->ratio(), d.motor.kt, d.motor.J_M});
+  const TwinExcitation run = twinExcitation(nominal, known);
+  const auto& L = run.log;
+  const auto& traj = run.trajectory;
   identify::CurrentLog log;
   log.source = "full twin";
   const Eigen::Index K = L.values.rows();
@@ -249,23 +263,9 @@ TEST(CurrentCalibration, TheRefinementAgainstTheFullTwinRecoversItsDrives) {
   const jointsim::test::TempDir tmp;
   const identify::CurrentFit known = truth(false);
   const systems::RobotSystem nominal = systems::loadRobotWithDrives(kDir + "robots/ur5_drives.yaml");
-  std::vector<std::string> set = {"robot=" + kDir + "robots/ur5_drives_measured.yaml"};
-  for (size_t k = 0; k < 6; ++k) {
-    const auto& d = nominal.drives()[k];
-    const auto& p = known.joints[k];
-    const std::string j = "+drives." + d.joint + ".";
-    auto num = [](double v) { return std::to_string(v); };
-    set.push_back(j + "motor.kt=" + num(p.kt_scale.value * d.motor.kt));
-    set.push_back(j + "motor.ke=" + num(p.kt_scale.value * d.motor.kt));
-    set.push_back(j + "friction.positive.alpha0=" + num(p.coulomb_pos.value));
-    set.push_back(j + "friction.negative.alpha0=" + num(p.coulomb_neg.value));
-    set.push_back(j + "friction.positive.alpha2=" + num(p.viscous_pos.value));
-    set.push_back(j + "friction.negative.alpha2=" + num(p.viscous_neg.value));
-  }
-  auto e = experiments::loadExperiment(kDir + "experiments/ur5_excitation.yaml", set);
-  const auto L = experiments::runInMemory(*e).log;
-  const auto root = io::YamlValue::loadFile(kDir + "experiments/ur5_excitation.yaml");
-  const auto traj = control::trajectoryFromYaml(root["trajectory"], 6, kDir + "experiments");
+  const TwinExcitation run = twinExcitation(nominal, known);
+  const auto& L = run.log;
+  const auto& traj = run.trajectory;
   std::ofstream csv(tmp / "twin_log.csv");
   csv << "t_s";
   for (const char* c : {"q_target_", "qd_target_", "qdd_target_", "q_actual_", "i_actual_"})
