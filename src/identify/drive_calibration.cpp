@@ -67,7 +67,7 @@ CurrentLog readCurrentLog(const std::string& log_csv, int dof, const CurrentLogC
              cqd = cols(columns.qd, "qd", "velocities in rad/s"),
              cqdd = cols(columns.qdd, "qdd", "accelerations in rad/s^2"),
              ci = cols(columns.current, "current", "measured currents in A");
-  io::checkedTimes(t, tc, o.gap_factor);
+  const std::vector<double> times = io::checkedTimes(t, tc, o.gap_factor);
   std::vector<Eigen::Index> rows;
   for (Eigen::Index r = 0; r < t.rows(); ++r)
     if (t.data(r, tc) >= o.t_begin && t.data(r, tc) <= o.t_end) rows.push_back(r);
@@ -77,6 +77,8 @@ CurrentLog readCurrentLog(const std::string& log_csv, int dof, const CurrentLogC
   log.source = log_csv;
   const auto K = static_cast<Eigen::Index>(rows.size());
   for (Eigen::MatrixXd* m : {&log.q, &log.qd, &log.qdd, &log.current}) m->resize(K, dof);
+  for (Eigen::Index k = 0; k < K; ++k)
+    log.t.push_back(times[static_cast<size_t>(rows[static_cast<size_t>(k)])] - times.front());
   for (Eigen::Index k = 0; k < K; ++k)
     for (int j = 0; j < dof; ++j) {
       const auto J = static_cast<size_t>(j);
@@ -173,33 +175,6 @@ std::string renderDrives(const std::string& robot_file, const std::string& log_c
   return os.str();
 }
 
-/// The measured currents of the window and their times relative to the log's first sample [s].
-struct MeasuredCurrents {
-  std::vector<double> t;
-  Eigen::MatrixXd current;  // K × n [A]
-};
-
-MeasuredCurrents measuredCurrents(const std::string& log_csv, int dof, const CurrentLogColumns& columns,
-                                  const DriveCalibrationOptions& o) {
-  const io::CsvTable t = io::readCsv(log_csv);
-  const int tc = columns.time.empty() ? 0 : t.require(columns.time, "the log's time in s");
-  std::vector<int> ci;
-  for (const auto& n : control::LogColumns::expand(columns.current, dof, "current"))
-    ci.push_back(t.require(n, "measured currents in A"));
-  const std::vector<double> times = io::checkedTimes(t, tc, o.gap_factor);
-  MeasuredCurrents m;
-  std::vector<Eigen::Index> rows;
-  for (Eigen::Index r = 0; r < t.rows(); ++r)
-    if (times[static_cast<size_t>(r)] >= o.t_begin && times[static_cast<size_t>(r)] <= o.t_end) rows.push_back(r);
-  m.current.resize(static_cast<Eigen::Index>(rows.size()), dof);
-  for (size_t k = 0; k < rows.size(); ++k) {
-    m.t.push_back(times[static_cast<size_t>(rows[k])] - times.front());
-    for (int j = 0; j < dof; ++j)
-      m.current(static_cast<Eigen::Index>(k), j) = t.data(rows[k], ci[static_cast<size_t>(j)]);
-  }
-  return m;
-}
-
 /// A unique scratch folder, removed with its content when the object goes.
 struct ScratchDir {
   fs::path path;
@@ -224,15 +199,14 @@ struct ScratchDir {
 /// See DriveCalibrationOptions::refine_experiment. Parameters per joint p = (a, c, v): factors on the inner fit's
 /// k_t scale, Coulomb and viscous friction. Residuals: the replayed twin's current minus the measured one at the
 /// measured samples of the window (the replay's t = 0 is the log's first sample).
-TwinRefinement refineWithTwin(const std::string& robot_file, const std::string& log_csv,
-                              const CurrentLogColumns& columns, const systems::RobotSystem& robot,
-                              const DriveCalibration& cal, const DriveCalibrationOptions& o,
-                              const std::string& output_file) {
+TwinRefinement refineWithTwin(const std::string& robot_file, const std::string& log_csv, const CurrentLog& log,
+                              const systems::RobotSystem& robot, const DriveCalibration& cal,
+                              const DriveCalibrationOptions& o, const std::string& output_file) {
   (void)output_file;
   if (o.refine_iterations < 1)
     throw InputError("refine_iterations: expected >= 1, got " + std::to_string(o.refine_iterations));
   const int n = robot.model().nq;
-  MeasuredCurrents meas = measuredCurrents(log_csv, n, columns, o);
+  CurrentLog meas = log;       // the window's measured currents and times
   for (int j = 0; j < n; ++j)  // a fitted current offset belongs to the sensor: the twin has none
     meas.current.col(j).array() -= cal.fit.joints[static_cast<size_t>(j)].offset.value;
   const ScratchDir scratch;
@@ -445,7 +419,7 @@ DriveCalibration calibrateDrives(const std::string& robot_file, const std::strin
 
   cal.drives_yaml = renderDrives(robot_file, log_csv, robot, cal, o, output_file);
   if (!o.refine_experiment.empty()) {
-    cal.refinement = refineWithTwin(robot_file, log_csv, columns, robot, cal, o, output_file);
+    cal.refinement = refineWithTwin(robot_file, log_csv, log, robot, cal, o, output_file);
     for (size_t j = 0; j < cal.fit.joints.size(); ++j) {  // the refined values (the standard errors stay the fit's)
       JointCurrentFit& f = cal.fit.joints[j];
       f.kt_scale.value *= cal.refinement.kt_factor[j];

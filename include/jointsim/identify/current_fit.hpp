@@ -32,6 +32,8 @@ struct CurrentLog {
   Eigen::MatrixXd qd;          ///< K × n joint velocities [rad/s] (the controller's command: noise-free)
   Eigen::MatrixXd qdd;         ///< K × n joint accelerations [rad/s²] (the controller's command)
   Eigen::MatrixXd current;     ///< K × n measured motor currents [A]
+  /// The samples' times since the log's first sample [s] (set by readCurrentLog; the fit does not use them).
+  std::vector<double> t;
 };
 
 /// The nominal drive of a joint.
