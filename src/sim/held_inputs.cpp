@@ -75,4 +75,38 @@ std::vector<double> InputProfiles::breakpoints(double t_end) const {
   return out;
 }
 
+void HeldInputPlant::setInput(PlantState& state, int port, double value) const {
+  HeldInputs& in = heldInputs(state);
+  in.checkIndex(port, name());
+  if (in.set(static_cast<std::size_t>(port), value, ports_, name())) state.inputsChanged();
+}
+
+double HeldInputPlant::input(const PlantState& state, int port) const {
+  const HeldInputs& in = heldInputs(state);
+  in.checkIndex(port, name());
+  return in.value[static_cast<std::size_t>(port)];
+}
+
+bool HeldInputPlant::inputActive(const PlantState& state, int port) const {
+  const HeldInputs& in = heldInputs(state);
+  in.checkIndex(port, name());
+  return alwaysActive(port) || profiles_.active(in, static_cast<std::size_t>(port));
+}
+
+void HeldInputPlant::setInputProfile(int port, const control::Profile& profile) {
+  checkConfigurable("setInputProfile");
+  profiles_.set(port, profile, ports_, name());
+}
+
+void HeldInputPlant::releaseInput(PlantState& state, int port) const {
+  HeldInputs& in = heldInputs(state);
+  in.checkIndex(port, name());
+  if (in.release(static_cast<std::size_t>(port))) state.inputsChanged();
+}
+
+std::vector<double> HeldInputPlant::withProfileBreakpoints(std::vector<double> events, double t_end) const {
+  for (double b : profiles_.breakpoints(t_end)) events.push_back(b);
+  return events;
+}
+
 }  // namespace jointsim::sim

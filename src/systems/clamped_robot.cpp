@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <set>
+#include <utility>
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
@@ -184,35 +185,6 @@ void ClampedRobot::State::load(ByteReader& in) {
   inputs.load(in);
 }
 
-void ClampedRobot::setInput(sim::PlantState& state, int port, double value) const {
-  State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  if (st.inputs.set(static_cast<size_t>(port), value, ports_, name())) st.inputsChanged();
-}
-
-double ClampedRobot::input(const sim::PlantState& state, int port) const {
-  const State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  return st.inputs.value[static_cast<size_t>(port)];
-}
-
-bool ClampedRobot::inputActive(const sim::PlantState& state, int port) const {
-  const State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  return profiles_.active(st.inputs, static_cast<size_t>(port)) || port % 2 == 1;
-}
-
-void ClampedRobot::releaseInput(sim::PlantState& state, int port) const {
-  State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  if (st.inputs.release(static_cast<size_t>(port))) st.inputsChanged();
-}
-
-void ClampedRobot::setInputProfile(int port, const control::Profile& profile) {
-  checkConfigurable("setInputProfile");
-  profiles_.set(port, profile, ports_, name());
-}
-
 const std::vector<FrictionMode>& ClampedRobot::modes(const sim::PlantState& state) const {
   return own<State>(state).modes;
 }
@@ -383,13 +355,13 @@ sim::SimulateOptions ClampedRobot::simulateOptions() const {
   return sim::SimulateOptions::everyInterval(s_.duration, s_.log_interval, s_.solver);
 }
 
-std::vector<double> ClampedRobot::timeEvents(double) const {
+std::vector<double> ClampedRobot::timeEvents(double t_end) const {
   std::vector<double> t;
   for (const auto& p : paths_)
     for (double b : p.breakpoints()) t.push_back(b);
   std::sort(t.begin(), t.end());
   t.erase(std::unique(t.begin(), t.end()), t.end());
-  return t;
+  return withProfileBreakpoints(std::move(t), t_end);
 }
 
 void ClampedRobot::signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -419,5 +391,7 @@ void ClampedRobot::signals(const sim::PlantState& state, double t, const Eigen::
   out[c++] = st.f_w.norm();
   out[c++] = st.m_w.norm();
 }
+
+bool ClampedRobot::alwaysActive(int port) const { return port % 2 == 1; }
 
 }  // namespace jointsim::systems

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <utility>
 
 #include "jointsim/common/check.hpp"
 #include "jointsim/common/error.hpp"
@@ -101,36 +102,6 @@ void DriveChain::State::save(ByteWriter& out) const {
 void DriveChain::State::load(ByteReader& in) {
   drive::loadModes(in, modes);
   inputs.load(in);
-}
-
-void DriveChain::setInput(sim::PlantState& state, int port, double value) const {
-  State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  if (st.inputs.set(static_cast<size_t>(port), value, ports_, name())) st.inputsChanged();
-}
-
-double DriveChain::input(const sim::PlantState& state, int port) const {
-  const State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  return st.inputs.value[static_cast<size_t>(port)];
-}
-
-bool DriveChain::inputActive(const sim::PlantState& state, int port) const {
-  const State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  return port >= static_cast<int>(ports_.size()) - static_cast<int>(s_.inertias.size()) ||
-         profiles_.active(st.inputs, static_cast<size_t>(port));
-}
-
-void DriveChain::releaseInput(sim::PlantState& state, int port) const {
-  State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  if (st.inputs.release(static_cast<size_t>(port))) st.inputsChanged();
-}
-
-void DriveChain::setInputProfile(int port, const control::Profile& profile) {
-  checkConfigurable("setInputProfile");
-  profiles_.set(port, profile, ports_, name());
 }
 
 const std::vector<FrictionMode>& DriveChain::modes(const sim::PlantState& state) const {
@@ -377,8 +348,7 @@ std::vector<double> DriveChain::timeEvents(double t_end) const {
     for (double b : el.torque.breakpoints(t_end)) events.push_back(b);
     for (double b : el.normalized.breakpoints(t_end)) events.push_back(b);
   }
-  for (double b : profiles_.breakpoints(t_end)) events.push_back(b);
-  return events;
+  return withProfileBreakpoints(std::move(events), t_end);
 }
 
 void DriveChain::start(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
@@ -447,6 +417,10 @@ void DriveChain::signals(const sim::PlantState& state, double t, const Eigen::Re
       row[c++] = st.modes[k] == FrictionMode::StartBackward ? 1.0 : 0.0;
     }
   }
+}
+
+bool DriveChain::alwaysActive(int port) const {
+  return port >= static_cast<int>(ports_.size()) - static_cast<int>(s_.inertias.size());
 }
 
 }  // namespace jointsim::systems

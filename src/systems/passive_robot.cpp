@@ -74,29 +74,6 @@ PassiveRobot::State::State(const PassiveRobot& robot)
   inputs.resize(robot.ports_.size());
 }
 
-void PassiveRobot::setInput(sim::PlantState& state, int port, double value) const {
-  State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  if (st.inputs.set(static_cast<size_t>(port), value, ports_, name())) st.inputsChanged();
-}
-
-void PassiveRobot::releaseInput(sim::PlantState& state, int port) const {
-  State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  if (st.inputs.release(static_cast<size_t>(port))) st.inputsChanged();
-}
-
-void PassiveRobot::setInputProfile(int port, const control::Profile& profile) {
-  checkConfigurable("setInputProfile");
-  profiles_.set(port, profile, ports_, name());
-}
-
-double PassiveRobot::input(const sim::PlantState& state, int port) const {
-  const State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  return st.inputs.value[static_cast<size_t>(port)];
-}
-
 std::string PassiveRobot::name() const { return "multibody (" + model_.name + ")"; }
 
 sim::SimulateOptions PassiveRobot::simulateOptions() const {

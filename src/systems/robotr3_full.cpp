@@ -35,6 +35,22 @@ RobotR3AxisParams RobotR3AxisParams::fullRobot(int j) {
   return p;
 }
 
+RobotR3AxisParams RobotR3AxisParams::oneAxis() {
+  RobotR3AxisParams p;  // [MSL, RobotR3.OneAxis]
+  p.type = 1;
+  p.ratio = 210.0;
+  p.motor = drive::OpAmpMotorParams::oneAxis();
+  p.c = 8.0;
+  p.d = 0.01;
+  p.Rv0 = 0.5;
+  p.Rv1 = 0.1 / 130.0;
+  p.peak = 1.0;
+  p.kp = 5.0;
+  p.ks = 0.5;
+  p.Ts = 0.05;
+  return p;
+}
+
 void RobotR3FullSetup::validate() const {
   const char* const c = "RobotR3 robot";
   const auto n = static_cast<size_t>(arm.nq);
@@ -129,35 +145,6 @@ void RobotR3Full::State::load(ByteReader& in) {
   inputs.load(in);
 }
 
-void RobotR3Full::setInput(sim::PlantState& state, int port, double value) const {
-  State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  if (st.inputs.set(static_cast<size_t>(port), value, ports_, name())) st.inputsChanged();
-}
-
-double RobotR3Full::input(const sim::PlantState& state, int port) const {
-  const State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  return st.inputs.value[static_cast<size_t>(port)];
-}
-
-bool RobotR3Full::inputActive(const sim::PlantState& state, int port) const {
-  const State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  return port % 2 == 1 || profiles_.active(st.inputs, static_cast<size_t>(port));
-}
-
-void RobotR3Full::releaseInput(sim::PlantState& state, int port) const {
-  State& st = own<State>(state);
-  st.inputs.checkIndex(port, name());
-  if (st.inputs.release(static_cast<size_t>(port))) st.inputsChanged();
-}
-
-void RobotR3Full::setInputProfile(int port, const control::Profile& profile) {
-  checkConfigurable("setInputProfile");
-  profiles_.set(port, profile, ports_, name());
-}
-
 const std::vector<FrictionMode>& RobotR3Full::modes(const sim::PlantState& state) const {
   return own<State>(state).modes;
 }
@@ -169,9 +156,7 @@ sim::SimulateOptions RobotR3Full::simulateOptions() const {
 }
 
 std::vector<double> RobotR3Full::timeEvents(double t_end) const {
-  std::vector<double> events = path_.breakpoints();
-  for (double b : profiles_.breakpoints(t_end)) events.push_back(b);
-  return events;
+  return withProfileBreakpoints(path_.breakpoints(), t_end);
 }
 
 double RobotR3Full::endTime() const { return std::min(s_.stop_time, path_.endTime() + s_.swing_time); }
@@ -361,5 +346,7 @@ void RobotR3Full::signals(const sim::PlantState& state, double /*t*/, const Eige
     if (j != 1) row[c++] = y[n_ + j];
   for (int j = 0; j < n_; ++j) row[c++] = drive::frictionModeNumber(st.modes[static_cast<size_t>(j)]);
 }
+
+bool RobotR3Full::alwaysActive(int port) const { return port % 2 == 1; }
 
 }  // namespace jointsim::systems

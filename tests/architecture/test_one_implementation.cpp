@@ -1,7 +1,8 @@
 // One implementation of the hybrid mode iteration and of each controller law (issue: one composable model): every
 // model with exact stick–slip friction runs the event iteration drive::iterateFrictionModes (msl_friction.hpp), and
 // the control laws — the TorqueCascade / RobotR3 axis controller, the VoltageCascade, the rig's velocity PI — are
-// written once, in src/control/joint_controller.cpp. The check reads every file of include/jointsim/ and src/ for the
+// written once, in src/control/joint_controller.cpp; the input methods of the models with held input ports once, in
+// sim::HeldInputPlant. The check reads every file of include/jointsim/ and src/ for the
 // marks of a law written out (a PI integrator ẋ = u/Ts, an integral gain times an integral, a friction mode step
 // outside its one iteration, a hand-written iteration loop); it runs on a fixture with a copy of each to show it can fail.
 #include <filesystem>
@@ -40,6 +41,9 @@ const std::vector<Rule>& rules() {
       {"a proportional gain applied to a velocity or current error (P_vel, P_cur)",
        std::regex(R"(\b(P_vel|P_cur)\s*\*)"),
        {"src/control/joint_controller.cpp"}},
+      {"a held input port set or released outside sim::HeldInputPlant (the one implementation of the input methods)",
+       std::regex(R"(\binputs\.(set|release)\s*\()"),
+       {"src/sim/held_inputs.cpp"}},
   };
   return r;
 }
@@ -106,7 +110,8 @@ TEST(OneImplementation, TheCheckFindsCopies) {
          "    const FrictionMode m = drive::nextFrictionMode(st.modes[k], false, S, w, a, t0, t0max, f);\n"
          "  ydot[c] = st.e[j] / a.Ts;\n"
          "  const double raw = s_.pi.kp * err + s_.pi.ki * y[e_idx_];\n"
-         "  out.i_ref = P_vel * e_vel;  // ydot = e / Ts in a comment is fine\n";
+         "  out.i_ref = P_vel * e_vel;  // ydot = e / Ts in a comment is fine\n"
+         "  if (st.inputs.set(static_cast<size_t>(port), value, ports_, name())) st.inputsChanged();\n";
   const auto f = findings(dir.path());
-  EXPECT_EQ(f.size(), 5u) << joined(f);
+  EXPECT_EQ(f.size(), 6u) << joined(f);
 }

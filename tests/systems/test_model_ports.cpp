@@ -3,6 +3,7 @@
 // torques, the RobotR3 axis and FullRobot's current references and load torques. Each against something
 // independent: a closed form, gravity torques from RNEA, the frozen controller, a saved state that restores the
 // inputs.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -12,8 +13,11 @@
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/multibody/algorithms.hpp"
 #include "jointsim/sim/simulator.hpp"
+#include "jointsim/systems/clamped_robot.hpp"
 #include "jointsim/systems/drive_chain.hpp"
 #include "jointsim/systems/passive_robot.hpp"
+#include "jointsim/systems/robotr3_axis.hpp"
+#include "jointsim/systems/robotr3_full.hpp"
 #include "test_util.hpp"
 
 namespace jointsim {
@@ -45,7 +49,30 @@ std::shared_ptr<experiments::Experiment> load(const std::string& file, const std
       experiments::loadExperiment(test::sourcePath("config/experiments/" + file), sets));
 }
 
+// A copy of `plant` (a P) with a step profile at `port` at t = 0.137 s: that time must be one of its time events (so
+// that no step of the integrator crosses the jump), besides the model's own events.
+template <class P>
+void expectAProfilesStepIsATimeEvent(const sim::Plant& plant, const std::string& port) {
+  P copy = dynamic_cast<const P&>(plant);  // a copy is another plant, not frozen: it takes profiles
+  const std::vector<double> own = copy.timeEvents(10.0);
+  copy.setInputProfile(sim::inputIndex(copy, port), control::Profile::step(0.0, 0.1, 0.137));
+  const std::vector<double> events = copy.timeEvents(10.0);
+  EXPECT_NE(std::find(events.begin(), events.end(), 0.137), events.end()) << copy.name() << ", port " << port;
+  for (double e : own) EXPECT_NE(std::find(events.begin(), events.end(), e), events.end()) << copy.name();
+}
+
 }  // namespace
+
+// Every model with input profiles makes their breakpoints time events (the clamped robot did not: a load-torque step
+// there was crossed by an integrator step).
+TEST(ModelPorts, EveryModelMakesItsInputProfilesBreakpointsTimeEvents) {
+  expectAProfilesStepIsATimeEvent<systems::DriveChain>(load("msl_friction.yaml", {})->plant(), "inertia2.load_torque");
+  expectAProfilesStepIsATimeEvent<systems::PassiveRobot>(load("ur5_fall.yaml", {})->plant(), "elbow_joint.torque");
+  expectAProfilesStepIsATimeEvent<systems::ClampedRobot>(load("irb140_clamping.yaml", {"curves=false"})->plant(),
+                                                         "joint2.load_torque");
+  expectAProfilesStepIsATimeEvent<systems::RobotR3Axis>(load("robotr3_one_axis.yaml", {})->plant(), "axis.load_torque");
+  expectAProfilesStepIsATimeEvent<systems::RobotR3Full>(load("robotr3_full_robot.yaml", {})->plant(), "r3.load_torque");
+}
 
 TEST(ModelPorts, DriveChainSourceAndLoadTorquesAgainstTheClosedForm) {
   const systems::DriveChain chain(oneInertia());

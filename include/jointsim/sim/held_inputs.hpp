@@ -54,4 +54,38 @@ struct InputProfiles {
   std::vector<double> breakpoints(double t_end) const;
 };
 
+/// Base of a plant whose inputs are a fixed list of independent ports (no groups) held in its State's HeldInputs and
+/// optionally driven by InputProfiles: the one implementation of the Plant input methods for such plants. A derived
+/// plant fills `ports_` in its constructor (then `profiles_.resize(ports_.size())`), keeps a HeldInputs of that size
+/// in its State, returns it from heldInputs(), and reads its ports in the right-hand side through
+/// `profiles_.value(held, k, t)` and `profiles_.active(held, k)`.
+class HeldInputPlant : public Plant {
+ public:
+  std::vector<InputPort> inputPorts() const override { return ports_; }
+  /// Holds `value` at `port`: InputError (nothing changed) for a port out of range, a value out of its range.
+  void setInput(PlantState& state, int port, double value) const override;
+  /// The value held at `port` (0 until set and after a release).
+  double input(const PlantState& state, int port) const override;
+  /// In effect: held, driven by a profile, or a port that always acts (alwaysActive).
+  bool inputActive(const PlantState& state, int port) const override;
+  /// Port `port` driven by `profile` from the start of every run (only before a simulator uses the plant).
+  void setInputProfile(int port, const control::Profile& profile) override;
+  /// Port `port` no longer held: back to its profile, or to the model's own source.
+  void releaseInput(PlantState& state, int port) const override;
+
+ protected:
+  /// The HeldInputs in `state` (a state of this plant; InputError for another plant's, as Plant::own).
+  virtual HeldInputs& heldInputs(PlantState& state) const = 0;
+  virtual const HeldInputs& heldInputs(const PlantState& state) const = 0;
+  /// Whether `port` acts whatever is held (an input that adds to the model's forces, 0 until set) rather than
+  /// replacing a source of the model (a command in place of a controller's, in effect once set). Default: every port.
+  virtual bool alwaysActive(int /*port*/) const { return true; }
+  /// `events` (a plant's own time events) followed by the profiles' breakpoints in (0, t_end): what a plant's
+  /// timeEvents() returns.
+  std::vector<double> withProfileBreakpoints(std::vector<double> events, double t_end) const;
+
+  std::vector<InputPort> ports_;  ///< the plant's inputs (set in its constructor)
+  InputProfiles profiles_;        ///< profiles driving the ports (setInputProfile)
+};
+
 }  // namespace jointsim::sim

@@ -102,7 +102,7 @@ struct ClampingSetup {
 
 /// The clamped robot as a plant. Constant once built (sim::Plant): the run's friction modes and the workspace of
 /// the right-hand side live in ClampedRobot::State.
-class ClampedRobot : public sim::Plant {
+class ClampedRobot : public sim::HeldInputPlant {
  public:
   /// The run's state: the motors' friction modes (discrete state, saved) and the workspace of the right-hand side.
   struct State : sim::PlantStateOf<State> {
@@ -150,11 +150,7 @@ class ClampedRobot : public sim::Plant {
   /// controller's output (its integrator frozen; in effect once set), and `<joint>.load_torque` [N·m], an external
   /// torque at the joint (0 until set).
   std::vector<sim::InputPort> inputPorts() const override { return ports_; }
-  void setInput(sim::PlantState& state, int port, double value) const override;
-  double input(const sim::PlantState& state, int port) const override;
-  bool inputActive(const sim::PlantState& state, int port) const override;
-  void setInputProfile(int port, const control::Profile& profile) override;
-  void releaseInput(sim::PlantState& state, int port) const override;
+  // setInput, input, inputActive, setInputProfile, releaseInput: sim::HeldInputPlant.
   std::string name() const override;
   int stateSize() const override { return n_states_; }
   Eigen::VectorXd initialState() const override;
@@ -179,6 +175,11 @@ class ClampedRobot : public sim::Plant {
   void clampDeflection(const sim::PlantState& state, const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Vector3d& dp,
                        Eigen::Vector3d& theta) const;
 
+ protected:
+  sim::HeldInputs& heldInputs(sim::PlantState& state) const override { return own<State>(state).inputs; }
+  const sim::HeldInputs& heldInputs(const sim::PlantState& state) const override { return own<State>(state).inputs; }
+  bool alwaysActive(int port) const override;
+
  private:
   void solve(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
   ClampingSetup s_;
@@ -195,8 +196,6 @@ class ClampedRobot : public sim::Plant {
   Eigen::Vector3d p0_;
   Eigen::Matrix3d R0_;
   std::vector<std::string> signals_;
-  std::vector<sim::InputPort> ports_;
-  sim::InputProfiles profiles_;  ///< profiles driving the ports (setInputProfile)
 };
 
 }  // namespace jointsim::systems

@@ -89,7 +89,7 @@ struct DriveChainSetup {
 /// force), the torque sources' and normal
 /// forces' breakpoints as time events. Constant once built (sim::Plant): the run's modes and the workspace of the
 /// right-hand side live in DriveChain::State.
-class DriveChain : public sim::Plant {
+class DriveChain : public sim::HeldInputPlant {
  public:
   /// The run's state: the friction modes (discrete state, saved) and the workspace of the right-hand side.
   struct State : sim::PlantStateOf<State> {
@@ -142,14 +142,15 @@ class DriveChain : public sim::Plant {
   /// Input ports (sim::InputPort): per torque source `<source>` [N·m], its torque held in place of its profile (in
   /// effect once set); per inertia `<inertia>.load_torque` [N·m], an external torque on it (0 until set).
   std::vector<sim::InputPort> inputPorts() const override { return ports_; }
-  void setInput(sim::PlantState& state, int port, double value) const override;
-  double input(const sim::PlantState& state, int port) const override;
-  bool inputActive(const sim::PlantState& state, int port) const override;
-  void setInputProfile(int port, const control::Profile& profile) override;
-  void releaseInput(sim::PlantState& state, int port) const override;
+  // setInput, input, inputActive, setInputProfile, releaseInput: sim::HeldInputPlant.
 
   /// Friction/compliant torque of element e at the modes in `state` [N·m].
   double elementTorque(const sim::PlantState& state, int e, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+
+ protected:
+  sim::HeldInputs& heldInputs(sim::PlantState& state) const override { return own<State>(state).inputs; }
+  const sim::HeldInputs& heldInputs(const sim::PlantState& state) const override { return own<State>(state).inputs; }
+  bool alwaysActive(int port) const override;
 
  private:
   void solve(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // fills acc, tau_el
@@ -163,8 +164,6 @@ class DriveChain : public sim::Plant {
   /// Per element: its contact law when it is an elasto-backlash element (made once, not in the right-hand side).
   std::vector<std::shared_ptr<const drive::ElastoBacklash>> backlash_;
   std::vector<int> normal_slot_;  ///< per element: the root slot of its normal force, −1: none
-  std::vector<sim::InputPort> ports_;
-  sim::InputProfiles profiles_;   ///< profiles driving the ports (setInputProfile)
   std::vector<int> source_port_;  ///< per element: its input port when it is a torque source, −1 otherwise
   std::vector<int> load_port_;    ///< per inertia: its load-torque port
   int root_count_ = 0;

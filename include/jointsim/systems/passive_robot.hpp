@@ -35,7 +35,7 @@ struct PassiveRobotParams {
   void validate(const multibody::Model& model) const;
 };
 
-class PassiveRobot : public sim::Plant {
+class PassiveRobot : public sim::HeldInputPlant {
  public:
   /// Validates `params` against `model` (InputError).
   PassiveRobot(multibody::Model model, PassiveRobotParams params);
@@ -71,17 +71,18 @@ class PassiveRobot : public sim::Plant {
   /// Input ports (sim::InputPort): per joint `<joint>.torque` [N·m, or N for a prismatic joint], a torque applied at
   /// the joint (0 until set; its work is not in the logged energies).
   std::vector<sim::InputPort> inputPorts() const override { return ports_; }
-  void setInput(sim::PlantState& state, int port, double value) const override;
-  double input(const sim::PlantState& state, int port) const override;
-  void setInputProfile(int port, const control::Profile& profile) override;
-  void releaseInput(sim::PlantState& state, int port) const override;
-  std::vector<double> timeEvents(double t_end) const override { return profiles_.breakpoints(t_end); }
+  // setInput, input, inputActive, setInputProfile, releaseInput: sim::HeldInputPlant.
+  std::vector<double> timeEvents(double t_end) const override { return withProfileBreakpoints({}, t_end); }
   /// q_i, qd_i per joint (joint names), kinetic, potential and total energy [J], tip frame position [m]; with
   /// end stops also the energy stored in them (end_stop_energy [J], included in total_energy) and the torque
   /// of each stop (end_stop_torque_<joint> [N·m or N]).
   const std::vector<std::string>& signalNames() const override { return signals_; }
   void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                Eigen::Ref<Eigen::VectorXd> out) const override;
+
+ protected:
+  sim::HeldInputs& heldInputs(sim::PlantState& state) const override { return own<State>(state).inputs; }
+  const sim::HeldInputs& heldInputs(const sim::PlantState& state) const override { return own<State>(state).inputs; }
 
  private:
   multibody::Model model_;
@@ -90,8 +91,6 @@ class PassiveRobot : public sim::Plant {
   EndStops stops_;
   int tip_ = 0;
   std::vector<std::string> signals_;
-  std::vector<sim::InputPort> ports_;
-  sim::InputProfiles profiles_;  ///< profiles driving the ports (setInputProfile)
 };
 
 }  // namespace jointsim::systems

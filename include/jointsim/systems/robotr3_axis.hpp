@@ -24,20 +24,16 @@
 #include "jointsim/sim/held_inputs.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/systems/drive_chain.hpp"
+#include "jointsim/systems/robotr3_full.hpp"
 
 namespace jointsim::systems {
 
 struct RobotR3AxisSetup {
   std::string name = "one_axis";
   std::string prefix = "axis";  ///< prefix of the reference column names ("axis" for OneAxis)
-  drive::OpAmpMotorParams motor = drive::OpAmpMotorParams::oneAxis();
-  double ratio = 210.0;                              ///< gear ratio motor/joint [-] (sign allowed)
-  double c = 8.0;                                    ///< spring, motor side [N·m/rad]
-  double d = 0.01;                                   ///< damper, motor side [N·m·s/rad]
-  double Rv0 = 0.5;                                  ///< friction at zero speed [N·m]
-  double Rv1 = 0.1 / 130.0;                          ///< viscous friction slope [N·m·s/rad]
-  double peak = 1.0;                                 ///< stiction factor (type 1 ignores the gear's peak: 1)
-  double kp = 5.0, ks = 0.5, Ts = 0.05;              ///< controller gains [1/s], [A·s/rad], [s]
+  /// The axis's drive: a type-1 axis (elastic gear, motor-side friction) with its controller, the same parameters
+  /// (and parameter table, through which faults act) as an axis of the FullRobot. Default: [MSL, RobotR3.OneAxis].
+  RobotR3AxisParams axis = RobotR3AxisParams::oneAxis();
   double load_inertia = 19.5;                        ///< J_load [kg·m²]
   double q_begin = 0.0, q_end = 2.0943951023931953;  ///< path [rad]
   double qd_max = 3.0, qdd_max = 10.0;               ///< path limits [rad/s], [rad/s²]
@@ -50,7 +46,7 @@ struct RobotR3AxisSetup {
   void validate() const;
 };
 
-class RobotR3Axis : public sim::Plant {
+class RobotR3Axis : public sim::HeldInputPlant {
  public:
   explicit RobotR3Axis(RobotR3AxisSetup setup);
 
@@ -70,11 +66,7 @@ class RobotR3Axis : public sim::Plant {
   /// (its PI frozen; in effect once set), and `<prefix>.load_torque` [N·m], an external torque on the load (0 until
   /// set; its work is not in the energy columns).
   std::vector<sim::InputPort> inputPorts() const override { return ports_; }
-  void setInput(sim::PlantState& state, int port, double value) const override;
-  double input(const sim::PlantState& state, int port) const override;
-  bool inputActive(const sim::PlantState& state, int port) const override;
-  void setInputProfile(int port, const control::Profile& profile) override;
-  void releaseInput(sim::PlantState& state, int port) const override;
+  // setInput, input, inputActive, setInputProfile, releaseInput: sim::HeldInputPlant.
   /// t_end = endTime(), outputs every log_interval (also the max step when the solver sets none).
   sim::SimulateOptions simulateOptions() const;
   static constexpr int kStates = 11;  // q, qd, phi_rel, w_rel, x, v_C, i, W_el, E_R, E_d, E_f
@@ -111,6 +103,11 @@ class RobotR3Axis : public sim::Plant {
   };
   Eval evaluate(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
 
+ protected:
+  sim::HeldInputs& heldInputs(sim::PlantState& state) const override { return own<State>(state).inputs; }
+  const sim::HeldInputs& heldInputs(const sim::PlantState& state) const override { return own<State>(state).inputs; }
+  bool alwaysActive(int port) const override;
+
  private:
   Eval evaluateIn(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // at st.mode
   RobotR3AxisSetup s_;
@@ -118,8 +115,6 @@ class RobotR3Axis : public sim::Plant {
   control::JointController controller_;  ///< the TorqueCascade (kp, ks, Ts), its output the current reference [A]
   control::KinematicPtpTrajectory path_;
   std::vector<std::string> signals_;
-  std::vector<sim::InputPort> ports_;
-  sim::InputProfiles profiles_;  ///< profiles driving the ports (setInputProfile)
 };
 
 }  // namespace jointsim::systems

@@ -39,6 +39,9 @@ struct RobotR3AxisParams {
   double kp = 5.0, ks = 0.5, Ts = 0.05;
   /// Axis j (1..6) of FullRobot (axis parameters of [MSL, RobotR3.FullRobot]).
   static RobotR3AxisParams fullRobot(int j);
+  /// The axis of [MSL, RobotR3.OneAxis]: type 1, ratio 210, c = 8 N·m/rad, d = 0.01 N·m·s/rad, Rv0 = 0.5 N·m,
+  /// Rv1 = 0.1/130 N·m·s/rad, peak 1 (type 1 ignores the gear's peak), kp = 5 1/s, ks = 0.5 A·s/rad, Ts = 0.05 s.
+  static RobotR3AxisParams oneAxis();
   /// Parameter table of the axis's drive (drive/parameters.hpp): motor.J, motor.k (role torque_constant), c (role
   /// stiffness) and d of a type-1 axis, Rv0 (role coulomb), Rv1, peak.
   std::vector<drive::ParameterInfo> parameters() const;
@@ -57,7 +60,7 @@ struct RobotR3FullSetup {
   void validate() const;
 };
 
-class RobotR3Full : public sim::Plant {
+class RobotR3Full : public sim::HeldInputPlant {
  public:
   explicit RobotR3Full(RobotR3FullSetup setup);
 
@@ -87,11 +90,7 @@ class RobotR3Full : public sim::Plant {
   /// controller's (its PI frozen; in effect once set), and `<joint>.load_torque` [N·m], an external torque at the
   /// joint (0 until set).
   std::vector<sim::InputPort> inputPorts() const override { return ports_; }
-  void setInput(sim::PlantState& state, int port, double value) const override;
-  double input(const sim::PlantState& state, int port) const override;
-  bool inputActive(const sim::PlantState& state, int port) const override;
-  void setInputProfile(int port, const control::Profile& profile) override;
-  void releaseInput(sim::PlantState& state, int port) const override;
+  // setInput, input, inputActive, setInputProfile, releaseInput: sim::HeldInputPlant.
   std::string name() const override;
   int stateSize() const override { return n_states_; }
   Eigen::VectorXd initialState() const override;
@@ -112,6 +111,11 @@ class RobotR3Full : public sim::Plant {
   void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                Eigen::Ref<Eigen::VectorXd> row) const override;
 
+ protected:
+  sim::HeldInputs& heldInputs(sim::PlantState& state) const override { return own<State>(state).inputs; }
+  const sim::HeldInputs& heldInputs(const sim::PlantState& state) const override { return own<State>(state).inputs; }
+  bool alwaysActive(int port) const override;
+
  private:
   void solve(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // fills st's workspace
   RobotR3FullSetup s_;
@@ -121,8 +125,6 @@ class RobotR3Full : public sim::Plant {
   control::KinematicPtpTrajectory path_;
   std::vector<control::JointController> controllers_;  ///< per axis: the TorqueCascade (kp, ks, Ts)
   std::vector<std::string> signals_;
-  std::vector<sim::InputPort> ports_;
-  sim::InputProfiles profiles_;  ///< profiles driving the ports (setInputProfile)
 };
 
 }  // namespace jointsim::systems

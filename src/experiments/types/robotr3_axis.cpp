@@ -27,35 +27,35 @@ systems::RobotR3AxisSetup readRobotR3AxisSetup(const YamlValue& root, const std:
     if (m.has("preset")) {
       const std::string p = m["preset"].asString("one_axis or robotr3_axis1..6");
       if (p == "one_axis")
-        s.motor = drive::OpAmpMotorParams::oneAxis();
+        s.axis.motor = drive::OpAmpMotorParams::oneAxis();
       else if (p.size() == 13 && p.rfind("robotr3_axis", 0) == 0 && p[12] >= '1' && p[12] <= '6')
-        s.motor = drive::OpAmpMotorParams::robotR3Axis(p[12] - '0');
+        s.axis.motor = drive::OpAmpMotorParams::robotR3Axis(p[12] - '0');
       else
         m["preset"].failExpected("one_axis or robotr3_axis1..6");
     }
-    s.motor.J = num(m, "J", s.motor.J, "a rotor inertia in kg·m²");
-    s.motor.k = num(m, "k", s.motor.k, "a motor constant in N·m/A");
-    s.motor.w = num(m, "w", s.motor.w, "a current-loop frequency in rad/s");
-    s.motor.D = num(m, "D", s.motor.D, "a damping ratio");
+    s.axis.motor.J = num(m, "J", s.axis.motor.J, "a rotor inertia in kg·m²");
+    s.axis.motor.k = num(m, "k", s.axis.motor.k, "a motor constant in N·m/A");
+    s.axis.motor.w = num(m, "w", s.axis.motor.w, "a current-loop frequency in rad/s");
+    s.axis.motor.D = num(m, "D", s.axis.motor.D, "a damping ratio");
   }
   if (const YamlValue g = root["gear"]; g.defined()) {
     g.expectMap("a gear mapping {type, ratio, c, d, Rv0, Rv1, peak}");
     g.allowKeys({"type", "ratio", "c", "d", "Rv0", "Rv1", "peak"});
     if (g.has("type") && g["type"].asInt("1 (elastic); type 2 is not modelled yet") != 1)
       g["type"].failExpected("1 (the rigid type 2 is not modelled yet)");
-    s.ratio = num(g, "ratio", s.ratio, "a gear ratio");
-    s.c = num(g, "c", s.c, "a stiffness in N·m/rad");
-    s.d = num(g, "d", s.d, "a damping in N·m·s/rad");
-    s.Rv0 = num(g, "Rv0", s.Rv0, "a friction torque in N·m");
-    s.Rv1 = num(g, "Rv1", s.Rv1, "a viscous coefficient in N·m·s/rad");
-    s.peak = num(g, "peak", s.peak, "a stiction factor >= 1");
+    s.axis.ratio = num(g, "ratio", s.axis.ratio, "a gear ratio");
+    s.axis.c = num(g, "c", s.axis.c, "a stiffness in N·m/rad");
+    s.axis.d = num(g, "d", s.axis.d, "a damping in N·m·s/rad");
+    s.axis.Rv0 = num(g, "Rv0", s.axis.Rv0, "a friction torque in N·m");
+    s.axis.Rv1 = num(g, "Rv1", s.axis.Rv1, "a viscous coefficient in N·m·s/rad");
+    s.axis.peak = num(g, "peak", s.axis.peak, "a stiction factor >= 1");
   }
   if (const YamlValue c = root["controller"]; c.defined()) {
     c.expectMap("a controller mapping {kp, ks, Ts}");
     c.allowKeys({"kp", "ks", "Ts"});
-    s.kp = num(c, "kp", s.kp, "a gain in 1/s");
-    s.ks = num(c, "ks", s.ks, "a gain in A·s/rad");
-    s.Ts = num(c, "Ts", s.Ts, "a time constant in s");
+    s.axis.kp = num(c, "kp", s.axis.kp, "a gain in 1/s");
+    s.axis.ks = num(c, "ks", s.axis.ks, "a gain in A·s/rad");
+    s.axis.Ts = num(c, "Ts", s.axis.Ts, "a time constant in s");
   }
   if (const YamlValue l = root["load"]; l.defined()) {
     l.expectMap("a load mapping {inertia}");
@@ -185,23 +185,8 @@ ExperimentType robotR3AxisExperimentType() {
       if (f.joint != s.prefix)
         throw InputError("fault " + systems::describe(f) + ": the axis's drive is called '" + s.prefix + "', not '" +
                          f.joint + "'");
-      systems::RobotR3AxisParams a;
-      a.type = 1;
-      a.ratio = s.ratio;
-      a.motor = s.motor;
-      a.c = s.c;
-      a.d = s.d;
-      a.Rv0 = s.Rv0;
-      a.Rv1 = s.Rv1;
-      a.peak = s.peak;
       const std::string what = "RobotR3 axis '" + s.prefix + "'";
-      a = a.withParameters(systems::tableFaultChanges(a.parameters(), f, what), what);
-      s.motor = a.motor;  // every parameter of the table back
-      s.c = a.c;
-      s.d = a.d;
-      s.Rv0 = a.Rv0;
-      s.Rv1 = a.Rv1;
-      s.peak = a.peak;
+      s.axis = s.axis.withParameters(systems::tableFaultChanges(s.axis.parameters(), f, what), what);
     }
     return std::make_unique<RobotR3AxisExperiment>(std::move(s));
   };
