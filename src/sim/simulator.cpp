@@ -55,7 +55,7 @@ void AdvanceLimits::validate() const {
 namespace {
 /// First field of a saved state, and its format version.
 constexpr const char* kStateMagic = "jointsim simulator state";
-constexpr std::uint64_t kStateVersion = 2;  // 2: the robot's relative-replay anchors
+constexpr std::uint64_t kStateVersion = 3;  // 2: the robot's relative-replay anchors; 3: its load torques
 }  // namespace
 
 Snapshot::Snapshot(const Snapshot& other)

@@ -281,6 +281,9 @@ void RobotSystem::multibodyStage(const State& st, double t, const Eigen::Ref<con
     stops_.torques(q, qd, st.sig.tau_stop);
     st.tau += st.sig.tau_stop;
   }
+  for (int k = 0; k < n; ++k)  // external load torques at the joints (the J.load_torque inputs)
+    if (load_profiles_.active(st.loads, static_cast<size_t>(k)))
+      st.tau[k] += load_profiles_.value(st.loads, static_cast<size_t>(k), t);
   const multibody::Matrix6Xd* fext = nullptr;
   if (wrenches_ || !st.user_wrenches.empty()) {
     multibody::forwardKinematics(model_, st.data, q);

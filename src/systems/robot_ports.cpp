@@ -100,6 +100,10 @@ std::vector<sim::InputPort> RobotSystem::inputPorts() const {
   std::vector<sim::InputPort> out;
   out.reserve(inputs_.size());
   for (const InputSlot& in : inputs_) {
+    if (in.kind == kLoadTorqueInput) {
+      out.push_back(load_ports_[static_cast<size_t>(in.joint)]);
+      continue;
+    }
     const std::string& joint = drives_[static_cast<size_t>(in.joint)].joint;
     sim::InputPort p;
     p.group = joint;
@@ -144,6 +148,10 @@ void RobotSystem::setInput(sim::PlantState& state, int port, double value) const
   if (!std::isfinite(value))
     throw InputError(name() + ": input " + inputPorts()[static_cast<size_t>(port)].name +
                      ": expected a finite number, got " + formatNumber(value));
+  if (in.kind == kLoadTorqueInput) {
+    if (st.loads.set(k, value, load_ports_, name())) st.inputsChanged();
+    return;
+  }
   if (in.kind < 3) {
     if (st.port[k] != CommandPort::Setpoint) setCommandPort(state, in.joint, CommandPort::Setpoint);
     const bool held = st.ref_held[k] != 0;
@@ -162,6 +170,7 @@ void RobotSystem::setInput(sim::PlantState& state, int port, double value) const
 double RobotSystem::input(const sim::PlantState& state, int port) const {
   const InputSlot& in = inputSlot(port);
   const State& st = own<State>(state);
+  if (in.kind == kLoadTorqueInput) return st.loads.value[static_cast<size_t>(in.joint)];
   const bool held = st.ref_held[static_cast<size_t>(in.joint)] != 0;
   if (in.kind == 0) return held ? st.ref_q[in.joint] : st.q_start[in.joint];
   if (in.kind == 1) return held ? st.ref_qd[in.joint] : 0.0;
@@ -172,7 +181,27 @@ double RobotSystem::input(const sim::PlantState& state, int port) const {
 bool RobotSystem::inputActive(const sim::PlantState& state, int port) const {
   const InputSlot& in = inputSlot(port);
   const CommandPort now = own<State>(state).port[static_cast<size_t>(in.joint)];
+  if (in.kind == kLoadTorqueInput) return true;  // adds to the joint torques
   return in.kind < 3 ? now == CommandPort::Setpoint : now == static_cast<CommandPort>(in.kind - 3);
+}
+
+void RobotSystem::setInputProfile(int port, const control::Profile& profile) {
+  const InputSlot& in = inputSlot(port);
+  if (in.kind != kLoadTorqueInput)
+    throw InputError(name() + ": input " + inputPorts()[static_cast<size_t>(port)].name +
+                     ": a command port takes no profile (set it between steps, or give the drive a trajectory); "
+                     "the load torques take profiles");
+  checkConfigurable("setInputProfile");
+  load_profiles_.set(in.joint, profile, load_ports_, name());
+}
+
+void RobotSystem::releaseInput(sim::PlantState& state, int port) const {
+  const InputSlot& in = inputSlot(port);
+  if (in.kind != kLoadTorqueInput)
+    throw InputError(name() + ": input " + inputPorts()[static_cast<size_t>(port)].name +
+                     ": a command port is not released; choose another port (setCommandPort) instead");
+  State& st = own<State>(state);
+  if (st.loads.release(static_cast<size_t>(in.joint))) st.inputsChanged();
 }
 
 CommandPort RobotSystem::commandPort(const sim::PlantState& state, int joint) const {

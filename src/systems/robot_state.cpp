@@ -67,6 +67,8 @@ void RobotSystem::State::save(ByteWriter& out) const {
   out.doubles(stuck_value);
   out.tag("relative replay");
   out.vector(anchor);
+  out.tag("load torques");
+  loads.save(out);
 }
 
 void RobotSystem::State::load(ByteReader& in) {
@@ -144,6 +146,8 @@ void RobotSystem::State::load(ByteReader& in) {
     if (!std::isfinite(v)) in.fail("stuck values: a value that is not finite");
   in.tag("relative replay");
   anchor = finite(in.vector("replay anchors", n), "replay anchors");
+  in.tag("load torques");
+  loads.load(in);
   robot.rebuildDrives(*this, {});
 }
 

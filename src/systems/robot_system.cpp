@@ -116,6 +116,15 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
          {CommandPort::MotorVelocity, CommandPort::Current, CommandPort::Voltage, CommandPort::MotorTorque})
       if (portRefusal(k, p).empty()) inputs_.push_back({k, 3 + static_cast<int>(p)});
   }
+  for (int k = 0; k < n; ++k) {  // load torques after every command port (their indices stay as before)
+    inputs_.push_back({k, kLoadTorqueInput});
+    sim::InputPort p;
+    p.name = drives_[static_cast<size_t>(k)].joint + ".load_torque";
+    p.unit = model_.joint_types[static_cast<size_t>(k)] == multibody::JointType::Prismatic ? "N" : "N·m";
+    p.description = "external torque at the joint " + drives_[static_cast<size_t>(k)].joint + " (0 until set)";
+    load_ports_.push_back(p);
+  }
+  load_profiles_.resize(static_cast<size_t>(n));
   // Controller states come last, so that sampled control can take them out of the ODE state.
   for (auto& L : layout_) {
     if (L.n_controller > 0) {
@@ -169,6 +178,7 @@ RobotSystem::State::State(const RobotSystem& robot)
   stuck_episode.assign(robot.faults_.size(), -1);
   stuck_value.assign(robot.faults_.size(), 0.0);
   anchor.setZero(n);
+  loads.resize(static_cast<size_t>(n));
   for (const DriveSpec& d : drives) motors.emplace_back(d.motor);
   sig.resize(n);
   out_is_voltage.assign(static_cast<size_t>(n), 0);
@@ -321,6 +331,7 @@ std::vector<double> RobotSystem::timeEvents(double t_end) const {
     const std::vector<double> e = faultEvents(f, t_end);
     events.insert(events.end(), e.begin(), e.end());
   }
+  for (double b : load_profiles_.breakpoints(t_end)) events.push_back(b);  // load-torque profiles' jumps
   return events;
 }
 

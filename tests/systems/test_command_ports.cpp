@@ -1,8 +1,14 @@
 // Command ports of the robot with drives (systems::RobotSystem) driven through sim::Simulator: each port against
 // a closed form on a single gravity-free joint, the external wrench against the Jacobian transpose, bad inputs,
 // and a set-point → voltage → set-point switch on the UR5 twin.
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Cholesky>
 
 #include <gtest/gtest.h>
 
@@ -254,6 +260,85 @@ TEST(CommandPorts, SetpointVoltageSetpointSwitchOnTheUr5TwinIsBumpless) {
   EXPECT_LT(worst, std::max(2.0 * drift, 1e-4));        // no excursion beyond the open-loop drift
 }
 
+// A load torque at the joint (the `j1.load_torque` input) with the motor torque held at 0: q̈ = τ_L / (J_l + N² J_M)
+// (the rigid gear's rotor turns with the joint); released, the joint coasts at the speed it reached.
+TEST(CommandPorts, LoadTorqueAcceleratesTheJointInertiaAndIsReleased) {
+  systems::RobotSystem r = singleJoint();
+  sim::Simulator s(r, tight());
+  r.setCommandPort(s.plantState(), 0, CommandPort::MotorTorque);
+  r.setCommand(s.plantState(), 0, 0.0);
+  const int port = sim::inputIndex(r, "j1.load_torque");
+  EXPECT_EQ(r.inputPorts()[static_cast<size_t>(port)].unit, "N·m");
+  EXPECT_TRUE(r.inputActive(s.plantState(), port));
+  EXPECT_EQ(r.input(s.plantState(), port), 0.0);
+  r.setInput(s.plantState(), port, 0.3);
+  EXPECT_EQ(r.input(s.plantState(), port), 0.3);
+  s.advanceTo(0.3);
+  const double a = 0.3 / jointInertia(r);
+  EXPECT_NEAR(s.signal("q_j1"), 0.5 * a * 0.09, 1e-8);
+  EXPECT_NEAR(s.signal("qd_j1"), a * 0.3, 1e-8);
+  r.releaseInput(s.plantState(), port);
+  EXPECT_EQ(r.input(s.plantState(), port), 0.0);
+  s.advanceTo(0.5);
+  EXPECT_NEAR(s.signal("qd_j1"), a * 0.3, 1e-8);
+  EXPECT_NEAR(s.signal("q_j1"), 0.5 * a * 0.09 + a * 0.3 * 0.2, 1e-8);
+  // A command port is not released, nor driven by a profile; a load torque must be finite.
+  EXPECT_THROW(r.releaseInput(s.plantState(), sim::inputIndex(r, "j1.voltage")), InputError);
+  EXPECT_THROW(r.setInput(s.plantState(), port, std::nan("")), InputError);
+  systems::RobotSystem fresh = singleJoint();
+  EXPECT_THROW(fresh.setInputProfile(sim::inputIndex(fresh, "j1.current"), control::Profile::constant(1.0)),
+               InputError);
+}
+
+// The UR5 twin (compliant strain-wave gears): a load torque τ_L at the elbow changes the joint accelerations by
+// M(q)⁻¹ e_elbow τ_L at the same state (CRBA and a Cholesky solve, an algorithm apart from the twin's ABA) — from a
+// value held at the port and from a step profile given by the tracking file's `inputs:` key, whose step time becomes
+// a time event. A saved state keeps the held value.
+TEST(InputPorts, LoadTorquesOnTheUr5TwinFromThePortAndFromTheFilesInputsKey) {
+  const test::TempDir dir;
+  const std::string path = (dir / "twin.yaml").string();
+  std::ofstream(path) << "experiment: {name: twin_load, type: tracking}\nrobot: "
+                      << test::sourcePath("config/robots/ur5_drives.yaml")
+                      << "\ntrajectory: {type: point_to_point, start: [0.3, -1.2, 1.2, -1.5, -1.5708, 0.2], "
+                         "segments: [{target: [0.3, -1.2, 1.2, -1.5, -1.5708, 0.3], velocity: 1, acceleration: 1}]}\n"
+                         "inputs:\n  elbow_joint.load_torque: {type: step, initial: 0, final: 5, time: 0.05}\n"
+                         "duration: 0.1\n";
+  std::shared_ptr<experiments::Experiment> e = experiments::loadExperiment(path);
+  const auto& r = dynamic_cast<const systems::RobotSystem&>(e->plant());
+  const std::vector<double> events = r.timeEvents(0.1);
+  EXPECT_NE(std::find(events.begin(), events.end(), 0.05), events.end());
+  const int k = r.model().jointIndex("elbow_joint"), n = r.model().nq;
+  Eigen::VectorXd q0(6);
+  q0 << 0.3, -1.2, 1.2, -1.5, -1.5708, 0.2;
+  Eigen::VectorXd y = r.initialState(q0);
+  y.segment(n, n).setConstant(0.4);  // joints moving
+  const std::unique_ptr<sim::PlantState> st = r.makeState();
+  r.start(*st, 0.0, y);
+  multibody::Data data(r.model());
+  Eigen::MatrixXd M = multibody::crba(r.model(), data, y.head(n));
+  const Eigen::VectorXd col = M.llt().solve(Eigen::VectorXd::Unit(n, k));
+  auto qdd = [&](double t) {
+    Eigen::VectorXd yd(y.size());
+    r.derivatives(*st, t, y, yd);
+    return Eigen::VectorXd(yd.segment(n, n));
+  };
+  // The twin's rotor states do not move the joint accelerations at a fixed state: only the reference does, through
+  // the controllers, which act on the currents' derivatives, not on q̈.
+  const Eigen::VectorXd before = qdd(0.0499), after = qdd(0.0501);
+  EXPECT_LT((after - before - 5.0 * col).cwiseAbs().maxCoeff(), 1e-9 * (5.0 * col).cwiseAbs().maxCoeff());
+  const int port = sim::inputIndex(r, "elbow_joint.load_torque");
+  r.setInput(*st, port, -2.0);  // held: in place of the profile
+  const Eigen::VectorXd held = qdd(0.0501);
+  EXPECT_LT((held - before + 2.0 * col).cwiseAbs().maxCoeff(), 1e-9 * (2.0 * col).cwiseAbs().maxCoeff());
+  // Through a simulator: a saved state restores the held value.
+  auto s = experiments::makeSimulator(e);
+  s->plant().setInput(s->plantState(), port, 1.5);
+  const std::string bytes = s->saveState();
+  auto s2 = experiments::makeSimulator(e);
+  s2->loadState(bytes);
+  EXPECT_EQ(s2->plant().input(s2->plantState(), port), 1.5);
+}
+
 TEST(CommandPorts, JointRigHoldsACommandAndTakesALoadTorque) {
   // Rigid gear N = 4, torque input: the held command τ and a load torque τ_l on the output give
   // q̈_m = (τ + τ_l / N) / (J_m + J_l / N²) from rest (closed form q_m = ½ q̈_m t²).
@@ -281,12 +366,12 @@ TEST(InputPorts, TheRobotsPortsAsNamedInputsActAsItsOwnSetters) {
   for (const auto& p : ports) {
     names.push_back(p.name);
     units.push_back(p.unit);
-    EXPECT_EQ(p.group, "j1");
+    EXPECT_EQ(p.group, p.name == "j1.load_torque" ? "" : "j1");  // the load torque is no alternative command
     EXPECT_FALSE(p.description.empty());
   }
   EXPECT_EQ(names, (std::vector<std::string>{"j1.q", "j1.qd", "j1.qdd", "j1.motor_velocity", "j1.current", "j1.voltage",
-                                             "j1.motor_torque"}));
-  EXPECT_EQ(units, (std::vector<std::string>{"rad", "rad/s", "rad/s²", "rad/s", "A", "V", "N·m"}));
+                                             "j1.motor_torque", "j1.load_torque"}));
+  EXPECT_EQ(units, (std::vector<std::string>{"rad", "rad/s", "rad/s²", "rad/s", "A", "V", "N·m", "N·m"}));
   EXPECT_EQ(ports[5].mode, "voltage");
   EXPECT_EQ(ports[1].mode, "setpoint");
   // A torque-controlled drive has no current or voltage port.
@@ -327,7 +412,7 @@ TEST(InputPorts, TheRobotsPortsAsNamedInputsActAsItsOwnSetters) {
   EXPECT_EQ(a, b);
   EXPECT_GT(std::abs(a[0]), 0.1);  // it moved
   sim::Simulator s(r, tight());
-  EXPECT_THROW(r.setInput(s.plantState(), 7, 1.0), InputError);
+  EXPECT_THROW(r.setInput(s.plantState(), 8, 1.0), InputError);
   EXPECT_THROW(r.setInput(s.plantState(), 5, std::nan("")), InputError);
   EXPECT_EQ(r.commandPort(s.plantState(), 0), CommandPort::Setpoint);  // the refused value changed nothing
 }

@@ -30,6 +30,7 @@
 #include "jointsim/drive/transmission.hpp"
 #include "jointsim/multibody/data.hpp"
 #include "jointsim/multibody/model.hpp"
+#include "jointsim/sim/held_inputs.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/systems/faults.hpp"
 #include "jointsim/systems/joint_limits.hpp"
@@ -174,6 +175,8 @@ class RobotSystem : public sim::Plant {
     /// Relative replay: per joint, the measured minus the reference joint angle at the run's start or the start of
     /// the joint's last rest [rad].
     Eigen::VectorXd anchor;
+    /// Load torques at the joints (the `<joint>.load_torque` inputs; 0 until set) [N·m, N for a prismatic joint].
+    sim::HeldInputs loads;
     std::vector<DriveSpec> drives;
     std::vector<drive::DcMotor> motors;
     // Workspace of the right-hand side (holds nothing between calls; not saved).
@@ -228,11 +231,18 @@ class RobotSystem : public sim::Plant {
   /// [rad/s], `J.qdd` [rad/s²] (mode "setpoint": the held reference, setSetpoint) and, where the drive has them,
   /// `J.motor_velocity` [rad/s], `J.current` [A], `J.voltage` [V], `J.motor_torque` [N·m] (setCommand); group J.
   /// Setting one selects its port for the joint (setCommandPort, bumpless). Any finite value is admissible (the
-  /// voltage saturates at the supply, as a command would).
+  /// voltage saturates at the supply, as a command would). After them, per joint, `J.load_torque` [N·m]: an external
+  /// torque at the joint (a disturbance, a payload's torque; 0 until set, no group, always in effect), added to the
+  /// drives' joint torques before the forward dynamics; it takes a profile (setInputProfile: the `inputs:` key of a
+  /// tracking file) and can be released (back to its profile or 0).
   std::vector<sim::InputPort> inputPorts() const override;
   void setInput(sim::PlantState& state, int port, double value) const override;
   double input(const sim::PlantState& state, int port) const override;
   bool inputActive(const sim::PlantState& state, int port) const override;
+  /// Only the `J.load_torque` inputs take profiles (the command ports are set between steps).
+  void setInputProfile(int port, const control::Profile& profile) override;
+  /// Only the `J.load_torque` inputs are released (a command port is left by choosing another).
+  void releaseInput(sim::PlantState& state, int port) const override;
   /// Bumpless transfer for joints whose port changed since the last call (or the start).
   void applyInputs(sim::PlantState& state, double t, Eigen::Ref<Eigen::VectorXd> y) const override;
 
@@ -370,12 +380,16 @@ class RobotSystem : public sim::Plant {
   void checkJoint(int joint, const char* what) const;
   // Why joint `joint`'s drive cannot take commands at `port` (empty: it can).
   std::string portRefusal(int joint, CommandPort port) const;
-  /// The inputs (inputPorts()): joint and kind (0, 1, 2: reference q, q̇, q̈; 3 + CommandPort: a command port).
+  /// The inputs (inputPorts()): joint and kind (0, 1, 2: reference q, q̇, q̈; 3 + CommandPort: a command port;
+  /// kLoadTorqueInput: the joint's load torque).
   struct InputSlot {
     int joint;
     int kind;
   };
   std::vector<InputSlot> inputs_;
+  static constexpr int kLoadTorqueInput = 3 + 5;
+  std::vector<sim::InputPort> load_ports_;  ///< the `J.load_torque` inputs, per joint
+  sim::InputProfiles load_profiles_;        ///< their profiles (setInputProfile)
   const InputSlot& inputSlot(int port) const;
   void bumpless(State& st, int k, CommandPort from, double t, Eigen::Ref<Eigen::VectorXd> y) const;
   void multiRateStep(State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
