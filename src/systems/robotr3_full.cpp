@@ -65,7 +65,15 @@ void RobotR3FullSetup::validate() const {
     check::atLeast(c, key + ".peak", a.peak, 1.0, "(-)");
     check::nonNegative(c, key + ".Rv0", a.Rv0, "N·m");
     check::positive(c, key + ".Ts", a.Ts, "s");
+    if (initial_friction.size() == static_cast<Eigen::Index>(n))
+      check::that(std::abs(initial_friction[static_cast<Eigen::Index>(k)]) <= a.peak * a.Rv0, c,
+                  "initial_friction[" + std::to_string(k) + "]", "expected a torque within ±peak·Rv0");
   }
+  check::that(initial_friction.size() == 0 || initial_friction.size() == static_cast<Eigen::Index>(n), c,
+              "initial_friction", "expected one value per joint (or none)");
+  if (!one_axis_prefix.empty())
+    check::that(n == 1 && axes[0].type == 1 && energy, c, "one_axis_prefix",
+                "the OneAxis columns need a single type-1 axis with energy bookkeeping");
   const char* names[] = {"path.q_begin", "path.q_end", "path.qd_max", "path.qdd_max"};
   int i = 0;
   for (const Eigen::VectorXd* v : {&q_begin, &q_end, &qd_max, &qdd_max})
@@ -97,20 +105,44 @@ RobotR3Full::RobotR3Full(RobotR3FullSetup setup)
     ctrl_[static_cast<size_t>(j)] = n_states_;
     n_states_ += 3;
   }
-  for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".controller.PI.x[rad/s]");
-  for (int j = 1; j <= n_; ++j)
-    if (s_.axes[static_cast<size_t>(j - 1)].type == 1)
-      signals_.push_back("axis" + std::to_string(j) + ".gear.spring.phi_rel[rad]");
-  for (int j = 1; j <= n_; ++j)
-    if (s_.axes[static_cast<size_t>(j - 1)].type == 1)
-      signals_.push_back("axis" + std::to_string(j) + ".gear.spring.w_rel[rad/s]");
-  for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".motor.C.v[V]");
-  for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".motor.La.i[A]");
-  signals_.emplace_back("mechanics.b2.body.w_a[1][rad/s]");
-  for (int j = 1; j <= n_; ++j) signals_.push_back("mechanics.r" + std::to_string(j) + ".phi[rad]");
-  for (int j = 1; j <= n_; ++j)
-    if (j != 2) signals_.push_back("mechanics.r" + std::to_string(j) + ".w[rad/s]");
-  for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".gear.bearingFriction.mode[-]");
+  if (s_.energy) {
+    energy_ = n_states_;
+    n_states_ += 4;
+  }
+  if (!s_.one_axis_prefix.empty()) {  // [MSL, RobotR3.OneAxis]
+    const std::string& p = s_.one_axis_prefix;
+    signals_ = {p + ".controller.PI.x[rad/s]",
+                p + ".gear.spring.phi_rel[rad]",
+                p + ".gear.spring.w_rel[rad/s]",
+                p + ".initializeFlange.phi_flange[rad]",
+                p + ".initializeFlange.w_flange[rad/s]",
+                p + ".motor.C.v[V]",
+                p + ".motor.La.i[A]",
+                p + ".gear.bearingFriction.mode[-]",
+                p + ".gear.bearingFriction.startBackward[-]",
+                p + ".gear.bearingFriction.startForward[-]",
+                p + ".gear.bearingFriction.tau[N·m]",
+                p + ".motor.i_ref[A]"};
+  } else {  // [MSL, RobotR3.FullRobot]
+    for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".controller.PI.x[rad/s]");
+    for (int j = 1; j <= n_; ++j)
+      if (s_.axes[static_cast<size_t>(j - 1)].type == 1)
+        signals_.push_back("axis" + std::to_string(j) + ".gear.spring.phi_rel[rad]");
+    for (int j = 1; j <= n_; ++j)
+      if (s_.axes[static_cast<size_t>(j - 1)].type == 1)
+        signals_.push_back("axis" + std::to_string(j) + ".gear.spring.w_rel[rad/s]");
+    for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".motor.C.v[V]");
+    for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".motor.La.i[A]");
+    signals_.emplace_back("mechanics.b2.body.w_a[1][rad/s]");
+    for (int j = 1; j <= n_; ++j) signals_.push_back("mechanics.r" + std::to_string(j) + ".phi[rad]");
+    for (int j = 1; j <= n_; ++j)
+      if (j != 2) signals_.push_back("mechanics.r" + std::to_string(j) + ".w[rad/s]");
+    for (int j = 1; j <= n_; ++j) signals_.push_back("axis" + std::to_string(j) + ".gear.bearingFriction.mode[-]");
+  }
+  if (s_.energy) {  // after the OneAxis reference columns: W_el, stored, E_R, E_d, E_f
+    for (const char* e : {"amplifier_work", "stored", "resistor_loss", "damper_loss", "friction_loss"})
+      signals_.push_back(std::string("energy.") + e + "[J]");
+  }
   for (int j = 0; j < n_; ++j) {
     const std::string& joint = s_.arm.joint_names[static_cast<size_t>(j)];
     sim::InputPort c;
@@ -149,7 +181,9 @@ const std::vector<FrictionMode>& RobotR3Full::modes(const sim::PlantState& state
   return own<State>(state).modes;
 }
 
-std::string RobotR3Full::name() const { return "RobotR3 '" + s_.name + "'"; }
+std::string RobotR3Full::name() const {
+  return (s_.one_axis_prefix.empty() ? "RobotR3 '" : "RobotR3 axis '") + s_.name + "'";
+}
 
 sim::SimulateOptions RobotR3Full::simulateOptions() const {
   return sim::SimulateOptions::everyInterval(endTime(), s_.log_interval, s_.solver);
@@ -162,9 +196,9 @@ std::vector<double> RobotR3Full::timeEvents(double t_end) const {
 double RobotR3Full::endTime() const { return std::min(s_.stop_time, path_.endTime() + s_.swing_time); }
 
 Eigen::VectorXd RobotR3Full::initialState() const {
-  // [MSL, Rotational.Components.InitializeFlange] and the Motor's steady-state initial equations, with
-  // sa(0) = 0 (undetermined in MSL; docs/validation.md): at rest on the start angles, springs and currents
-  // holding gravity, electrical and PI steady state.
+  // [MSL, Rotational.Components.InitializeFlange] and the Motor's steady-state initial equations, with the
+  // friction torque sa(0) = initial_friction (undetermined in MSL, 0 by default; docs/validation.md): at rest on the
+  // start angles, springs and currents holding gravity, electrical and PI steady state.
   Eigen::VectorXd y = Eigen::VectorXd::Zero(n_states_);
   y.head(n_) = s_.q_begin;
   multibody::Data data(s_.arm);
@@ -172,16 +206,17 @@ Eigen::VectorXd RobotR3Full::initialState() const {
   for (int j = 0; j < n_; ++j) {
     const auto& a = s_.axes[static_cast<size_t>(j)];
     double phi_rel = 0.0, i = 0.0;
+    const double sa0 = s_.initial_friction.size() > 0 ? s_.initial_friction[j] : 0.0;
     if (a.type == 1) {
       const double tau_s = -G[j] / a.ratio;  // τ_j = −N τ_s = G
       phi_rel = tau_s / a.c;
-      i = -tau_s / a.motor.k;  // k i = τ_f(0) − τ_s with τ_f(0) = 0
+      i = (sa0 - tau_s) / a.motor.k;  // k i = τ_f(0) − τ_s
       y[rel_[static_cast<size_t>(j)]] = phi_rel;
     } else {
-      i = G[j] / (a.ratio * a.motor.k);  // N k i = G + τ_f(0)
+      i = (G[j] + sa0) / (a.ratio * a.motor.k);  // N k i = G + τ_f(0)
     }
     const int c = ctrl_[static_cast<size_t>(j)];
-    y[c] = i / a.ks - a.kp * phi_rel;  // x = i/ks − e(0)
+    y[c] = a.ks > 0.0 ? i / a.ks - a.kp * phi_rel : 0.0;  // x = i/ks − e(0)
     y[c + 1] = -(a.motor.Ra * i) / a.motor.amp_gain;
     y[c + 2] = i;
   }
@@ -294,6 +329,40 @@ void RobotR3Full::derivatives(const sim::PlantState& state, double t, const Eige
     ydot[c + 1] = (y[c + 2] - st.iref[j]) / (m.Ri * m.C());
     ydot[c + 2] = (-m.amp_gain * y[c + 1] - m.Ra * y[c + 2] - m.k * st.wm[j]) / m.La();
   }
+  if (energy_ >= 0) {  // W_el, E_R, E_d, E_f summed over the axes
+    double W = 0.0, R = 0.0, D = 0.0, F = 0.0;
+    for (int j = 0; j < n_; ++j) {
+      const auto& a = s_.axes[static_cast<size_t>(j)];
+      const int c = ctrl_[static_cast<size_t>(j)];
+      W += -a.motor.amp_gain * y[c + 1] * y[c + 2];
+      R += a.motor.Ra * y[c + 2] * y[c + 2];
+      if (a.type == 1) D += a.d * y[rel_[static_cast<size_t>(j)] + 1] * y[rel_[static_cast<size_t>(j)] + 1];
+      F += st.tau_f[j] * (a.type == 1 ? st.wm[j] : y[n_ + j]);
+    }
+    ydot[energy_] = W;
+    ydot[energy_ + 1] = R;
+    ydot[energy_ + 2] = D;
+    ydot[energy_ + 3] = F;
+  }
+}
+
+double RobotR3Full::storedEnergy(const State& st, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  // ½ q̇ᵀ M̄ q̇ (M̄ from solve(), type-2 rotors as armature) + potential energy of the arm + per type-1 axis the
+  // rotor ½ J ω_m² and spring ½ c φ_rel², per axis the inductance ½ La i².
+  const auto qd = y.segment(n_, n_);
+  double E = multibody::potentialEnergy(s_.arm, st.data, y.head(n_));
+  for (int a = 0; a < n_; ++a)
+    for (int b = 0; b < n_; ++b) E += 0.5 * qd[a] * st.Mbar(a, b) * qd[b];
+  for (int j = 0; j < n_; ++j) {
+    const auto& a = s_.axes[static_cast<size_t>(j)];
+    if (a.type == 1) {
+      const double phi_rel = y[rel_[static_cast<size_t>(j)]];
+      E += 0.5 * a.motor.J * st.wm[j] * st.wm[j] + 0.5 * a.c * phi_rel * phi_rel;
+    }
+    const double i = y[ctrl_[static_cast<size_t>(j)] + 2];
+    E += 0.5 * a.motor.La() * i * i;
+  }
+  return E;
 }
 
 void RobotR3Full::roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -329,10 +398,28 @@ void RobotR3Full::updateModes(sim::PlantState& state, double t, const Eigen::Ref
       });
 }
 
-void RobotR3Full::signals(const sim::PlantState& state, double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y,
+void RobotR3Full::signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                           Eigen::Ref<Eigen::VectorXd> row) const {
   const State& st = own<State>(state);
+  if (energy_ >= 0) solve(st, t, y);  // τ_f, i_ref, M̄ and ω_m at t
   Eigen::Index c = 0;
+  auto energies = [&] {
+    row[c++] = y[energy_];
+    row[c++] = storedEnergy(st, y);
+    for (int k = 1; k < 4; ++k) row[c++] = y[energy_ + k];
+  };
+  if (!s_.one_axis_prefix.empty()) {  // [MSL, RobotR3.OneAxis]: one type-1 axis, states as its Modelica model
+    const FrictionMode m = st.modes[0];
+    const int x = ctrl_[0], r = rel_[0];
+    for (double v : {y[x], y[r], y[r + 1], y[0], y[1], y[x + 1], y[x + 2]}) row[c++] = v;
+    row[c++] = drive::frictionModeNumber(m);
+    row[c++] = m == FrictionMode::StartBackward ? 1.0 : 0.0;
+    row[c++] = m == FrictionMode::StartForward ? 1.0 : 0.0;
+    row[c++] = st.tau_f[0];
+    row[c++] = st.iref[0];
+    energies();
+    return;
+  }
   for (int j = 0; j < n_; ++j) row[c++] = y[ctrl_[static_cast<size_t>(j)]];
   for (int j = 0; j < n_; ++j)
     if (rel_[static_cast<size_t>(j)] >= 0) row[c++] = y[rel_[static_cast<size_t>(j)]];
@@ -345,6 +432,7 @@ void RobotR3Full::signals(const sim::PlantState& state, double /*t*/, const Eige
   for (int j = 0; j < n_; ++j)
     if (j != 1) row[c++] = y[n_ + j];
   for (int j = 0; j < n_; ++j) row[c++] = drive::frictionModeNumber(st.modes[static_cast<size_t>(j)]);
+  if (energy_ >= 0) energies();
 }
 
 bool RobotR3Full::alwaysActive(int port) const { return port % 2 == 1; }

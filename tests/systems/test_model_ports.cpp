@@ -16,7 +16,6 @@
 #include "jointsim/systems/clamped_robot.hpp"
 #include "jointsim/systems/drive_chain.hpp"
 #include "jointsim/systems/passive_robot.hpp"
-#include "jointsim/systems/robotr3_axis.hpp"
 #include "jointsim/systems/robotr3_full.hpp"
 #include "test_util.hpp"
 
@@ -70,7 +69,7 @@ TEST(ModelPorts, EveryModelMakesItsInputProfilesBreakpointsTimeEvents) {
   expectAProfilesStepIsATimeEvent<systems::PassiveRobot>(load("ur5_fall.yaml", {})->plant(), "elbow_joint.torque");
   expectAProfilesStepIsATimeEvent<systems::ClampedRobot>(load("irb140_clamping.yaml", {"curves=false"})->plant(),
                                                          "joint2.load_torque");
-  expectAProfilesStepIsATimeEvent<systems::RobotR3Axis>(load("robotr3_one_axis.yaml", {})->plant(), "axis.load_torque");
+  expectAProfilesStepIsATimeEvent<systems::RobotR3Full>(load("robotr3_one_axis.yaml", {})->plant(), "axis.load_torque");
   expectAProfilesStepIsATimeEvent<systems::RobotR3Full>(load("robotr3_full_robot.yaml", {})->plant(), "r3.load_torque");
 }
 

@@ -6,7 +6,9 @@
 /// bearing friction) — each with the P/PI cascade, following one synchronised KinematicPTP2 path, ending at the
 /// path end + swing time. Friction follows the exact MSL logic; the stuck torques of stuck type-2 joints are
 /// solved together with the arm dynamics (M̄ q̈ + h = τ with q̈_j = 0 for every stuck joint j).
-/// States (36 for the r3): q, q̇, then φ_rel, ω_rel of each type-1 axis, then x, v_C, i of each axis.
+/// States (36 for the r3): q, q̇, then φ_rel, ω_rel of each type-1 axis, then x, v_C, i of each axis (then four energy
+/// integrals with RobotR3FullSetup::energy). The same plant runs one axis on a load ([MSL, RobotR3.OneAxis],
+/// robotr3_axis.hpp: systems::oneAxisRobot).
 /// The plant is constant during a run; the friction modes (the discrete state) and the workspace of the
 /// right-hand side are in its State (makeState()).
 
@@ -57,6 +59,20 @@ struct RobotR3FullSetup {
   double start_time = 0.0, swing_time = 0.5, stop_time = 2.0;  ///< [s]
   double log_interval = 0.0004;                                ///< [s]
   sim::CvodeOptions solver = DriveChainSetup::defaultSolver();
+  /// Friction torque of each axis at t = 0 [N·m], |τ| ≤ peak·Rv0 (undetermined in MSL, docs/validation.md; empty:
+  /// 0): the start currents hold it.
+  Eigen::VectorXd initial_friction;
+  /// Energy bookkeeping: four integrals as ODE states after the others, summed over the axes — the amplifiers' work
+  /// on the armature circuits W_el = Σ∫ −amp_gain v_C i dt, the resistor, damper and friction losses Σ∫ Ra i² dt,
+  /// Σ∫ d ω_rel² dt, Σ∫ τ_f ω dt (ω the motor speed of a type-1 axis, the joint speed of a type 2) [J] — and the
+  /// columns energy.amplifier_work, energy.stored (½ q̇ᵀ M̄ q̇ + potential + type-1 rotors ½ J ω_m² and springs
+  /// ½ c φ_rel² + inductances ½ La i²), energy.resistor_loss, energy.damper_loss, energy.friction_loss [J]. The work
+  /// of the load-torque inputs is not in them. W_el = ΔE_stored + losses is the balance.
+  bool energy = false;
+  /// Empty: the column names of [MSL, RobotR3.FullRobot] (axis<j>.…, mechanics.…). Set: a single type-1 axis with
+  /// energy bookkeeping on a load, with the column names of [MSL, RobotR3.OneAxis] under this prefix
+  /// (<prefix>.controller.PI.x, …, the friction torque, its mode flags and the current reference; robotr3_axis.hpp).
+  std::string one_axis_prefix;
   void validate() const;
 };
 
@@ -118,8 +134,11 @@ class RobotR3Full : public sim::HeldInputPlant {
 
  private:
   void solve(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // fills st's workspace
+  // The stored energy at y (energy bookkeeping) [J], with st's workspace after solve().
+  double storedEnergy(const State& st, const Eigen::Ref<const Eigen::VectorXd>& y) const;
   RobotR3FullSetup s_;
   int n_ = 0, n_states_ = 0;
+  int energy_ = -1;        // index of W_el (E_R, E_d, E_f follow); −1: no energy bookkeeping
   std::vector<int> rel_;   // index of φ_rel per axis (−1 for type 2)
   std::vector<int> ctrl_;  // index of x per axis (v_C, i follow)
   control::KinematicPtpTrajectory path_;

@@ -6,6 +6,7 @@
 #include "jointsim/experiments/config.hpp"
 #include "jointsim/experiments/types.hpp"
 #include "jointsim/systems/faults.hpp"
+#include "jointsim/systems/robotr3_axis.hpp"
 #include "jointsim/systems/robotr3_full.hpp"
 
 namespace jointsim::experiments {
@@ -82,7 +83,8 @@ systems::RobotR3AxisSetup readRobotR3AxisSetup(const YamlValue& root, const std:
 
 namespace {
 
-class RobotR3AxisExperiment : public PlantExperiment<systems::RobotR3Axis> {
+// The plant: the RobotR3 robot configured as one axis on a load (systems::oneAxisRobot).
+class RobotR3AxisExperiment : public PlantExperiment<systems::RobotR3Full> {
  public:
   using PlantExperiment::PlantExperiment;
   std::string keyUnit(const std::string& key) const override {
@@ -188,7 +190,7 @@ ExperimentType robotR3AxisExperimentType() {
       const std::string what = "RobotR3 axis '" + s.prefix + "'";
       s.axis = s.axis.withParameters(systems::tableFaultChanges(s.axis.parameters(), f, what), what);
     }
-    return std::make_unique<RobotR3AxisExperiment>(std::move(s));
+    return std::make_unique<RobotR3AxisExperiment>(systems::oneAxisRobot(s));
   };
   t.accepts_faults = true;
   t.figures = robotR3AxisFigures;

@@ -14,7 +14,7 @@ namespace jointsim::experiments {
 using io::YamlValue;
 
 systems::RobotR3FullSetup readRobotR3FullSetup(const YamlValue& root, const std::string& name) {
-  root.allowKeys({"experiment", "robot", "axes", "path", "stop_time", "log_interval", "solver"});
+  root.allowKeys({"experiment", "robot", "axes", "path", "stop_time", "log_interval", "solver", "energy"});
   systems::RobotR3FullSetup s;
   s.name = name;
   const YamlValue robot_node = root.required("robot", "multibody description of the arm");
@@ -52,6 +52,7 @@ systems::RobotR3FullSetup readRobotR3FullSetup(const YamlValue& root, const std:
   s.stop_time = root["stop_time"].asDouble(s.stop_time, "a time in s");
   s.log_interval = root["log_interval"].asDouble(s.log_interval, "an output interval in s");
   s.solver = readSolver(root["solver"], s.solver);
+  s.energy = root["energy"].defined() && root["energy"].asBool("true or false (energy bookkeeping columns)");
   root.validate([&] { s.validate(); });
   return s;
 }
