@@ -609,6 +609,7 @@ def test_inputs_are_listed_with_units_and_set_by_name_like_the_ports():
     ("robotr3_full_robot.yaml", "r2.load_torque", "N·m"),
     ("irb140_clamping.yaml", "joint2.motor_torque", "N·m"),
     ("ur5_fall.yaml", "elbow_joint.torque", "N·m"),
+    ("ur5_pick_and_place.yaml", "elbow_joint.load_torque", "N·m"),
 ])
 def test_every_experiment_type_has_input_ports_in_python(experiment, port, unit):
     """Input ports reach every model, not only the robot with drives and the rig: listed with units, set by name,
