@@ -64,6 +64,7 @@ RobotR3FullSetup oneAxisRobot(const RobotR3AxisSetup& setup) {
   r.log_interval = setup.log_interval;
   r.solver = setup.solver;
   r.initial_friction = one(setup.sa0);
+  r.load_inertia = one(setup.load_inertia);  // the 1-D load: M̄ = J_load, no multibody recursion in the right-hand side
   r.energy = true;
   r.one_axis_prefix = setup.prefix;
   return r;

@@ -71,6 +71,10 @@ void RobotR3FullSetup::validate() const {
   }
   check::that(initial_friction.size() == 0 || initial_friction.size() == static_cast<Eigen::Index>(n), c,
               "initial_friction", "expected one value per joint (or none)");
+  check::that(load_inertia.size() == 0 || load_inertia.size() == static_cast<Eigen::Index>(n), c, "load_inertia",
+              "expected one value per joint (or none: the arm's dynamics)");
+  for (Eigen::Index k = 0; k < load_inertia.size(); ++k)
+    check::positive(c, "load_inertia[" + std::to_string(k) + "]", load_inertia[k], "kg·m²");
   if (!one_axis_prefix.empty())
     check::that(n == 1 && axes[0].type == 1 && energy, c, "one_axis_prefix",
                 "the OneAxis columns need a single type-1 axis with energy bookkeeping");
@@ -202,7 +206,8 @@ Eigen::VectorXd RobotR3Full::initialState() const {
   Eigen::VectorXd y = Eigen::VectorXd::Zero(n_states_);
   y.head(n_) = s_.q_begin;
   multibody::Data data(s_.arm);
-  const Eigen::VectorXd G = multibody::gravityTorques(s_.arm, data, s_.q_begin);
+  const Eigen::VectorXd G = s_.load_inertia.size() > 0 ? Eigen::VectorXd::Zero(n_)  // fixed loads: no gravity
+                                                       : multibody::gravityTorques(s_.arm, data, s_.q_begin);
   for (int j = 0; j < n_; ++j) {
     const auto& a = s_.axes[static_cast<size_t>(j)];
     double phi_rel = 0.0, i = 0.0;
@@ -261,10 +266,18 @@ void RobotR3Full::solve(const State& st, double t, const Eigen::Ref<const Eigen:
         drive::frictionTorque(st.modes[static_cast<size_t>(j)], a.Rv0 + a.Rv1 * std::abs(w), 0.0);  // stuck: below
     if (a.type == 2 && st.modes[static_cast<size_t>(j)] != FrictionMode::Stuck) st.tau[j] -= st.tau_f[j];
   }
-  // Arm: M̄ q̈ = τ − h, with q̈_j = 0 and τ_f,j unknown for stuck type-2 joints.
-  st.Mbar = multibody::crba(s_.arm, st.data, q);
-  const Eigen::VectorXd& h = multibody::nonLinearEffects(s_.arm, st.data, q, qd);
-  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 12, 1> rhs = st.tau - h;
+  // Arm: M̄ q̈ = τ − h, with q̈_j = 0 and τ_f,j unknown for stuck type-2 joints; fixed loads: M̄ diagonal, h = 0.
+  const bool fixed_loads = s_.load_inertia.size() > 0;
+  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 12, 1> rhs(n_);
+  if (fixed_loads) {
+    st.Mbar.setZero();
+    for (int j = 0; j < n_; ++j) st.Mbar(j, j) = s_.load_inertia[j] + s_.arm.armature[j];
+    rhs = st.tau;
+  } else {
+    st.Mbar = multibody::crba(s_.arm, st.data, q);
+    const Eigen::VectorXd& h = multibody::nonLinearEffects(s_.arm, st.data, q, qd);
+    rhs = st.tau - h;
+  }
   Eigen::Matrix<int, Eigen::Dynamic, 1, 0, 12, 1> freeIdx(n_);
   int nf = 0;
   for (int j = 0; j < n_; ++j) {
@@ -279,7 +292,9 @@ void RobotR3Full::solve(const State& st, double t, const Eigen::Ref<const Eigen:
     for (int b = 0; b < nf; ++b) Mff(a, b) = st.Mbar(freeIdx[a], freeIdx[b]);
   }
   st.qdd.setZero();
-  if (nf > 0) {
+  if (fixed_loads) {
+    for (int a = 0; a < nf; ++a) st.qdd[freeIdx[a]] = rhs[freeIdx[a]] / st.Mbar(freeIdx[a], freeIdx[a]);
+  } else if (nf > 0) {
     const Eigen::LLT<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 12, 12>> llt(Mff);
     const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 12, 1> x = llt.solve(bf);
     for (int a = 0; a < nf; ++a) st.qdd[freeIdx[a]] = x[a];
@@ -350,7 +365,7 @@ double RobotR3Full::storedEnergy(const State& st, const Eigen::Ref<const Eigen::
   // ½ q̇ᵀ M̄ q̇ (M̄ from solve(), type-2 rotors as armature) + potential energy of the arm + per type-1 axis the
   // rotor ½ J ω_m² and spring ½ c φ_rel², per axis the inductance ½ La i².
   const auto qd = y.segment(n_, n_);
-  double E = multibody::potentialEnergy(s_.arm, st.data, y.head(n_));
+  double E = s_.load_inertia.size() > 0 ? 0.0 : multibody::potentialEnergy(s_.arm, st.data, y.head(n_));
   for (int a = 0; a < n_; ++a)
     for (int b = 0; b < n_; ++b) E += 0.5 * qd[a] * st.Mbar(a, b) * qd[b];
   for (int j = 0; j < n_; ++j) {

@@ -73,6 +73,10 @@ struct RobotR3FullSetup {
   /// energy bookkeeping on a load, with the column names of [MSL, RobotR3.OneAxis] under this prefix
   /// (<prefix>.controller.PI.x, …, the friction torque, its mode flags and the current reference; robotr3_axis.hpp).
   std::string one_axis_prefix;
+  /// Empty: the axes drive the arm's multibody dynamics. Set (one value per joint, > 0) [kg·m²]: each axis drives a
+  /// fixed load inertia of its own about a fixed axis (a 1-D shaft: no gravity, no coupling between the joints; the
+  /// arm model only names the joints) — M̄ = diag(load_inertia + type-2 rotors' N² J), h = 0.
+  Eigen::VectorXd load_inertia;
   void validate() const;
 };
 
