@@ -104,7 +104,8 @@ void HeldInputPlant::releaseInput(PlantState& state, int port) const {
   if (in.release(static_cast<std::size_t>(port))) state.inputsChanged();
 }
 
-std::vector<double> HeldInputPlant::withProfileBreakpoints(std::vector<double> events, double t_end) const {
+std::vector<double> HeldInputPlant::timeEvents(double t_end) const {
+  std::vector<double> events = modelTimeEvents(t_end);
   for (double b : profiles_.breakpoints(t_end)) events.push_back(b);
   return events;
 }

@@ -355,13 +355,13 @@ sim::SimulateOptions ClampedRobot::simulateOptions() const {
   return sim::SimulateOptions::everyInterval(s_.duration, s_.log_interval, s_.solver);
 }
 
-std::vector<double> ClampedRobot::timeEvents(double t_end) const {
+std::vector<double> ClampedRobot::modelTimeEvents(double /*t_end*/) const {
   std::vector<double> t;
   for (const auto& p : paths_)
     for (double b : p.breakpoints()) t.push_back(b);
   std::sort(t.begin(), t.end());
   t.erase(std::unique(t.begin(), t.end()), t.end());
-  return withProfileBreakpoints(std::move(t), t_end);
+  return t;
 }
 
 void ClampedRobot::signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,

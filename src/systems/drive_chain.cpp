@@ -341,14 +341,14 @@ sim::SimulateOptions DriveChain::simulateOptions() const {
   return sim::SimulateOptions::atRate(s_.duration, s_.log_rate, s_.solver);
 }
 
-std::vector<double> DriveChain::timeEvents(double t_end) const {
+std::vector<double> DriveChain::modelTimeEvents(double t_end) const {
   // Discontinuities of the torque sources and normal forces.
   std::vector<double> events;
   for (const auto& el : s_.elements) {
     for (double b : el.torque.breakpoints(t_end)) events.push_back(b);
     for (double b : el.normalized.breakpoints(t_end)) events.push_back(b);
   }
-  return withProfileBreakpoints(std::move(events), t_end);
+  return events;
 }
 
 void DriveChain::start(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {

@@ -41,8 +41,8 @@ RobotR3FullSetup oneAxisRobot(const RobotR3AxisSetup& setup) {
   setup.validate();
   RobotR3FullSetup r;
   r.name = setup.name;
-  // The load: one joint (named by the prefix, which names its ports) about the vertical axis, a body whose inertia
-  // about that axis is J_load, no mass (so no gravity torque and M(q) = J_load).
+  // The joint, named by the prefix (which names its ports). Its dynamics are the fixed load inertia below; the
+  // model's body (massless, J_load about the vertical axis) describes the same load for the multibody layer.
   multibody::ModelBuilder b(setup.name, "base");
   multibody::JointSpec j;
   j.name = setup.prefix;

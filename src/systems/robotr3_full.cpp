@@ -193,9 +193,7 @@ sim::SimulateOptions RobotR3Full::simulateOptions() const {
   return sim::SimulateOptions::everyInterval(endTime(), s_.log_interval, s_.solver);
 }
 
-std::vector<double> RobotR3Full::timeEvents(double t_end) const {
-  return withProfileBreakpoints(path_.breakpoints(), t_end);
-}
+std::vector<double> RobotR3Full::modelTimeEvents(double /*t_end*/) const { return path_.breakpoints(); }
 
 double RobotR3Full::endTime() const { return std::min(s_.stop_time, path_.endTime() + s_.swing_time); }
 

@@ -72,6 +72,9 @@ class HeldInputPlant : public Plant {
   void setInputProfile(int port, const control::Profile& profile) override;
   /// Port `port` no longer held: back to its profile, or to the model's own source.
   void releaseInput(PlantState& state, int port) const override;
+  /// The model's own time events (modelTimeEvents()) followed by the profiles' breakpoints in (0, t_end): final, so
+  /// that no model can leave its profiles' jumps out.
+  std::vector<double> timeEvents(double t_end) const final;
 
  protected:
   /// The HeldInputs in `state` (a state of this plant; InputError for another plant's, as Plant::own).
@@ -80,9 +83,8 @@ class HeldInputPlant : public Plant {
   /// Whether `port` acts whatever is held (an input that adds to the model's forces, 0 until set) rather than
   /// replacing a source of the model (a command in place of a controller's, in effect once set). Default: every port.
   virtual bool alwaysActive(int /*port*/) const { return true; }
-  /// `events` (a plant's own time events) followed by the profiles' breakpoints in (0, t_end): what a plant's
-  /// timeEvents() returns.
-  std::vector<double> withProfileBreakpoints(std::vector<double> events, double t_end) const;
+  /// The model's own input discontinuities in (0, t_end) [s] (its paths, sources; any order): default none.
+  virtual std::vector<double> modelTimeEvents(double /*t_end*/) const { return {}; }
 
   std::vector<InputPort> ports_;  ///< the plant's inputs (set in its constructor)
   InputProfiles profiles_;        ///< profiles driving the ports (setInputProfile)

@@ -164,8 +164,6 @@ class ClampedRobot : public sim::HeldInputPlant {
   int rootCount() const override { return 2 * n_; }
   void roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
              Eigen::Ref<Eigen::VectorXd> g) const override;
-  /// Time events of the references (segment slots, phase switches) [s].
-  std::vector<double> timeEvents(double t_end) const override;
   const std::vector<std::string>& signalNames() const override { return signals_; }
   void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                Eigen::Ref<Eigen::VectorXd> out) const override;
@@ -176,6 +174,9 @@ class ClampedRobot : public sim::HeldInputPlant {
                        Eigen::Vector3d& theta) const;
 
  protected:
+  /// Time events of the references (segment slots, phase switches) [s] (timeEvents() adds the input profiles' jumps:
+  /// sim::HeldInputPlant).
+  std::vector<double> modelTimeEvents(double t_end) const override;
   sim::HeldInputs& heldInputs(sim::PlantState& state) const override { return own<State>(state).inputs; }
   const sim::HeldInputs& heldInputs(const sim::PlantState& state) const override { return own<State>(state).inputs; }
   bool alwaysActive(int port) const override;

@@ -135,7 +135,6 @@ class DriveChain : public sim::HeldInputPlant {
   int rootCount() const override { return root_count_; }
   void roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
              Eigen::Ref<Eigen::VectorXd> g) const override;
-  std::vector<double> timeEvents(double t_end) const override;
   const std::vector<std::string>& signalNames() const override { return signals_; }
   void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                Eigen::Ref<Eigen::VectorXd> row) const override;
@@ -148,6 +147,9 @@ class DriveChain : public sim::HeldInputPlant {
   double elementTorque(const sim::PlantState& state, int e, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
 
  protected:
+  /// The torque sources' and normal forces' breakpoints (timeEvents() adds the input profiles' jumps:
+  /// sim::HeldInputPlant).
+  std::vector<double> modelTimeEvents(double t_end) const override;
   sim::HeldInputs& heldInputs(sim::PlantState& state) const override { return own<State>(state).inputs; }
   const sim::HeldInputs& heldInputs(const sim::PlantState& state) const override { return own<State>(state).inputs; }
   bool alwaysActive(int port) const override;

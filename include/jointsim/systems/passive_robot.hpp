@@ -71,8 +71,7 @@ class PassiveRobot : public sim::HeldInputPlant {
   /// Input ports (sim::InputPort): per joint `<joint>.torque` [N·m, or N for a prismatic joint], a torque applied at
   /// the joint (0 until set; its work is not in the logged energies).
   std::vector<sim::InputPort> inputPorts() const override { return ports_; }
-  // setInput, input, inputActive, setInputProfile, releaseInput: sim::HeldInputPlant.
-  std::vector<double> timeEvents(double t_end) const override { return withProfileBreakpoints({}, t_end); }
+  // setInput, input, inputActive, setInputProfile, releaseInput, timeEvents (the profiles' jumps): sim::HeldInputPlant.
   /// q_i, qd_i per joint (joint names), kinetic, potential and total energy [J], tip frame position [m]; with
   /// end stops also the energy stored in them (end_stop_energy [J], included in total_energy) and the torque
   /// of each stop (end_stop_torque_<joint> [N·m or N]).

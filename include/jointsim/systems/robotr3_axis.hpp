@@ -6,8 +6,8 @@
 /// current set-point; a KinematicPTP2 path; termination at end time + swing time.
 ///
 /// Not a model of its own: a configuration of the RobotR3 robot (systems::RobotR3Full, robotr3_full.hpp) with one
-/// type-1 axis (RobotR3AxisParams) whose "arm" is a single joint about the vertical axis carrying the load inertia
-/// (no gravity torque), with the energy bookkeeping on and the column names of [MSL, RobotR3.OneAxis]. States (as
+/// type-1 axis (RobotR3AxisParams) driving a fixed load inertia (RobotR3FullSetup::load_inertia: M̄ = J_load, no
+/// gravity, no multibody recursion; a single-joint model names the joint), with the energy bookkeeping on and the column names of [MSL, RobotR3.OneAxis]. States (as
 /// the Modelica model): q, q̇ (load), φ_rel = ratio·q − φ_m, ω_rel, PI state x, v_C, i; then the four energy
 /// integrals W_el = ∫ −5 v_C i dt (work of the power amplifier on the armature circuit), E_R = ∫ Ra i² dt,
 /// E_d = ∫ d ω_rel² dt, E_f = ∫ τ_f ω_m dt [J]. Input ports `<prefix>.current` [A] (the current reference held in

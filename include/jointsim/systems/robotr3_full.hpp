@@ -119,8 +119,6 @@ class RobotR3Full : public sim::HeldInputPlant {
   int rootCount() const override { return 2 * n_; }
   void roots(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
              Eigen::Ref<Eigen::VectorXd> g) const override;
-  /// The path's segment switches.
-  std::vector<double> timeEvents(double t_end) const override;
   /// The friction modes consistent with y at t (the event iteration with no flags).
   void start(sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const override {
     updateModes(state, t, y, {});
@@ -132,6 +130,8 @@ class RobotR3Full : public sim::HeldInputPlant {
                Eigen::Ref<Eigen::VectorXd> row) const override;
 
  protected:
+  /// The path's segment switches (timeEvents() adds the input profiles' jumps: sim::HeldInputPlant).
+  std::vector<double> modelTimeEvents(double t_end) const override;
   sim::HeldInputs& heldInputs(sim::PlantState& state) const override { return own<State>(state).inputs; }
   const sim::HeldInputs& heldInputs(const sim::PlantState& state) const override { return own<State>(state).inputs; }
   bool alwaysActive(int port) const override;
