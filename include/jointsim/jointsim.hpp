@@ -52,6 +52,7 @@
 #include "jointsim/report/dataset.hpp"
 #include "jointsim/report/plot.hpp"
 #include "jointsim/sim/cvode_integrator.hpp"
+#include "jointsim/sim/fixed_step_integrator.hpp"
 #include "jointsim/sim/held_inputs.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/sim/simulate.hpp"

@@ -19,15 +19,29 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   if (!node.defined()) return o;
   node.expectMap("a solver mapping {method, rtol, atol, max_step, max_order, stability_limit_detection}");
   node.allowKeys({"method", "rtol", "atol", "max_step", "max_order", "stability_limit_detection", "max_num_steps",
-                  "input_jumps", "max_gamma_change"});
+                  "input_jumps", "max_gamma_change", "step", "jacobian_every"});
+  const char* const methods = "bdf, adams or rosenbrock (fixed step)";
   if (node.has("method")) {
-    const std::string m = node["method"].asString("adams or bdf");
+    const std::string m = node["method"].asString(methods);
     if (m == "adams")
       o.method = sim::Method::Adams;
     else if (m == "bdf")
       o.method = sim::Method::BDF;
+    else if (m == "rosenbrock")
+      o.method = sim::Method::Rosenbrock;
     else
-      node["method"].failExpected("adams or bdf");
+      node["method"].failExpected(methods);
+  }
+  const bool fixed = o.method == sim::Method::Rosenbrock;
+  for (const char* key : {"step", "jacobian_every"})
+    if (node.has(key) && !fixed) node[key].failExpected(std::string("no ") + key + " unless method: rosenbrock");
+  o.fixed_step = node["step"].asDouble(o.fixed_step, "a fixed step in s (0: the control period)");
+  if (!(o.fixed_step >= 0.0) || !std::isfinite(o.fixed_step))
+    node["step"].failExpected("a fixed step >= 0 s (0: the control period)");
+  if (node.has("jacobian_every")) {
+    const long every = node["jacobian_every"].asInt("a number of steps >= 1");
+    if (every < 1 || every > 1000000) node["jacobian_every"].failExpected("a number of steps from 1 to 1e6");
+    o.jacobian_every = static_cast<int>(every);
   }
   o.rtol = node["rtol"].asDouble(o.rtol, "a relative tolerance > 0");
   if (!(o.rtol > 0)) node["rtol"].failExpected("a relative tolerance > 0");
@@ -159,13 +173,18 @@ control::Profile readProfile(const YamlValue& node, const std::string& unit) {
 }
 
 void solverJson(nlohmann::ordered_json& out, const sim::CvodeOptions& o) {
-  out = {{"method", o.method == sim::Method::BDF ? "bdf" : "adams"},
+  const char* method = o.method == sim::Method::BDF ? "bdf" : o.method == sim::Method::Adams ? "adams" : "rosenbrock";
+  out = {{"method", method},
          {"rtol", o.rtol},
          {"atol", o.atol},
          {"max_step", o.max_step},
          {"max_order", o.max_order},
          {"stability_limit_detection", o.stability_limit_detection},
          {"max_gamma_change", o.max_gamma_change}};
+  if (o.method == sim::Method::Rosenbrock) {
+    out["step"] = o.fixed_step;
+    out["jacobian_every"] = o.jacobian_every;
+  }
 }
 
 void solverStatsJson(nlohmann::ordered_json& out, const sim::SolverStats& s) {

@@ -225,6 +225,44 @@ int eigenFree(SUNLinearSolver S) {
 
 }  // namespace
 
+struct DirectSolver::Impl {
+  // The content's type is local to this file: held type-erased (a field of it would give Impl internal linkage).
+  Impl(Eigen::Index n, const JacobianStructure& structure) : holder(std::make_shared<EigenDenseContent>(n)), work(n) {
+    if (!structure.empty()) content().plan = std::make_unique<BlockPlan>(structure);
+  }
+  EigenDenseContent& content() { return *static_cast<EigenDenseContent*>(holder.get()); }
+  std::shared_ptr<void> holder;
+  Eigen::VectorXd work;
+};
+
+DirectSolver::DirectSolver(Eigen::Index n, const JacobianStructure& structure)
+    : impl_(std::make_unique<Impl>(n, structure)) {}
+DirectSolver::~DirectSolver() = default;
+
+bool DirectSolver::factor(const Eigen::MatrixXd& A) {
+  EigenDenseContent& c = impl_->content();
+  if (c.plan) {
+    c.blocks_factored = c.plan->factor(Eigen::Map<const Eigen::MatrixXd>(A.data(), A.rows(), A.cols()));
+    if (c.blocks_factored) return true;
+    ++c.dense_fallbacks;
+  }
+  c.lu.compute(A);
+  const auto& m = c.lu.matrixLU();
+  for (Eigen::Index k = 0; k < m.rows(); ++k)
+    if (!(m(k, k) != 0.0) || !std::isfinite(m(k, k))) return false;
+  return true;
+}
+
+void DirectSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  EigenDenseContent& c = impl_->content();
+  if (c.plan && c.blocks_factored) {
+    c.plan->solve(b.data(), x.data());
+    return;
+  }
+  x = b;
+  luSolveInPlace(c.lu, x, impl_->work);
+}
+
 SUNLinearSolver makeEigenDenseSolver(Eigen::Index n, SUNContext ctx, const JacobianStructure& structure) {
   SUNLinearSolver S = SUNLinSolNewEmpty(ctx);
   if (S == nullptr) return nullptr;

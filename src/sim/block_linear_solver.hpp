@@ -2,6 +2,8 @@
 // Internal to the sim layer: the Eigen direct linear solver that CvodeIntegrator gives CVODE (block_linear_solver.cpp).
 #include <Eigen/Core>
 
+#include <memory>
+
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_linearsolver.h>
 
@@ -14,5 +16,23 @@ namespace jointsim::sim {
 /// block-diagonal form (falling back to the dense LU for a block or Schur complement that is singular or
 /// ill-conditioned); solve applies the factors without allocating. nullptr when SUNDIALS cannot allocate it.
 SUNLinearSolver makeEigenDenseSolver(Eigen::Index n, SUNContext ctx, const JacobianStructure& structure);
+
+/// The same direct solver without SUNDIALS (FixedStepIntegrator's I − γhJ): factor() then any number of solve()s, which
+/// allocate nothing.
+class DirectSolver {
+ public:
+  DirectSolver(Eigen::Index n, const JacobianStructure& structure);
+  ~DirectSolver();
+  DirectSolver(const DirectSolver&) = delete;
+  DirectSolver& operator=(const DirectSolver&) = delete;
+  /// Factorises A (n × n); false when it is singular (a zero pivot of the dense LU).
+  bool factor(const Eigen::MatrixXd& A);
+  /// x = A⁻¹ b (b and x of size n; they may not alias).
+  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace jointsim::sim

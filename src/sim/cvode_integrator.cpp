@@ -546,6 +546,8 @@ CvodeIntegrator::CvodeIntegrator(int n, RhsFunction rhs, CvodeOptions options, J
   if (options.max_num_steps <= 0) {
     bad("max_num_steps must be > 0, got " + std::to_string(options.max_num_steps));
   }
+  if (options.method != Method::BDF && options.method != Method::Adams)
+    bad("CVODE integrates with Method::BDF or Method::Adams (Method::Rosenbrock is sim::FixedStepIntegrator's)");
   const int order_limit = options.method == Method::BDF ? 5 : 12;
   if (options.max_order < 0 || options.max_order > order_limit) {
     bad("max_order must be 0 (default) or 1.." + std::to_string(order_limit) + " for " +

@@ -125,9 +125,9 @@ std::vector<std::string> tableColumns(const Plant& plant) {
   return columns;
 }
 
-void installPlantJacobian(const Plant& plant, const PlantState& state, CvodeIntegrator& integ) {
+void installPlantJacobian(const Plant& plant, const PlantState& state, Integrator& integ) {
   const CvodeOptions& o = integ.options();
-  if (!plant.providesJacobian() || !o.plant_jacobian || o.method != Method::BDF) return;
+  if (!plant.providesJacobian() || !o.plant_jacobian || o.method == Method::Adams) return;
   integ.setDifferenceJacobian(
       [&plant, &state](double t, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f,
                        const Eigen::Ref<const Eigen::VectorXd>& inc,

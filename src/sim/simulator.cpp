@@ -1,5 +1,6 @@
 #include "jointsim/sim/simulator.hpp"
 #include "jointsim/sim/simulate.hpp"
+#include "jointsim/sim/fixed_step_integrator.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -116,15 +117,20 @@ void Simulator::build(const CvodeOptions& solver) {
   state_ = owned_.get();
   const Plant* p = plant_.get();
   // The callbacks read the state through this simulator: restore() may replace it.
-  integ_ = std::make_unique<CvodeIntegrator>(
-      n,
-      [this, p](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-        guard(t, y);
-        p->derivatives(*state_, t, y, yd);
-      },
-      options);
+  Ts_ = p->samplePeriod();
+  if (!(Ts_ >= 0.0) || !std::isfinite(Ts_)) throw InputError(p->name() + ": sample period must be >= 0 s");
+  RhsFunction rhs = [this, p](double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+    guard(t, y);
+    p->derivatives(*state_, t, y, yd);
+  };
+  if (options.method == Method::Rosenbrock) {
+    options.fixed_step = fixedStep(*p, options.fixed_step);
+    integ_ = std::make_unique<FixedStepIntegrator>(n, std::move(rhs), options);
+  } else {
+    integ_ = std::make_unique<CvodeIntegrator>(n, std::move(rhs), options);
+  }
   const CvodeOptions& o = integ_->options();
-  if (p->providesJacobian() && o.plant_jacobian && o.method == Method::BDF) {
+  if (p->providesJacobian() && o.plant_jacobian && o.method != Method::Adams) {
     integ_->setDifferenceJacobian([this, p](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                                             const Eigen::Ref<const Eigen::VectorXd>& f,
                                             const Eigen::Ref<const Eigen::VectorXd>& inc,
@@ -138,11 +144,30 @@ void Simulator::build(const CvodeOptions& solver) {
                                                       Eigen::Ref<Eigen::VectorXd> g) { p->roots(*state_, t, y, g); });
   bounded_.resize(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) bounded_[static_cast<size_t>(i)] = !p->unboundedState(i);
-  Ts_ = p->samplePeriod();
-  if (!(Ts_ >= 0.0) || !std::isfinite(Ts_)) throw InputError(p->name() + ": sample period must be >= 0 s");
   signals_.setZero(static_cast<Eigen::Index>(p->signalNames().size()));
   f_work_.setZero(n);
   f_old_.setZero(n);
+}
+
+double fixedStep(const Plant& plant, double step) {
+  const double Ts = plant.samplePeriod();
+  if (step == 0.0) {
+    if (Ts > 0.0) return Ts;
+    throw InputError(plant.name() +
+                     ": solver: the fixed-step method (rosenbrock) needs its step (solver.step [s]): the plant has no "
+                     "sampled controller whose period it could take");
+  }
+  if (!(step > 0.0) || !std::isfinite(step))
+    throw InputError(plant.name() + ": solver.step: expected a finite step > 0 s, got " + formatNumber(step));
+  if (Ts > 0.0) {
+    const double ratio = Ts / step, k = std::round(ratio);
+    if (k < 1.0 || std::abs(ratio - k) > 1e-9 * ratio)
+      throw InputError(plant.name() + ": solver.step: expected the control period " + formatNumber(Ts) +
+                       " s or an integer fraction of it (the fixed steps are locked to the control clock), got " +
+                       formatNumber(step) + " s");
+    return Ts / k;
+  }
+  return step;
 }
 
 Simulator::~Simulator() = default;

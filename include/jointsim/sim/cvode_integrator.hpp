@@ -26,6 +26,11 @@ enum class Method {
   /// Adams-Moulton formulas (orders 1..12) solved with fixed-point (functional) iteration; no linear
   /// solver, no Jacobian. Cheaper per step for non-stiff systems, but fails or crawls on stiff ones.
   Adams,
+  /// Not CVODE: the fixed-step, linearly implicit two-stage Rosenbrock-W method ROS2 of [Verwer1999]
+  /// (sim::FixedStepIntegrator; order 2 with any Jacobian approximation, L-stable) on a grid of CvodeOptions::fixed_step
+  /// locked to the control clock: no error control, no step rejection, two right-hand sides and two linear solves per
+  /// step. For sampled control where wall time per control period matters (docs/design.md, "Fixed-step integration").
+  Rosenbrock,
 };
 
 /// Block structure of the Jacobian ∂f/∂y of a system made of a hub (e.g. a multibody's q, q̇) and parts that
@@ -125,7 +130,17 @@ struct CvodeOptions {
   /// 20,000 steps below 1 ns each (its fastest modes are kHz gear and bristle modes, stepped in µs).
   double collapse_mean_step = 1e-9;
   long collapse_window = 20000;  ///< steps per window of the collapse check (>= 1)
+  /// Step of Method::Rosenbrock [s], >= 0. sim::Simulator takes 0 as the plant's sample period (the control period);
+  /// a step given with a sampled plant must be that period or an integer fraction of it. The steps lie on the grid
+  /// k·fixed_step (k integer); a stop time or a located root between two grid points adds one short step to it.
+  double fixed_step = 0.0;
+  /// Method::Rosenbrock: right-hand-side Jacobian evaluated (and the matrix I − γhJ factorised) every this many steps,
+  /// >= 1, and after every restart that does not reuse it. ROS2 keeps order 2 with an outdated Jacobian (a W-method);
+  /// a stale one weakens only the damping of the fastest modes.
+  int jacobian_every = 1;
 };
+
+
 
 /// BDF capped at order 2 with the given tolerances: the default for drive trains. BDF orders 3–5 are not
 /// A-stable: lightly damped kHz drive modes (strain-wave gear, stiff springs, LuGre bristles) then force steps
@@ -178,6 +193,29 @@ using DifferenceJacobianFunction =
 using RootFunction =
     std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g)>;
 
+/// What sim::Simulator asks of an integrator of y' = f(t, y): CVODE (CvodeIntegrator) or the fixed-step method
+/// (FixedStepIntegrator, Method::Rosenbrock). The members mean what CvodeIntegrator's documentation says.
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  virtual void initialize(double t0, const Eigen::Ref<const Eigen::VectorXd>& y0, bool reuse_jacobian) = 0;
+  virtual double advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out) = 0;
+  virtual void setStopTime(double t_stop) = 0;
+  virtual void setStepLimit(long steps) = 0;
+  virtual void setDifferenceJacobian(DifferenceJacobianFunction jacobian) = 0;
+  virtual void setJacobianStructure(JacobianStructure structure) = 0;
+  virtual double jumpError(const Eigen::Ref<const Eigen::VectorXd>& f_old, const Eigen::Ref<const Eigen::VectorXd>& f_new,
+                           double h_max) const = 0;
+  virtual void setRootFunction(int n_roots, RootFunction g) = 0;
+  virtual bool rootFound() const = 0;
+  virtual const std::vector<int>& rootDirections() const = 0;
+  virtual double lastStep(Eigen::Ref<Eigen::VectorXd> y) const = 0;
+  virtual double time() const = 0;
+  virtual SolverStats stats() const = 0;
+  virtual long steps() const = 0;
+  virtual const CvodeOptions& options() const = 0;
+};
+
 /// CVODE integrator for y' = f(t, y), y in R^n.
 ///
 /// Usage: construct, initialize(t0, y0), then advance(t_out, y) repeatedly. After a discontinuity
@@ -186,7 +224,7 @@ using RootFunction =
 ///
 /// Not copyable; movable (a moved-from integrator may only be destroyed or assigned to). Not
 /// thread-safe; distinct instances are independent.
-class CvodeIntegrator {
+class CvodeIntegrator final : public Integrator {
  public:
   /// \param n         number of states (> 0)
   /// \param rhs       right-hand side (non-empty)
@@ -213,7 +251,7 @@ class CvodeIntegrator {
   /// matrix; it affects the Newton iteration's convergence only, never the accuracy of the step (the residual is
   /// always the right-hand side itself). Should the iteration fail to converge, CVODE asks again and gets a fresh
   /// Jacobian. Saves one Jacobian per restart (51 µs on the UR5 twin) under sampled control.
-  void initialize(double t0, const Eigen::Ref<const Eigen::VectorXd>& y0, bool reuse_jacobian);
+  void initialize(double t0, const Eigen::Ref<const Eigen::VectorXd>& y0, bool reuse_jacobian) override;
 
   /// Integrate towards t_out [s] (CV_NORMAL mode: internal steps may overshoot t_out, the result
   /// is interpolated) and store y(t) in y_out (size n). Returns the time reached: t_out, or the stop
@@ -224,7 +262,7 @@ class CvodeIntegrator {
   ///         an exception, the SolverError is thrown with std::throw_with_nested (the original can
   ///         be recovered with std::rethrow_if_nested) and its flag() is "RHS_EXCEPTION". y_out is
   ///         left unchanged on failure.
-  double advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out);
+  double advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out) override;
 
   /// Never step past t_stop [s]: advance() returns at t_stop exactly if t_out lies beyond it. The
   /// stop time is one-shot: it is cleared once advance() has returned at it (as in SUNDIALS >= 6.5).
@@ -232,7 +270,7 @@ class CvodeIntegrator {
   /// time (see SolverStats::current_time), a stop time must be set before the integrator has stepped
   /// past it; initialize() resets the internal time.
   /// \throws InputError if t_stop is not finite or CVODE has already stepped past it.
-  void setStopTime(double t_stop);
+  void setStopTime(double t_stop) override;
   /// Remove a stop time set with setStopTime().
   void clearStopTime();
 
@@ -242,16 +280,16 @@ class CvodeIntegrator {
   /// bounds one call of advance(), this bounds the run, and is enforced inside the call, so a single
   /// output interval cannot spend more than the budget.
   /// \throws InputError if steps < 0.
-  void setStepLimit(long steps);
+  void setStepLimit(long steps) override;
 
   /// A Jacobian by differences organised by the caller (see DifferenceJacobianFunction) in place of the one given
   /// at construction or CVODE's dense difference quotients; BDF only; call before initialize().
-  void setDifferenceJacobian(DifferenceJacobianFunction jacobian);
+  void setDifferenceJacobian(DifferenceJacobianFunction jacobian) override;
   /// Factorise the Newton matrix by block elimination over `structure` (validated here; BDF with the Eigen
   /// dense solver only; call before initialize()). The Jacobian must respect the structure: entries between
   /// two blocks are ignored. A block (or the hub's Schur complement) that is numerically singular falls back
   /// to the dense LU for that factorisation.
-  void setJacobianStructure(JacobianStructure structure);
+  void setJacobianStructure(JacobianStructure structure) override;
 
   /// Where an input jumped at time() (the integrator stopped there), the local error the multistep history would
   /// carry into the next step: h ‖f_new − f_old‖_w, the weighted RMS norm (CVODE's error weights) of the jump of the
@@ -259,31 +297,31 @@ class CvodeIntegrator {
   /// size, h_max). About 1 or less: the next step passes the error test with the history kept; far above: the step
   /// would have to shrink by that factor (a restart is cheaper). +∞ before the first step of a segment.
   double jumpError(const Eigen::Ref<const Eigen::VectorXd>& f_old, const Eigen::Ref<const Eigen::VectorXd>& f_new,
-                   double h_max) const;
+                   double h_max) const override;
 
   /// Installs root functions (call before initialize(); they persist across restarts). advance() then
   /// returns early at a located root: rootFound() is true and rootDirections() gives, per function,
   /// +1 (rising), −1 (falling) or 0 (no crossing).
-  void setRootFunction(int n_roots, RootFunction g);
-  bool rootFound() const;
-  const std::vector<int>& rootDirections() const;
+  void setRootFunction(int n_roots, RootFunction g) override;
+  bool rootFound() const override;
+  const std::vector<int>& rootDirections() const override;
 
   /// The state at CVODE's last accepted internal step, where a caller may go on from after a failed or stopped
   /// advance() (e.g. a budget or a stop request raised in the right-hand side): writes y(t_n) into `y` (size n) and
   /// returns t_n [s]. Returns NaN and leaves `y` untouched when no step was taken since the last initialize().
-  double lastStep(Eigen::Ref<Eigen::VectorXd> y) const;
+  double lastStep(Eigen::Ref<Eigen::VectorXd> y) const override;
 
   /// Time of the last result [s]: t0 after initialize(), the value returned by advance(), or after a
   /// failure CVODE's internal time at the failure. NaN before initialize().
-  double time() const;
+  double time() const override;
   /// Number of states n.
   int size() const;
   /// Solver counters, see SolverStats.
-  SolverStats stats() const;
+  SolverStats stats() const override;
   /// Internal steps so far, over all restarts (stats().steps, without the other counters' cost).
-  long steps() const;
+  long steps() const override;
   /// The options given at construction.
-  const CvodeOptions& options() const;
+  const CvodeOptions& options() const override;
 
  private:
   struct Impl;

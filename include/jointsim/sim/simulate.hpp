@@ -96,8 +96,13 @@ using OutputSink = std::function<void(const Eigen::VectorXd& row)>;
 constexpr double kKeepHistoryLimit = 1.0;
 
 /// Gives `integ` the plant's own Jacobian and its block structure when the plant provides them and the
-/// integrator's options ask for it (plant_jacobian, BDF); before integ.initialize().
-void installPlantJacobian(const Plant& plant, const PlantState& state, CvodeIntegrator& integ);
+/// integrator's options ask for it (plant_jacobian; BDF or the fixed-step method); before integ.initialize().
+void installPlantJacobian(const Plant& plant, const PlantState& state, Integrator& integ);
+
+/// The step of the fixed-step method (Method::Rosenbrock) for `plant` given solver.step `step` [s]: 0 takes the plant's
+/// sample period (the control period); with a sampled plant a step must be that period or an integer fraction of it
+/// (returned as T_s / k exactly). InputError naming the plant otherwise.
+double fixedStep(const Plant& plant, double step);
 
 /// Runs `plant` from its initialState() at t = 0 to options.t_end. Throws InputError for bad options (also an
 /// output grid over max_rows), SimulationFailure (a SolverError with the simulated time, the flag and the plant's

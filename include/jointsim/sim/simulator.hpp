@@ -223,7 +223,7 @@ class Simulator {
   double end_ = std::numeric_limits<double>::infinity();
   bool stop_at_end_ = false;
   Landing landing_ = Landing::Stop;  // of the current call
-  std::unique_ptr<CvodeIntegrator> integ_;
+  std::unique_ptr<Integrator> integ_;
   std::string component_;
   double t_ = 0.0, t0_ = 0.0;
   Eigen::VectorXd y_, y_work_, f_work_;

@@ -1,0 +1,479 @@
+// The fixed-step Rosenbrock-W integrator ROS2 [Verwer1999] (fixed_step_integrator.hpp).
+#include "jointsim/sim/fixed_step_integrator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
+#include "sim/block_linear_solver.hpp"
+
+namespace jointsim::sim {
+
+namespace {
+/// ROS2's γ = 1 + 1/√2 [Verwer1999, eq. 2.3]: L-stable, and the error constant of the second-order pair smallest.
+const double kGamma = 1.0 + 1.0 / std::sqrt(2.0);
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+constexpr double kNoTime = std::numeric_limits<double>::quiet_NaN();  // unset time [s]
+/// A step shorter than this fraction of the fixed step is not taken: the grid point or stop time this close is
+/// merged with the one after it (rounding of k·h against a stop time computed another way).
+constexpr double kMergeFraction = 1e-6;
+/// Illinois iterations per located root (the bracket shrinks superlinearly; 100 ulp are met in far fewer).
+constexpr int kMaxRootIterations = 100;
+}  // namespace
+
+struct FixedStepIntegrator::Impl {
+  int n = 0;
+  RhsFunction rhs;
+  DifferenceJacobianFunction djac;
+  JacobianStructure structure;
+  CvodeOptions opts;
+  double h = 0.0;  // the fixed step [s]
+  std::unique_ptr<DirectSolver> solver;
+
+  bool initialized = false;
+  double t = kNoTime;       // time of the internal state [s]
+  Eigen::VectorXd y;     // internal state
+  double t_last = kNoTime;  // the time advance() last returned
+  bool stepped = false;  // a step (or a located root) since initialize()
+  double stop = kNoTime;    // one-shot stop time
+  long step_limit = 0;   // lifetime step budget (0: none)
+
+  // Jacobian and the factorised iteration matrix I − γ h_f W.
+  Eigen::MatrixXd J, M;
+  bool jac_valid = false;
+  int steps_since_jac = 0;
+  double factored_h = kNoTime;
+
+  // Workspace; ft = ∂f/∂t, by a difference quotient with the Jacobian (part of W: as outdated as it).
+  Eigen::VectorXd f0, f1, k1, k2, ytmp, rhs2, inc, ft;
+  // The last step's cubic Hermite segment [seg_t0, seg_t1] (valid while seg_valid); seg_f1 evaluated on demand.
+  bool seg_valid = false, seg_f1_valid = false;
+  double seg_t0 = kNoTime, seg_t1 = kNoTime;
+  Eigen::VectorXd seg_y0, seg_f0, seg_y1, seg_f1;
+  // A root located beyond the last output time (the step passed both): returned by the next advance().
+  bool root_pending = false;
+
+  // Roots.
+  int n_roots = 0;
+  RootFunction g;
+  Eigen::VectorXd g0, g1, gt;
+  std::vector<int> dirs;
+  bool root_found = false;
+
+  SolverStats stats;
+
+  std::string prefix() const {
+    return "fixed-step integrator (ROS2" + (opts.component.empty() ? std::string() : ", " + opts.component) + ")";
+  }
+
+  std::string stateName(Eigen::Index i) const {
+    std::string name = opts.state_name ? opts.state_name(static_cast<int>(i)) : std::string();
+    return name.empty() ? "y[" + std::to_string(i) + "]" : name;
+  }
+
+  /// Calls `call` (a user callback named `what`) and turns its exceptions into a SolverError with the original nested.
+  template <class F>
+  void guarded(const char* what, double at, F&& call) {
+    try {
+      call();
+    } catch (...) {
+      std::string component = opts.component, original = "unknown exception";
+      try {
+        throw;
+      } catch (const ComponentError& e) {
+        component = e.component();
+        original = e.what();
+      } catch (const std::exception& e) {
+        original = e.what();
+      } catch (...) {
+      }
+      std::throw_with_nested(SolverError(prefix() + ": " + what + " threw at t = " + formatNumber(at) +
+                                             " s: " + original + " [flag RHS_EXCEPTION]",
+                                         at, "RHS_EXCEPTION", component));
+    }
+  }
+
+  void evalRhs(double at, const Eigen::VectorXd& state, Eigen::VectorXd& out) {
+    guarded("right-hand side", at, [&] { rhs(at, state, out); });
+    ++stats.rhs_evals;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!std::isfinite(out[i]))
+        throw SolverError(prefix() + ": the right-hand side returned a non-finite value (ydot[" + std::to_string(i) +
+                              "], " + stateName(i) + ", = " + formatNumber(out[i]) + ") at t = " + formatNumber(at) +
+                              " s (a fixed step cannot retry smaller: a smaller solver.step, or BDF)",
+                          at, "RHS_NONFINITE", opts.component);
+  }
+
+  void evalRoots(double at, const Eigen::VectorXd& state, Eigen::VectorXd& out) {
+    guarded("root function", at, [&] { g(at, state, out); });
+  }
+
+  /// W = ∂f/∂y at (t, y) with f0 = f(t, y): the plant's (difference increments as CVODE's cvLsDenseDQJac) or dense
+  /// difference quotients.
+  void evalJacobian(double at, const Eigen::VectorXd& state) {
+    // inc_j = max(√ε |y_j|, m / w_j), w_j = 1 / (rtol |y_j| + atol_j), m = 1000 h ε n ‖f‖_w (weighted RMS norm).
+    double norm = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double atol = opts.atol_vector.size() ? opts.atol_vector[i] : opts.atol;
+      const double w = 1.0 / (opts.rtol * std::abs(state[i]) + atol);
+      norm += (f0[i] * w) * (f0[i] * w);
+    }
+    norm = std::sqrt(norm / n);
+    const double min_inc = norm > 0.0 ? 1000.0 * h * kEps * n * norm : 1.0;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double atol = opts.atol_vector.size() ? opts.atol_vector[j] : opts.atol;
+      inc[j] = std::max(std::sqrt(kEps) * std::abs(state[j]), min_inc * (opts.rtol * std::abs(state[j]) + atol));
+    }
+    J.setZero();
+    if (djac) {
+      guarded("Jacobian", at, [&] { djac(at, state, f0, inc, J); });
+    } else {
+      ytmp = state;
+      for (Eigen::Index j = 0; j < n; ++j) {
+        ytmp[j] = state[j] + inc[j];
+        guarded("right-hand side", at, [&] { rhs(at, ytmp, f1); });
+        ++stats.rhs_evals_jacobian;
+        J.col(j) = (f1 - f0) / inc[j];
+        ytmp[j] = state[j];
+      }
+    }
+    // ∂f/∂t by a forward difference over δ ≈ √ε max(|t|, h) (within the step: no sample or event lies inside it).
+    const double delta = (at + std::sqrt(kEps) * std::max(std::abs(at), h)) - at;
+    guarded("right-hand side", at, [&] { rhs(at + delta, state, f1); });
+    ++stats.rhs_evals_jacobian;
+    ft = (f1 - f0) / delta;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!std::isfinite(ft[i]))
+        throw SolverError(prefix() + ": the right-hand side returned a non-finite value (ydot[" + std::to_string(i) +
+                              "], " + stateName(i) + ", = " + formatNumber(f1[i]) + ") at t = " +
+                              formatNumber(at + delta) + " s (while differencing it in time)",
+                          at + delta, "RHS_NONFINITE", opts.component);
+    for (Eigen::Index j = 0; j < n; ++j)
+      for (Eigen::Index i = 0; i < n; ++i)
+        if (!std::isfinite(J(i, j)))
+          throw SolverError(prefix() + ": the Jacobian has a non-finite entry J(" + std::to_string(i) + ", " +
+                                std::to_string(j) + ") at t = " + formatNumber(at) + " s",
+                            at, "RHS_NONFINITE", opts.component);
+    ++stats.jac_evals;
+    jac_valid = true;
+    steps_since_jac = 0;
+    factored_h = kNoTime;
+  }
+
+  void factor(double hs, double at) {
+    M = -kGamma * hs * J;
+    M.diagonal().array() += 1.0;
+    ++stats.lin_setups;
+    if (!solver->factor(M))
+      throw SolverError(prefix() + ": I - γhW is singular at t = " + formatNumber(at) + " s (step " +
+                            formatNumber(hs) + " s)",
+                        at, "LSETUP_FAIL", opts.component);
+    factored_h = hs;
+  }
+
+  /// End of the next step from t: the next grid point, or the stop time before it.
+  double stepEnd() const {
+    const double merge = kMergeFraction * h;
+    double k = std::floor(t / h) + 1.0;
+    double tg = k * h;
+    if (tg - t < merge) tg = (k + 1.0) * h;
+    if (!std::isnan(stop) && stop > t && stop <= tg + merge) return stop;
+    return tg;
+  }
+
+  /// One ROS2 step from (t, y) to t1; fills the Hermite segment.
+  void step(double t1) {
+    const double hs = t1 - t;
+
+    evalRhs(t, y, f0);
+    if (!jac_valid || steps_since_jac >= opts.jacobian_every) evalJacobian(t, y);
+    if (factored_h != hs) factor(hs, t);
+    // [Verwer1999, eq. 2.2] with W and ∂f/∂t from the last Jacobian evaluation.
+    rhs2 = f0 + (kGamma * hs) * ft;
+    solver->solve(rhs2, k1);
+    ytmp = y + hs * k1;
+    evalRhs(t1, ytmp, f1);
+    rhs2 = f1 - 2.0 * k1 - (kGamma * hs) * ft;
+    solver->solve(rhs2, k2);
+    seg_t0 = t;
+    seg_y0 = y;
+    seg_f0 = f0;
+    seg_t1 = t1;
+    y += (1.5 * hs) * k1 + (0.5 * hs) * k2;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!std::isfinite(y[i]))
+        throw SolverError(prefix() + ": the state became non-finite (" + stateName(i) + ") in the step to t = " +
+                              formatNumber(t1) + " s",
+                          t1, "RHS_NONFINITE", opts.component);
+    seg_y1 = y;
+    seg_valid = true;
+    seg_f1_valid = false;
+    t = t1;
+    stepped = true;
+    ++steps_since_jac;
+    ++stats.steps;
+    stats.last_step = hs;
+    stats.last_order = 2;
+  }
+
+  /// The cubic Hermite interpolant of the last step at time `at` into `out`.
+  void interpolate(double at, Eigen::VectorXd& out) {
+    if (!seg_f1_valid) {
+      evalRhs(seg_t1, seg_y1, seg_f1);
+      seg_f1_valid = true;
+    }
+    const double hs = seg_t1 - seg_t0;
+    const double s = (at - seg_t0) / hs;
+    const double s2 = s * s, s3 = s2 * s;
+    const double h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + s, h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
+    out = h00 * seg_y0 + (h10 * hs) * seg_f0 + h01 * seg_y1 + (h11 * hs) * seg_f1;
+  }
+
+  /// After a step: the earliest sign change of the root functions over it, located on the interpolant; the state
+  /// moved back there (the step beyond is dropped). False when none changed sign.
+  bool locateRoot() {
+    if (n_roots == 0) return false;
+    evalRoots(t, y, g1);
+    bool any = false;
+    for (int i = 0; i < n_roots; ++i) {
+      const double a = g0[i], b = g1[i];
+      if (a != 0.0 && (b == 0.0 || (a < 0.0) != (b < 0.0))) any = true;
+    }
+    if (!any) {
+      g0 = g1;
+      return false;
+    }
+    const double ta = seg_t0, tb = seg_t1;
+    const double tol = 100.0 * kEps * (std::abs(tb) + (tb - ta));
+    double t_root = tb;
+    for (int i = 0; i < n_roots; ++i) {
+      double ga = g0[i], gb = g1[i];
+      if (!(ga != 0.0 && (gb == 0.0 || (ga < 0.0) != (gb < 0.0)))) continue;
+      // Illinois on [lo, hi] with g_i(lo) of the start's sign; hi ends past (or on) the root.
+      double lo = ta, hi = std::min(tb, t_root);
+      if (hi < tb) {  // an earlier root of another function bounds this one's search
+        interpolate(hi, ytmp);
+        evalRoots(hi, ytmp, gt);
+        gb = gt[i];
+        if (!(gb == 0.0 || (ga < 0.0) != (gb < 0.0))) continue;
+      }
+      int side = 0;
+      for (int it = 0; it < kMaxRootIterations && hi - lo > tol; ++it) {
+        double tm = hi - gb * (hi - lo) / (gb - ga);
+        if (!(tm > lo && tm < hi)) tm = 0.5 * (lo + hi);
+        interpolate(tm, ytmp);
+        evalRoots(tm, ytmp, gt);
+        const double gm = gt[i];
+        if (gm == 0.0 || (ga < 0.0) != (gm < 0.0)) {
+          hi = tm;
+          gb = gm;
+          if (side == 1) ga *= 0.5;
+          side = 1;
+        } else {
+          lo = tm;
+          ga = gm;
+          if (side == -1) gb *= 0.5;
+          side = -1;
+        }
+      }
+      t_root = std::min(t_root, hi);
+    }
+    // The state at the root; every function whose sign differs there from the step's start fired.
+    if (t_root < tb) {
+      interpolate(t_root, ytmp);
+      y = ytmp;
+    }
+    evalRoots(t_root, y, gt);
+    for (int i = 0; i < n_roots; ++i) {
+      const double a = g0[i], b = gt[i];
+      dirs[static_cast<size_t>(i)] = (a != 0.0 && (b == 0.0 || (a < 0.0) != (b < 0.0))) ? (a < 0.0 ? 1 : -1) : 0;
+    }
+    t = t_root;  // the segment's cubic still interpolates [seg_t0, t_root]
+    g0 = gt;
+    return true;
+  }
+};
+
+FixedStepIntegrator::FixedStepIntegrator(int n, RhsFunction rhs, CvodeOptions options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.opts = std::move(options);
+  auto bad = [&](const std::string& what) { throw InputError(m.prefix() + ": " + what); };
+  if (n <= 0) bad("the number of states must be > 0, got " + std::to_string(n));
+  if (!rhs) bad("no right-hand side given");
+  if (m.opts.method != Method::Rosenbrock) bad("the options must select Method::Rosenbrock");
+  if (!(m.opts.fixed_step > 0.0) || !std::isfinite(m.opts.fixed_step))
+    bad("fixed_step must be a finite step > 0 s, got " + formatNumber(m.opts.fixed_step));
+  if (m.opts.jacobian_every < 1)
+    bad("jacobian_every must be >= 1 step, got " + std::to_string(m.opts.jacobian_every));
+  if (m.opts.max_num_steps <= 0) bad("max_num_steps must be > 0, got " + std::to_string(m.opts.max_num_steps));
+  if (!(m.opts.rtol > 0.0) || !std::isfinite(m.opts.rtol)) bad("rtol must be finite and > 0");
+  if (m.opts.atol_vector.size() != 0 && m.opts.atol_vector.size() != n)
+    bad("atol_vector has " + std::to_string(m.opts.atol_vector.size()) + " entries, expected " + std::to_string(n));
+  m.n = n;
+  m.h = m.opts.fixed_step;
+  m.rhs = std::move(rhs);
+  m.J.setZero(n, n);
+  m.M.setZero(n, n);
+  for (Eigen::VectorXd* v : {&m.f0, &m.f1, &m.k1, &m.k2, &m.ytmp, &m.rhs2, &m.inc, &m.seg_y0, &m.seg_f0, &m.seg_y1,
+                             &m.seg_f1, &m.y, &m.ft})
+    v->setZero(n);
+  m.solver = std::make_unique<DirectSolver>(n, m.structure);
+}
+
+FixedStepIntegrator::~FixedStepIntegrator() = default;
+
+void FixedStepIntegrator::initialize(double t0, const Eigen::Ref<const Eigen::VectorXd>& y0, bool reuse_jacobian) {
+  Impl& m = *impl_;
+  if (y0.size() != m.n)
+    throw InputError(m.prefix() + ": initialize: the state has " + std::to_string(y0.size()) + " entries, expected " +
+                     std::to_string(m.n));
+  if (!std::isfinite(t0) || !y0.allFinite()) throw InputError(m.prefix() + ": initialize: t0 and y0 must be finite");
+  m.t = m.t_last = t0;
+  m.y = y0;
+  m.initialized = true;
+  m.stepped = m.seg_valid = m.root_pending = m.root_found = false;
+  if (!reuse_jacobian) m.jac_valid = false;
+  if (m.n_roots > 0) {
+    m.evalRoots(t0, m.y, m.g0);
+    std::fill(m.dirs.begin(), m.dirs.end(), 0);
+  }
+}
+
+double FixedStepIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out) {
+  Impl& m = *impl_;
+  if (!m.initialized) throw Error(m.prefix() + ": advance before initialize");
+  if (y_out.size() != m.n)
+    throw InputError(m.prefix() + ": advance: the output has " + std::to_string(y_out.size()) + " entries, expected " +
+                     std::to_string(m.n));
+  if (!std::isfinite(t_out)) throw InputError(m.prefix() + ": advance: t_out must be finite");
+  m.root_found = false;
+  std::fill(m.dirs.begin(), m.dirs.end(), 0);
+  auto at = [&](double when) {  // y(when) on the last segment (when <= m.t)
+    if (std::abs(when - m.t) < kMergeFraction * m.h) {  // (or a time this close: rounding)
+      y_out = m.y;
+    } else {
+      m.interpolate(when, m.ytmp);
+      y_out = m.ytmp;
+    }
+    m.t_last = when;
+    return when;
+  };
+  if (m.root_pending) {
+    if (t_out < m.t) return at(t_out);
+    m.root_pending = false;
+    m.root_found = true;
+    return at(m.t);
+  }
+  if (t_out <= m.t) {
+    if (t_out == m.t || (m.seg_valid && t_out >= m.seg_t0)) return at(t_out);
+    throw InputError(m.prefix() + ": advance: t_out = " + formatNumber(t_out) + " s lies before the last step (t = " +
+                     formatNumber(m.t) + " s)");
+  }
+  long here = 0;
+  while (m.t < t_out) {
+    if (!std::isnan(m.stop) && m.t >= m.stop) break;
+    if (++here > m.opts.max_num_steps)
+      throw SolverError(m.prefix() + ": " + std::to_string(m.opts.max_num_steps) +
+                            " steps (max_num_steps) in one call before t = " + formatNumber(t_out) + " s",
+                        m.t, "CV_TOO_MUCH_WORK", m.opts.component);
+    if (m.step_limit > 0 && m.stats.steps >= m.step_limit) {
+      ++m.stats.steps;
+      throw SolverError(m.prefix() + ": the step budget of " + std::to_string(m.step_limit) + " steps is spent at t = " +
+                            formatNumber(m.t) + " s",
+                        m.t, "STEP_BUDGET", m.opts.component);
+    }
+    if (!std::isnan(m.stop) && m.stop - m.t < kMergeFraction * m.h) {
+      // A stop this close (rounding of the caller's times against the grid) is where the state already is.
+      m.t = m.stop;
+      break;
+    }
+    const double t1 = m.stepEnd();
+    m.step(t1);
+    if (m.locateRoot()) {
+      if (m.t <= t_out) {
+        m.root_found = true;
+        if (m.t == m.stop) m.stop = kNoTime;
+        return at(m.t);
+      }
+      m.root_pending = true;
+      return at(t_out);
+    }
+  }
+  if (!std::isnan(m.stop) && m.t == m.stop && m.stop <= t_out) {
+    m.stop = kNoTime;
+    return at(m.t);
+  }
+  return at(std::min(t_out, m.t));
+}
+
+void FixedStepIntegrator::setStopTime(double t_stop) {
+  Impl& m = *impl_;
+  if (!std::isfinite(t_stop)) throw InputError(m.prefix() + ": setStopTime: the stop time must be finite");
+  if (m.initialized && t_stop < m.t)
+    throw InputError(m.prefix() + ": setStopTime: " + formatNumber(t_stop) + " s lies behind the last step (t = " +
+                     formatNumber(m.t) + " s)");
+  m.stop = t_stop;
+}
+
+void FixedStepIntegrator::setStepLimit(long steps) {
+  if (steps < 0) throw InputError(impl_->prefix() + ": setStepLimit: expected a number of steps >= 0");
+  impl_->step_limit = steps;
+}
+
+void FixedStepIntegrator::setDifferenceJacobian(DifferenceJacobianFunction jacobian) {
+  impl_->djac = std::move(jacobian);
+  impl_->jac_valid = false;
+}
+
+void FixedStepIntegrator::setJacobianStructure(JacobianStructure structure) {
+  Impl& m = *impl_;
+  structure.validate(m.n);
+  m.structure = std::move(structure);
+  m.solver = std::make_unique<DirectSolver>(m.n, m.structure);
+  m.factored_h = kNoTime;
+}
+
+double FixedStepIntegrator::jumpError(const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
+                                      double) const {
+  return 0.0;
+}
+
+void FixedStepIntegrator::setRootFunction(int n_roots, RootFunction g) {
+  Impl& m = *impl_;
+  if (n_roots < 0 || (n_roots > 0 && !g)) throw InputError(m.prefix() + ": setRootFunction: bad root functions");
+  m.n_roots = n_roots;
+  m.g = std::move(g);
+  m.g0.setZero(n_roots);
+  m.g1.setZero(n_roots);
+  m.gt.setZero(n_roots);
+  m.dirs.assign(static_cast<size_t>(n_roots), 0);
+}
+
+bool FixedStepIntegrator::rootFound() const { return impl_->root_found; }
+const std::vector<int>& FixedStepIntegrator::rootDirections() const { return impl_->dirs; }
+
+double FixedStepIntegrator::lastStep(Eigen::Ref<Eigen::VectorXd> y) const {
+  const Impl& m = *impl_;
+  if (!m.stepped || y.size() != m.n) return kNoTime;
+  y = m.y;
+  return m.t;
+}
+
+double FixedStepIntegrator::time() const { return impl_->t_last; }
+
+SolverStats FixedStepIntegrator::stats() const {
+  SolverStats s = impl_->stats;
+  s.current_time = impl_->t;
+  return s;
+}
+
+long FixedStepIntegrator::steps() const { return impl_->stats.steps; }
+const CvodeOptions& FixedStepIntegrator::options() const { return impl_->opts; }
+
+}  // namespace jointsim::sim

@@ -1,0 +1,312 @@
+// Tests of the fixed-step integrator sim::FixedStepIntegrator (ROS2, [Verwer1999]) against closed forms: the order of
+// convergence on a non-autonomous problem with an exact and a wrong Jacobian (a W-method), L-stability, the stability
+// function on an undamped oscillator (amplitude and phase per step), roots located on the step, stop times, the
+// errors; and through sim::Simulator on a sampled plant against the exact discrete-time recurrence.
+
+#include "jointsim/sim/fixed_step_integrator.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <exception>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/sim/plant.hpp"
+#include "jointsim/sim/simulator.hpp"
+
+namespace {
+
+using jointsim::InputError;
+using jointsim::SolverError;
+using jointsim::sim::CvodeIntegrator;
+using jointsim::sim::CvodeOptions;
+using jointsim::sim::FixedStepIntegrator;
+using jointsim::sim::Method;
+namespace sim = jointsim::sim;
+
+const double kGamma = 1.0 + 1.0 / std::sqrt(2.0);
+
+CvodeOptions fixedStep(double h, int jacobian_every = 1) {
+  CvodeOptions o;
+  o.method = Method::Rosenbrock;
+  o.fixed_step = h;
+  o.jacobian_every = jacobian_every;
+  return o;
+}
+
+::testing::AssertionResult contains(const std::string& haystack, const std::string& needle) {
+  if (haystack.find(needle) != std::string::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "'" << needle << "' not found in: " << haystack;
+}
+
+// y' = λ (y − sin t) + cos t, y(0) = 1: y(t) = sin t + e^{λt}. `w_scale` scales the Jacobian handed to the method
+// (1: exact; another value: a wrong W, which a W-method of order 2 must tolerate).
+double errorAtOne(double lambda, double h, double w_scale) {
+  FixedStepIntegrator integ(
+      1, [lambda](double t, const auto& y, auto yd) { yd[0] = lambda * (y[0] - std::sin(t)) + std::cos(t); },
+      fixedStep(h));
+  integ.setDifferenceJacobian([lambda, w_scale](double, const auto&, const auto&, const auto&, auto J) {
+    J(0, 0) = w_scale * lambda;
+  });
+  integ.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+  Eigen::VectorXd y(1);
+  EXPECT_EQ(integ.advance(1.0, y), 1.0);
+  EXPECT_EQ(integ.steps(), std::lround(1.0 / h));
+  return std::abs(y[0] - (std::sin(1.0) + std::exp(lambda)));
+}
+
+TEST(FixedStep, SecondOrderOnANonAutonomousProblemWithTheExactAndAWrongJacobian) {
+  for (double w_scale : {1.0, 0.5, 0.0}) {
+    const double e1 = errorAtOne(-2.0, 0.02, w_scale), e2 = errorAtOne(-2.0, 0.01, w_scale),
+                 e3 = errorAtOne(-2.0, 0.005, w_scale);
+    // Order 2: each halving of the step divides the error by 4 (not 2), whatever W is; and the error is small.
+    EXPECT_NEAR(e1 / e2, 4.0, 0.4) << "W = " << w_scale << " J";
+    EXPECT_NEAR(e2 / e3, 4.0, 0.3) << "W = " << w_scale << " J";
+    EXPECT_LT(e3, 3e-5) << "W = " << w_scale << " J";
+  }
+}
+
+TEST(FixedStep, LStableAStiffTransientIsGoneAfterOneStep) {
+  // λ h = −1e5: the stability function R(z) = (1 + (1 − 2γ) z + (γ² − 2γ + ½) z²) / (1 − γz)² tends to 0 as z → −∞
+  // (γ² − 2γ + ½ = 0 for γ = 1 + 1/√2), so the transient e^{λt} is damped to O(1/z) in one step, and the smooth
+  // solution sin t is followed to second order. (An A-stable but not L-stable method, the trapezoidal rule, would
+  // carry a transient of R(−∞) = −1 for ever.)
+  const double lambda = -1e8, h = 1e-3;
+  FixedStepIntegrator integ(
+      1, [lambda](double t, const auto& y, auto yd) { yd[0] = lambda * (y[0] - std::sin(t)) + std::cos(t); },
+      fixedStep(h));
+  integ.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+  Eigen::VectorXd y(1);
+  integ.advance(h, y);
+  EXPECT_LT(std::abs(y[0] - std::sin(h)), 1e-4);
+  integ.advance(2 * h, y);
+  EXPECT_LT(std::abs(y[0] - std::sin(2 * h)), 1e-8);
+  integ.advance(1.0, y);
+  // (The difference quotient of ∂f/∂t loses ε|λy|/δ ≈ 1 to rounding here, which the step divides by λ.)
+  EXPECT_LT(std::abs(y[0] - std::sin(1.0)), 1e-6);
+}
+
+TEST(FixedStep, AnUnresolvedOscillatorRingsDownAsTheStabilityFunctionPredicts) {
+  // A lightly damped gear mode at 4.6 kHz stepped at 20 kHz (ωh = 1.45, above the step's Nyquist frequency's
+  // resolution): per step the linear system is multiplied by R(hJ), so the amplitude shrinks by |R(iωh)| and the phase
+  // turns by arg R(iωh), exactly, where the true mode would keep its amplitude and turn by ωh.
+  const double w = 2.0 * std::acos(-1.0) * 4600.0, h = 5e-5;
+  FixedStepIntegrator integ(
+      2,
+      [w](double, const auto& y, auto yd) {
+        yd[0] = w * y[1];
+        yd[1] = -w * y[0];
+      },
+      fixedStep(h));
+  integ.initialize(0.0, Eigen::Vector2d(1.0, 0.0), false);
+  const std::complex<double> z(0.0, w * h);
+  const std::complex<double> R =
+      (1.0 + (1.0 - 2.0 * kGamma) * z + (kGamma * kGamma - 2.0 * kGamma + 0.5) * z * z) / ((1.0 - kGamma * z) *
+                                                                                             (1.0 - kGamma * z));
+  Eigen::VectorXd y(2);
+  const int steps = 10;
+  integ.advance(steps * h, y);
+  // y = x + i·v rotates as e^{−iωt}: its numerical image is multiplied by conj(R)... compare modulus and angle.
+  const std::complex<double> got(y[0], y[1]), want = std::pow(std::conj(R), steps);
+  EXPECT_NEAR(std::abs(got) / std::abs(want), 1.0, 1e-8);
+  EXPECT_NEAR(std::arg(got), std::arg(want), 1e-8);
+  EXPECT_LT(std::abs(R), 0.75);  // measured damping per step: the mode is damped, not resolved
+  EXPECT_GT(std::abs(R), 0.5);
+}
+
+TEST(FixedStep, ARootIsLocatedOnTheStepAndTheEarliestOfTwoIsReported) {
+  // A falling ball y'' = −g from 1 m: y is quadratic in t, which ROS2 and the cubic interpolant reproduce exactly, so
+  // the root y = 0 (t = √(2/g)) is located to the root tolerance.
+  const double g = 9.81, h = 0.01;
+  FixedStepIntegrator integ(
+      2,
+      [g](double, const auto& y, auto yd) {
+        yd[0] = y[1];
+        yd[1] = -g;
+      },
+      fixedStep(h));
+  integ.setRootFunction(2, [](double, const auto& y, auto r) {
+    r[0] = y[0] - 0.5;  // half height: first
+    r[1] = y[0];
+  });
+  integ.initialize(0.0, Eigen::Vector2d(1.0, 0.0), false);
+  Eigen::VectorXd y(2);
+  double t = integ.advance(1.0, y);
+  ASSERT_TRUE(integ.rootFound());
+  EXPECT_NEAR(t, std::sqrt(2.0 * 0.5 / g), 1e-12);
+  EXPECT_EQ(integ.rootDirections(), (std::vector<int>{-1, 0}));
+  EXPECT_NEAR(y[0], 0.5, 1e-12);
+  integ.initialize(t, y, true);  // as sim::Simulator restarts after an event
+  t = integ.advance(1.0, y);
+  ASSERT_TRUE(integ.rootFound());
+  EXPECT_NEAR(t, std::sqrt(2.0 / g), 1e-12);
+  EXPECT_EQ(integ.rootDirections(), (std::vector<int>{0, -1}));
+  EXPECT_NEAR(y[1], -std::sqrt(2.0 * g), 1e-10);
+  // The steps after the root meet the grid again: the next one ends at the next multiple of h.
+  integ.initialize(t, y, true);
+  integ.advance(std::ceil(t / h) * h, y);
+  EXPECT_FALSE(integ.rootFound());
+  EXPECT_NEAR(integ.stats().last_step, std::ceil(t / h) * h - t, 1e-15);
+}
+
+TEST(FixedStep, StopTimesEndShortStepsAndOutputsBetweenStepsAreInterpolated) {
+  // y' = 2t: ROS2 reduces to the trapezoidal rule (W plays no part where f does not depend on y), exact for a linear
+  // f, and the cubic interpolant is exact for y = t², so every value below is exact to rounding.
+  const double h = 0.1;
+  FixedStepIntegrator integ(1, [](double t, const auto&, auto yd) { yd[0] = 2.0 * t; }, fixedStep(h));
+  integ.initialize(0.0, Eigen::VectorXd::Zero(1), false);
+  integ.setStopTime(0.25);
+  Eigen::VectorXd y(1);
+  EXPECT_EQ(integ.advance(1.0, y), 0.25);  // steps 0.1, 0.2, then 0.05 to the stop
+  EXPECT_EQ(integ.steps(), 3);
+  EXPECT_NEAR(y[0], 0.25 * 0.25, 1e-15);
+  EXPECT_NEAR(integ.stats().last_step, 0.05, 1e-15);
+  // The stop is one-shot; the next steps are back on the grid (0.3, 0.4), and 0.33 is interpolated.
+  EXPECT_EQ(integ.advance(0.33, y), 0.33);
+  EXPECT_EQ(integ.steps(), 5);
+  EXPECT_NEAR(y[0], 0.33 * 0.33, 1e-15);
+  EXPECT_EQ(integ.time(), 0.33);
+  EXPECT_EQ(integ.stats().current_time, 0.4);
+  EXPECT_EQ(integ.advance(0.4, y), 0.4);  // no step: already there
+  EXPECT_EQ(integ.steps(), 5);
+  EXPECT_NEAR(y[0], 0.16, 1e-15);
+  // A stop a rounding error away from where the integrator stands (k·0.1 against a time summed another way) takes no
+  // step of 1e-17 s: the state is already there.
+  integ.setStopTime(0.4 + 1e-17 + 5e-17);
+  EXPECT_GT(integ.advance(1.0, y), 0.4);
+  EXPECT_EQ(integ.steps(), 5);
+}
+
+TEST(FixedStep, FailuresNameTheTimeAndTheStateAndBadOptionsAreRefused) {
+  CvodeOptions o = fixedStep(0.01);
+  o.state_name = [](int i) { return i == 0 ? std::string("motor.current [A]") : std::string(); };
+  o.component = "test drive";
+  FixedStepIntegrator blowup(1, [](double t, const auto& y, auto yd) { yd[0] = t > 0.5 ? NAN : y[0]; }, o);
+  blowup.initialize(0.0, Eigen::VectorXd::Ones(1), false);
+  Eigen::VectorXd y(1);
+  try {
+    blowup.advance(1.0, y);
+    FAIL() << "no error";
+  } catch (const SolverError& e) {
+    EXPECT_TRUE(contains(e.what(), "motor.current [A]"));
+    EXPECT_TRUE(contains(e.what(), "test drive"));
+    EXPECT_GE(e.time(), 0.5);
+    EXPECT_LT(e.time(), 0.52);
+    EXPECT_EQ(e.flag(), "RHS_NONFINITE");
+  }
+  FixedStepIntegrator thrower(
+      1,
+      [](double t, const auto&, auto yd) {
+        if (t > 0.3) throw std::runtime_error("broken model");
+        yd[0] = 0.0;
+      },
+      o);
+  thrower.initialize(0.0, Eigen::VectorXd::Ones(1), false);
+  try {
+    thrower.advance(1.0, y);
+    FAIL() << "no error";
+  } catch (const SolverError& e) {
+    EXPECT_EQ(e.flag(), "RHS_EXCEPTION");
+    EXPECT_TRUE(contains(e.what(), "broken model"));
+    bool nested = false;
+    try {
+      std::rethrow_if_nested(e);
+    } catch (const std::runtime_error&) {
+      nested = true;
+    }
+    EXPECT_TRUE(nested);
+  }
+  auto rhs = [](double, const auto&, auto yd) { yd[0] = 0.0; };
+  EXPECT_THROW(FixedStepIntegrator(1, rhs, fixedStep(0.0)), InputError);
+  EXPECT_THROW(FixedStepIntegrator(1, rhs, fixedStep(-1.0)), InputError);
+  EXPECT_THROW(FixedStepIntegrator(1, rhs, fixedStep(0.1, 0)), InputError);
+  EXPECT_THROW(FixedStepIntegrator(1, rhs, CvodeOptions{}), InputError);  // BDF is CVODE's
+  EXPECT_THROW(CvodeIntegrator(1, rhs, fixedStep(0.1)), InputError);      // and Rosenbrock is not
+  // A step budget ends the call; max_num_steps bounds one call.
+  FixedStepIntegrator budget(1, rhs, fixedStep(0.01));
+  budget.initialize(0.0, Eigen::VectorXd::Ones(1), false);
+  budget.setStepLimit(10);
+  try {
+    budget.advance(1.0, y);
+    FAIL() << "no error";
+  } catch (const SolverError& e) {
+    EXPECT_EQ(e.flag(), "STEP_BUDGET");
+    EXPECT_NEAR(budget.lastStep(y), 0.1, 1e-12);
+  }
+}
+
+// x' = (u − x)/τ with u = −K x held from each sample (period T): exactly x_{k+1} = (a − (1 − a) K) x_k, a = e^{−T/τ}.
+class SampledLag : public sim::Plant {
+ public:
+  struct State : sim::PlantStateOf<State> {
+    using PlantStateOf::PlantStateOf;
+    double u = 0.0;
+  };
+  static constexpr double tau = 2e-3, K = 0.5, T = 1e-3;
+  std::string name() const override { return "sampled lag"; }
+  int stateSize() const override { return 1; }
+  Eigen::VectorXd initialState() const override { return Eigen::VectorXd::Ones(1); }
+  std::unique_ptr<sim::PlantState> makeState() const override { return std::make_unique<State>(*this); }
+  void start(sim::PlantState& s, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const override {
+    sample(s, t, y);
+  }
+  double samplePeriod() const override { return T; }
+  void sample(sim::PlantState& s, double, const Eigen::Ref<const Eigen::VectorXd>& y) const override {
+    own<State>(s).u = -K * y[0];
+  }
+  void derivatives(const sim::PlantState& s, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> yd) const override {
+    yd[0] = (own<State>(s).u - y[0]) / tau;
+  }
+  const std::vector<std::string>& signalNames() const override { return names_; }
+  void signals(const sim::PlantState&, double, const Eigen::Ref<const Eigen::VectorXd>& y,
+               Eigen::Ref<Eigen::VectorXd> out) const override {
+    out[0] = y[0];
+  }
+
+ private:
+  std::vector<std::string> names_{"x[-]"};
+};
+
+TEST(FixedStep, SampledControlThroughTheSimulatorIsTheMethodsRecurrenceAndConvergesAtSecondOrder) {
+  // Between samples the plant is linear with the fixed point u, which ROS2 keeps: with m steps per period each sample
+  // maps x to u + R(−T/(mτ))^m (x − u), R the stability function, exactly. And R^m → e^{−T/τ} at second order.
+  SampledLag plant;
+  const double T = SampledLag::T, tau = SampledLag::tau, K = SampledLag::K;
+  const double exact = std::pow(std::exp(-T / tau) - (1.0 - std::exp(-T / tau)) * K, 20);  // x after 20 samples
+  std::vector<double> errors;
+  for (int m : {1, 2, 4}) {
+    CvodeOptions o;
+    o.method = Method::Rosenbrock;
+    o.fixed_step = m == 1 ? 0.0 : T / m;  // 0: the control period
+    sim::Simulator s(plant, o);
+    for (int i = 0; i < 20; ++i) s.advance(T);
+    EXPECT_EQ(s.stats().steps, 20L * m);  // locked to the clock: m steps per period, no more
+    const double z = -T / (m * tau);
+    const double R = (1.0 + (1.0 - 2.0 * kGamma) * z + (kGamma * kGamma - 2.0 * kGamma + 0.5) * z * z) /
+                     ((1.0 - kGamma * z) * (1.0 - kGamma * z));
+    const double Rm = std::pow(R, m);
+    EXPECT_NEAR(s.state()[0], std::pow(Rm - (1.0 - Rm) * K, 20), 1e-15) << m << " steps per period";
+    errors.push_back(std::abs(s.state()[0] - exact));
+  }
+  EXPECT_LT(errors[0], 2e-3);
+  EXPECT_GT(errors[0] / errors[1], 3.5);  // z = −0.5 per period is not yet asymptotic; then 4
+  EXPECT_NEAR(errors[1] / errors[2], 4.0, 0.4);
+  // A step that is not an integer fraction of the control period is refused, naming the period.
+  CvodeOptions bad;
+  bad.method = Method::Rosenbrock;
+  bad.fixed_step = 0.3e-3;
+  try {
+    sim::Simulator s(plant, bad);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(), "integer fraction"));
+    EXPECT_TRUE(contains(e.what(), "0.001"));
+  }
+}
+
+}  // namespace
