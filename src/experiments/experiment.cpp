@@ -131,6 +131,15 @@ std::unique_ptr<Experiment> buildExperiment(const YamlValue& root, const std::st
       p.node.fail(err.what());
     }
   }
+  // The fixed-step method's step against the plant's control period, known once the plant is built.
+  if (const sim::SimulateOptions o = e->simulateOptions(); o.solver.method == sim::Method::Rosenbrock) {
+    try {
+      sim::fixedStep(e->plant(), o.solver.fixed_step);
+    } catch (const InputError& err) {
+      const YamlValue solver = root["solver"];
+      (solver.has("step") ? solver["step"] : solver["method"]).fail(err.what());
+    }
+  }
   e->setIdentity(name, t, path);
   e->setConfig(config);
   e->setInputs(inputs.files());

@@ -37,11 +37,11 @@ struct FixedStepIntegrator::Impl {
 
   bool initialized = false;
   double t = kNoTime;       // time of the internal state [s]
-  Eigen::VectorXd y;     // internal state
+  Eigen::VectorXd y;        // internal state
   double t_last = kNoTime;  // the time advance() last returned
-  bool stepped = false;  // a step (or a located root) since initialize()
+  bool stepped = false;     // a step (or a located root) since initialize()
   double stop = kNoTime;    // one-shot stop time
-  long step_limit = 0;   // lifetime step budget (0: none)
+  long step_limit = 0;      // lifetime step budget (0: none)
 
   // Jacobian and the factorised iteration matrix I − γ h_f W.
   Eigen::MatrixXd J, M;
@@ -150,8 +150,8 @@ struct FixedStepIntegrator::Impl {
     for (Eigen::Index i = 0; i < n; ++i)
       if (!std::isfinite(ft[i]))
         throw SolverError(prefix() + ": the right-hand side returned a non-finite value (ydot[" + std::to_string(i) +
-                              "], " + stateName(i) + ", = " + formatNumber(f1[i]) + ") at t = " +
-                              formatNumber(at + delta) + " s (while differencing it in time)",
+                              "], " + stateName(i) + ", = " + formatNumber(f1[i]) +
+                              ") at t = " + formatNumber(at + delta) + " s (while differencing it in time)",
                           at + delta, "RHS_NONFINITE", opts.component);
     for (Eigen::Index j = 0; j < n; ++j)
       for (Eigen::Index i = 0; i < n; ++i)
@@ -170,8 +170,8 @@ struct FixedStepIntegrator::Impl {
     M.diagonal().array() += 1.0;
     ++stats.lin_setups;
     if (!solver->factor(M))
-      throw SolverError(prefix() + ": I - γhW is singular at t = " + formatNumber(at) + " s (step " +
-                            formatNumber(hs) + " s)",
+      throw SolverError(prefix() + ": I - γhW is singular at t = " + formatNumber(at) + " s (step " + formatNumber(hs) +
+                            " s)",
                         at, "LSETUP_FAIL", opts.component);
     factored_h = hs;
   }
@@ -207,8 +207,8 @@ struct FixedStepIntegrator::Impl {
     y += (1.5 * hs) * k1 + (0.5 * hs) * k2;
     for (Eigen::Index i = 0; i < n; ++i)
       if (!std::isfinite(y[i]))
-        throw SolverError(prefix() + ": the state became non-finite (" + stateName(i) + ") in the step to t = " +
-                              formatNumber(t1) + " s",
+        throw SolverError(prefix() + ": the state became non-finite (" + stateName(i) +
+                              ") in the step to t = " + formatNumber(t1) + " s",
                           t1, "RHS_NONFINITE", opts.component);
     seg_y1 = y;
     seg_valid = true;
@@ -309,8 +309,7 @@ FixedStepIntegrator::FixedStepIntegrator(int n, RhsFunction rhs, CvodeOptions op
   if (m.opts.method != Method::Rosenbrock) bad("the options must select Method::Rosenbrock");
   if (!(m.opts.fixed_step > 0.0) || !std::isfinite(m.opts.fixed_step))
     bad("fixed_step must be a finite step > 0 s, got " + formatNumber(m.opts.fixed_step));
-  if (m.opts.jacobian_every < 1)
-    bad("jacobian_every must be >= 1 step, got " + std::to_string(m.opts.jacobian_every));
+  if (m.opts.jacobian_every < 1) bad("jacobian_every must be >= 1 step, got " + std::to_string(m.opts.jacobian_every));
   if (m.opts.max_num_steps <= 0) bad("max_num_steps must be > 0, got " + std::to_string(m.opts.max_num_steps));
   if (!(m.opts.rtol > 0.0) || !std::isfinite(m.opts.rtol)) bad("rtol must be finite and > 0");
   if (m.opts.atol_vector.size() != 0 && m.opts.atol_vector.size() != n)
@@ -320,8 +319,8 @@ FixedStepIntegrator::FixedStepIntegrator(int n, RhsFunction rhs, CvodeOptions op
   m.rhs = std::move(rhs);
   m.J.setZero(n, n);
   m.M.setZero(n, n);
-  for (Eigen::VectorXd* v : {&m.f0, &m.f1, &m.k1, &m.k2, &m.ytmp, &m.rhs2, &m.inc, &m.seg_y0, &m.seg_f0, &m.seg_y1,
-                             &m.seg_f1, &m.y, &m.ft})
+  for (Eigen::VectorXd* v :
+       {&m.f0, &m.f1, &m.k1, &m.k2, &m.ytmp, &m.rhs2, &m.inc, &m.seg_y0, &m.seg_f0, &m.seg_y1, &m.seg_f1, &m.y, &m.ft})
     v->setZero(n);
   m.solver = std::make_unique<DirectSolver>(n, m.structure);
 }
@@ -354,7 +353,7 @@ double FixedStepIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_
   if (!std::isfinite(t_out)) throw InputError(m.prefix() + ": advance: t_out must be finite");
   m.root_found = false;
   std::fill(m.dirs.begin(), m.dirs.end(), 0);
-  auto at = [&](double when) {  // y(when) on the last segment (when <= m.t)
+  auto at = [&](double when) {                          // y(when) on the last segment (when <= m.t)
     if (std::abs(when - m.t) < kMergeFraction * m.h) {  // (or a time this close: rounding)
       y_out = m.y;
     } else {
@@ -372,8 +371,8 @@ double FixedStepIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_
   }
   if (t_out <= m.t) {
     if (t_out == m.t || (m.seg_valid && t_out >= m.seg_t0)) return at(t_out);
-    throw InputError(m.prefix() + ": advance: t_out = " + formatNumber(t_out) + " s lies before the last step (t = " +
-                     formatNumber(m.t) + " s)");
+    throw InputError(m.prefix() + ": advance: t_out = " + formatNumber(t_out) +
+                     " s lies before the last step (t = " + formatNumber(m.t) + " s)");
   }
   long here = 0;
   while (m.t < t_out) {
@@ -384,8 +383,8 @@ double FixedStepIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_
                         m.t, "CV_TOO_MUCH_WORK", m.opts.component);
     if (m.step_limit > 0 && m.stats.steps >= m.step_limit) {
       ++m.stats.steps;
-      throw SolverError(m.prefix() + ": the step budget of " + std::to_string(m.step_limit) + " steps is spent at t = " +
-                            formatNumber(m.t) + " s",
+      throw SolverError(m.prefix() + ": the step budget of " + std::to_string(m.step_limit) +
+                            " steps is spent at t = " + formatNumber(m.t) + " s",
                         m.t, "STEP_BUDGET", m.opts.component);
     }
     if (!std::isnan(m.stop) && m.stop - m.t < kMergeFraction * m.h) {
@@ -416,8 +415,8 @@ void FixedStepIntegrator::setStopTime(double t_stop) {
   Impl& m = *impl_;
   if (!std::isfinite(t_stop)) throw InputError(m.prefix() + ": setStopTime: the stop time must be finite");
   if (m.initialized && t_stop < m.t)
-    throw InputError(m.prefix() + ": setStopTime: " + formatNumber(t_stop) + " s lies behind the last step (t = " +
-                     formatNumber(m.t) + " s)");
+    throw InputError(m.prefix() + ": setStopTime: " + formatNumber(t_stop) +
+                     " s lies behind the last step (t = " + formatNumber(m.t) + " s)");
   m.stop = t_stop;
 }
 
@@ -439,8 +438,8 @@ void FixedStepIntegrator::setJacobianStructure(JacobianStructure structure) {
   m.factored_h = kNoTime;
 }
 
-double FixedStepIntegrator::jumpError(const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
-                                      double) const {
+double FixedStepIntegrator::jumpError(const Eigen::Ref<const Eigen::VectorXd>&,
+                                      const Eigen::Ref<const Eigen::VectorXd>&, double) const {
   return 0.0;
 }
 

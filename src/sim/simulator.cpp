@@ -1,6 +1,6 @@
 #include "jointsim/sim/simulator.hpp"
-#include "jointsim/sim/simulate.hpp"
 #include "jointsim/sim/fixed_step_integrator.hpp"
+#include "jointsim/sim/simulate.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -154,15 +154,15 @@ double fixedStep(const Plant& plant, double step) {
   if (step == 0.0) {
     if (Ts > 0.0) return Ts;
     throw InputError(plant.name() +
-                     ": solver: the fixed-step method (rosenbrock) needs its step (solver.step [s]): the plant has no "
-                     "sampled controller whose period it could take");
+                     ": the fixed-step method (rosenbrock) needs its step (solver.step [s]): the plant has no sampled "
+                     "controller whose period it could take");
   }
   if (!(step > 0.0) || !std::isfinite(step))
-    throw InputError(plant.name() + ": solver.step: expected a finite step > 0 s, got " + formatNumber(step));
+    throw InputError(plant.name() + ": the fixed step: expected a finite step > 0 s, got " + formatNumber(step));
   if (Ts > 0.0) {
     const double ratio = Ts / step, k = std::round(ratio);
     if (k < 1.0 || std::abs(ratio - k) > 1e-9 * ratio)
-      throw InputError(plant.name() + ": solver.step: expected the control period " + formatNumber(Ts) +
+      throw InputError(plant.name() + ": the fixed step: expected the control period " + formatNumber(Ts) +
                        " s or an integer fraction of it (the fixed steps are locked to the control clock), got " +
                        formatNumber(step) + " s");
     return Ts / k;

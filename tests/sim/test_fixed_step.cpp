@@ -49,9 +49,8 @@ double errorAtOne(double lambda, double h, double w_scale) {
   FixedStepIntegrator integ(
       1, [lambda](double t, const auto& y, auto yd) { yd[0] = lambda * (y[0] - std::sin(t)) + std::cos(t); },
       fixedStep(h));
-  integ.setDifferenceJacobian([lambda, w_scale](double, const auto&, const auto&, const auto&, auto J) {
-    J(0, 0) = w_scale * lambda;
-  });
+  integ.setDifferenceJacobian(
+      [lambda, w_scale](double, const auto&, const auto&, const auto&, auto J) { J(0, 0) = w_scale * lambda; });
   integ.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
   Eigen::VectorXd y(1);
   EXPECT_EQ(integ.advance(1.0, y), 1.0);
@@ -104,9 +103,8 @@ TEST(FixedStep, AnUnresolvedOscillatorRingsDownAsTheStabilityFunctionPredicts) {
       fixedStep(h));
   integ.initialize(0.0, Eigen::Vector2d(1.0, 0.0), false);
   const std::complex<double> z(0.0, w * h);
-  const std::complex<double> R =
-      (1.0 + (1.0 - 2.0 * kGamma) * z + (kGamma * kGamma - 2.0 * kGamma + 0.5) * z * z) / ((1.0 - kGamma * z) *
-                                                                                             (1.0 - kGamma * z));
+  const std::complex<double> R = (1.0 + (1.0 - 2.0 * kGamma) * z + (kGamma * kGamma - 2.0 * kGamma + 0.5) * z * z) /
+                                 ((1.0 - kGamma * z) * (1.0 - kGamma * z));
   Eigen::VectorXd y(2);
   const int steps = 10;
   integ.advance(steps * h, y);
@@ -157,7 +155,8 @@ TEST(FixedStep, StopTimesEndShortStepsAndOutputsBetweenStepsAreInterpolated) {
   // y' = 2t: ROS2 reduces to the trapezoidal rule (W plays no part where f does not depend on y), exact for a linear
   // f, and the cubic interpolant is exact for y = t², so every value below is exact to rounding.
   const double h = 0.1;
-  FixedStepIntegrator integ(1, [](double t, const auto&, auto yd) { yd[0] = 2.0 * t; }, fixedStep(h));
+  FixedStepIntegrator integ(
+      1, [](double t, const auto&, auto yd) { yd[0] = 2.0 * t; }, fixedStep(h));
   integ.initialize(0.0, Eigen::VectorXd::Zero(1), false);
   integ.setStopTime(0.25);
   Eigen::VectorXd y(1);
@@ -185,7 +184,8 @@ TEST(FixedStep, FailuresNameTheTimeAndTheStateAndBadOptionsAreRefused) {
   CvodeOptions o = fixedStep(0.01);
   o.state_name = [](int i) { return i == 0 ? std::string("motor.current [A]") : std::string(); };
   o.component = "test drive";
-  FixedStepIntegrator blowup(1, [](double t, const auto& y, auto yd) { yd[0] = t > 0.5 ? NAN : y[0]; }, o);
+  FixedStepIntegrator blowup(
+      1, [](double t, const auto& y, auto yd) { yd[0] = t > 0.5 ? NAN : y[0]; }, o);
   blowup.initialize(0.0, Eigen::VectorXd::Ones(1), false);
   Eigen::VectorXd y(1);
   try {

@@ -140,8 +140,6 @@ struct CvodeOptions {
   int jacobian_every = 1;
 };
 
-
-
 /// BDF capped at order 2 with the given tolerances: the default for drive trains. BDF orders 3–5 are not
 /// A-stable: lightly damped kHz drive modes (strain-wave gear, stiff springs, LuGre bristles) then force steps
 /// of a few µs; BDF2 is A-stable and damps modes it does not resolve (docs/design.md).
@@ -204,8 +202,8 @@ class Integrator {
   virtual void setStepLimit(long steps) = 0;
   virtual void setDifferenceJacobian(DifferenceJacobianFunction jacobian) = 0;
   virtual void setJacobianStructure(JacobianStructure structure) = 0;
-  virtual double jumpError(const Eigen::Ref<const Eigen::VectorXd>& f_old, const Eigen::Ref<const Eigen::VectorXd>& f_new,
-                           double h_max) const = 0;
+  virtual double jumpError(const Eigen::Ref<const Eigen::VectorXd>& f_old,
+                           const Eigen::Ref<const Eigen::VectorXd>& f_new, double h_max) const = 0;
   virtual void setRootFunction(int n_roots, RootFunction g) = 0;
   virtual bool rootFound() const = 0;
   virtual const std::vector<int>& rootDirections() const = 0;

@@ -1,0 +1,86 @@
+// The fixed-step method (solver: {method: rosenbrock}) on the UR5 twin under 20 kHz sampled control, against CVODE at
+// rtol 1e-9 (the validation protocol's deterministic, noise-free case, docs/design.md "Fixed-step integration"), and
+// the experiment file's checks of its keys.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "jointsim/common/error.hpp"
+#include "jointsim/experiments/experiment.hpp"
+#include "test_util.hpp"
+
+namespace jointsim {
+namespace {
+
+using ::testing::HasSubstr;
+
+experiments::ExperimentResult runTwin(const std::vector<std::string>& solver) {
+  std::vector<std::string> sets = {"+control.rate=20000", "duration=0.78"};
+  sets.insert(sets.end(), solver.begin(), solver.end());
+  auto e = experiments::loadExperiment(test::sourcePath("config/experiments/ur5_excitation.yaml"), sets);
+  return experiments::runInMemory(*e);
+}
+
+// Largest |a − b| over the columns starting with `prefix` (not q_set/q_fb/current_ref), absolute or relative to
+// each column's range in `a`.
+double worst(const sim::SignalTable& a, const sim::SignalTable& b, const std::string& prefix, bool relative) {
+  double w = 0.0;
+  for (size_t j = 0; j < a.columns.size(); ++j) {
+    const std::string& c = a.columns[j];
+    if (c.rfind(prefix, 0) != 0 || c.rfind("q_set", 0) == 0 || c.rfind("q_fb", 0) == 0 ||
+        c.rfind("current_ref", 0) == 0)
+      continue;
+    const Eigen::VectorXd x = a.values.col(static_cast<Eigen::Index>(j)), y = b[c];
+    const double range = relative ? x.maxCoeff() - x.minCoeff() : 1.0;
+    w = std::max(w, (x - y).cwiseAbs().maxCoeff() / range);
+  }
+  return w;
+}
+
+// 0.78 s of the excitation with a velocity reversal of the wrist joints (at 0.756 s), where the LuGre bristles
+// (σ₀ = 5e6 N·m/rad) stick: the stiffest moment of the run.
+TEST(FixedStepTwin, TwoStepsPerControlPeriodMeetTheAccuracyOfTheValidationProtocol) {
+  const auto ref = runTwin({"solver.rtol=1e-9", "solver.atol=1e-11"});
+  const auto fixed = runTwin({"solver.method=rosenbrock", "+solver.step=2.5e-5"});
+  ASSERT_EQ(ref.log.values.rows(), fixed.log.values.rows());
+  EXPECT_EQ(fixed.result.stats.steps, 31200);  // 0.78 s / 25 µs: locked to the clock, no extra step
+  EXPECT_EQ(fixed.result.stats.error_test_failures, 0);
+  // Measured: 2.9e-6 rad, 1.04 % and 1.64 % of the ranges (the protocol asks 1e-4 rad, 2 % and 3 %); with one step per
+  // period (solver.step 5e-5 s) 9.0e-6 rad, 3.2 % and 5.1 %, which fails here: the bristles' stick transient is
+  // damped by the L-stable step rather than followed.
+  EXPECT_LT(worst(ref.log, fixed.log, "q_", false), 1e-4);
+  EXPECT_LT(worst(ref.log, fixed.log, "current_", true), 0.02);
+  EXPECT_LT(worst(ref.log, fixed.log, "gear_torque_", true), 0.03);
+}
+
+TEST(FixedStepTwin, TheFilesStepIsCheckedAgainstTheControlPeriod) {
+  const std::string file = test::sourcePath("config/experiments/ur5_excitation.yaml");
+  try {
+    experiments::loadExperiment(file, {"+control.rate=20000", "solver.method=rosenbrock", "+solver.step=3e-5"});
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("ur5_excitation.yaml"));
+    EXPECT_THAT(e.what(), HasSubstr("solver.step"));
+    EXPECT_THAT(e.what(), HasSubstr("integer fraction"));
+  }
+  // Continuous control has no period to take the step from.
+  try {
+    experiments::loadExperiment(file, {"solver.method=rosenbrock"});
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("solver.method"));
+    EXPECT_THAT(e.what(), HasSubstr("solver.step [s]"));
+  }
+  // A step for CVODE means nothing.
+  EXPECT_THROW(experiments::loadExperiment(file, {"+solver.step=1e-5"}), InputError);
+  EXPECT_THROW(experiments::loadExperiment(file, {"solver.method=rk4"}), InputError);
+  // With an explicit step a continuous plant runs with it.
+  auto e = experiments::loadExperiment(file, {"solver.method=rosenbrock", "+solver.step=1e-4", "duration=0.01"});
+  EXPECT_EQ(experiments::runInMemory(*e).result.stats.steps, 100);
+}
+
+}  // namespace
+}  // namespace jointsim
