@@ -3,7 +3,8 @@
 // gear, LuGre friction, voltage cascade), following a Fourier excitation. Counters: solver steps, wall time per step
 // [µs] and the real-time factor (simulated seconds per wall-clock second), for continuous control (CVODE BDF, rtol
 // 1e-6, atol 1e-9, the structured Jacobian, as `type: tracking`) and sampled control at 20 kHz (the drives' own
-// sensors). The baseline of the per-step cost growth with the number of drives (docs/performance.md).
+// sensors), with CVODE and with the fixed-step method (ROS2, one step per control period, solver.method rosenbrock).
+// The per-step cost growth with the number of drives (docs/performance.md).
 // Run: ./build/bench/bench_drive_count
 #include <chrono>
 #include <memory>
@@ -73,13 +74,14 @@ std::unique_ptr<systems::RobotSystem> robot(int n) {
 }
 
 // One run of `duration` per iteration; range(0): the number of drives; range(1): 0 continuous control, else the
-// sampled control rate [Hz].
-void DriveCount(benchmark::State& state, double duration) {
+// sampled control rate [Hz]; `fixed_step`: ROS2 with one step per control period instead of CVODE.
+void DriveCount(benchmark::State& state, double duration, bool fixed_step) {
   const int n = static_cast<int>(state.range(0));
   const double rate = static_cast<double>(state.range(1));
   std::unique_ptr<systems::RobotSystem> sys = robot(n);
   if (rate > 0) sys->setSampledControl(rate, 1);
-  const sim::SimulateOptions o = sim::SimulateOptions::atRate(duration, 100.0, sim::stiffDriveSolver(1e-6, 1e-9));
+  sim::SimulateOptions o = sim::SimulateOptions::atRate(duration, 100.0, sim::stiffDriveSolver(1e-6, 1e-9));
+  if (fixed_step) o.solver.method = sim::Method::Rosenbrock;  // step 0: the control period
   long steps = 0;
   double wall = 0.0;  // [s], summed over the iterations
   for (auto _ : state) {
@@ -99,12 +101,17 @@ void DriveCount(benchmark::State& state, double duration) {
 }  // namespace
 
 // Continuous control: 0.25 s of the excitation.
-BENCHMARK_CAPTURE(DriveCount, continuous, 0.25)
+BENCHMARK_CAPTURE(DriveCount, continuous, 0.25, false)
     ->ArgsProduct({{6, 12, 24, 48}, {0}})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
 // Sampled control at 20 kHz: 0.05 s (1,000 control periods).
-BENCHMARK_CAPTURE(DriveCount, sampled_20kHz, 0.05)
+BENCHMARK_CAPTURE(DriveCount, sampled_20kHz, 0.05, false)
+    ->ArgsProduct({{6, 12, 24, 48}, {20000}})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
+// The same with the fixed-step method.
+BENCHMARK_CAPTURE(DriveCount, sampled_20kHz_fixed_step, 0.05, true)
     ->ArgsProduct({{6, 12, 24, 48}, {20000}})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
