@@ -51,8 +51,9 @@ static void UR5_Twin_Jacobian(benchmark::State& st) {
   Eigen::VectorXd yp = y, fp(n);
   for (auto _ : st) {
     J.setZero();
-    if (st.range(0) == 1) {
-      sys.jacobian(*run, 0.5, y, f, inc, J);
+    if (st.range(0) >= 1) {
+      sys.jacobian(*run, 0.5, y, f, inc, J,
+                   st.range(0) == 2 ? sim::JacobianKind::Analytic : sim::JacobianKind::Differences);
     } else {
       for (Eigen::Index j = 0; j < n; ++j) {
         yp[j] += inc[j];
@@ -64,6 +65,6 @@ static void UR5_Twin_Jacobian(benchmark::State& st) {
     benchmark::DoNotOptimize(J.data());
   }
 }
-BENCHMARK(UR5_Twin_Jacobian)->Arg(1)->Arg(0)->ArgName("structured");
+BENCHMARK(UR5_Twin_Jacobian)->Arg(2)->Arg(1)->Arg(0)->ArgName("structured");  // 2: analytic multibody, 1: differences
 
 BENCHMARK_MAIN();

@@ -19,7 +19,7 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   if (!node.defined()) return o;
   node.expectMap("a solver mapping {method, rtol, atol, max_step, max_order, stability_limit_detection}");
   node.allowKeys({"method", "rtol", "atol", "max_step", "max_order", "stability_limit_detection", "max_num_steps",
-                  "input_jumps", "max_gamma_change", "step", "jacobian_every"});
+                  "input_jumps", "max_gamma_change", "step", "jacobian_every", "analytic_jacobian"});
   const char* const methods = "bdf, adams or rosenbrock (fixed step)";
   if (node.has("method")) {
     const std::string m = node["method"].asString(methods);
@@ -57,6 +57,7 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   if (node.has("max_num_steps")) o.max_num_steps = node["max_num_steps"].asInt("a positive step count");
   if (node.has("stability_limit_detection"))
     o.stability_limit_detection = node["stability_limit_detection"].asBool("true or false");
+  if (node.has("analytic_jacobian")) o.analytic_jacobian = node["analytic_jacobian"].asBool("true or false");
   if (node.has("input_jumps")) {
     const std::string j = node["input_jumps"].asString("keep_history or restart");
     if (j == "keep_history")
@@ -181,6 +182,7 @@ void solverJson(nlohmann::ordered_json& out, const sim::CvodeOptions& o) {
          {"max_order", o.max_order},
          {"stability_limit_detection", o.stability_limit_detection},
          {"max_gamma_change", o.max_gamma_change}};
+  if (o.analytic_jacobian) out["analytic_jacobian"] = true;
   if (o.method == sim::Method::Rosenbrock) {
     out["step"] = o.fixed_step;
     out["jacobian_every"] = o.jacobian_every;

@@ -128,10 +128,12 @@ std::vector<std::string> tableColumns(const Plant& plant) {
 void installPlantJacobian(const Plant& plant, const PlantState& state, Integrator& integ) {
   const CvodeOptions& o = integ.options();
   if (!plant.providesJacobian() || !o.plant_jacobian || o.method == Method::Adams) return;
+  const JacobianKind kind =
+      o.analytic_jacobian || o.method == Method::Rosenbrock ? JacobianKind::Analytic : JacobianKind::Differences;
   integ.setDifferenceJacobian(
-      [&plant, &state](double t, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f,
-                       const Eigen::Ref<const Eigen::VectorXd>& inc,
-                       Eigen::Ref<Eigen::MatrixXd> J) { plant.jacobian(state, t, y, f, inc, J); });
+      [&plant, &state, kind](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                             const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
+                             Eigen::Ref<Eigen::MatrixXd> J) { plant.jacobian(state, t, y, f, inc, J, kind); });
   JacobianStructure structure = plant.jacobianStructure();
   if (!structure.empty() && o.dense_solver == CvodeOptions::DenseSolver::Eigen)
     integ.setJacobianStructure(std::move(structure));

@@ -131,10 +131,12 @@ void Simulator::build(const CvodeOptions& solver) {
   }
   const CvodeOptions& o = integ_->options();
   if (p->providesJacobian() && o.plant_jacobian && o.method != Method::Adams) {
-    integ_->setDifferenceJacobian([this, p](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                                            const Eigen::Ref<const Eigen::VectorXd>& f,
-                                            const Eigen::Ref<const Eigen::VectorXd>& inc,
-                                            Eigen::Ref<Eigen::MatrixXd> J) { p->jacobian(*state_, t, y, f, inc, J); });
+    const JacobianKind kind =
+        o.analytic_jacobian || o.method == Method::Rosenbrock ? JacobianKind::Analytic : JacobianKind::Differences;
+    integ_->setDifferenceJacobian(
+        [this, p, kind](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                        const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
+                        Eigen::Ref<Eigen::MatrixXd> J) { p->jacobian(*state_, t, y, f, inc, J, kind); });
     JacobianStructure structure = p->jacobianStructure();
     if (!structure.empty() && o.dense_solver == CvodeOptions::DenseSolver::Eigen)
       integ_->setJacobianStructure(std::move(structure));

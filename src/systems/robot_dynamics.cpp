@@ -273,17 +273,21 @@ void RobotSystem::jointTorqueStage(const State& st) const {
   st.sig.tau_joint = st.tau;
 }
 
-void RobotSystem::multibodyStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+void RobotSystem::jointLoadStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
   const int n = model_.nq;
-  const auto q = y.head(n);
-  const auto qd = y.segment(n, n);
   if (stops_.active()) {  // end stops act on the joints beside the drives
-    stops_.torques(q, qd, st.sig.tau_stop);
+    stops_.torques(y.head(n), y.segment(n, n), st.sig.tau_stop);
     st.tau += st.sig.tau_stop;
   }
   for (int k = 0; k < n; ++k)  // external load torques at the joints (the J.load_torque inputs)
     if (load_profiles_.active(st.loads, static_cast<size_t>(k)))
       st.tau[k] += load_profiles_.value(st.loads, static_cast<size_t>(k), t);
+}
+
+void RobotSystem::multibodyStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const int n = model_.nq;
+  const auto q = y.head(n);
+  const auto qd = y.segment(n, n);
   const multibody::Matrix6Xd* fext = nullptr;
   if (wrenches_ || !st.user_wrenches.empty()) {
     multibody::forwardKinematics(model_, st.data, q);
@@ -325,7 +329,8 @@ void RobotSystem::rotorReactionStage(const State& st) const {
   }
 }
 
-void RobotSystem::evaluate(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
+void RobotSystem::evaluate(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot,
+                           bool multibody) const {
   setpointStage(st, t);
   measurementStage(st, t, y);
   controllerStage(st, y, ydot);
@@ -334,11 +339,13 @@ void RobotSystem::evaluate(const State& st, double t, const Eigen::Ref<const Eig
   transmissionStage(st, y, ydot);
   frictionStage(st, y, ydot);
   jointTorqueStage(st);
-  multibodyStage(st, t, y);
-  rotorReactionStage(st);
+  jointLoadStage(st, t, y);
   const int n = model_.nq;
   Eigen::Map<Eigen::VectorXd> yd(ydot, n_states_);
   yd.head(n) = y.segment(n, n);
+  if (!multibody) return;  // (the Jacobian's drive-local evaluations: q̈ not needed, its rows left as they are)
+  multibodyStage(st, t, y);
+  rotorReactionStage(st);
   yd.segment(n, n) = st.sig.qdd;
 }
 
@@ -375,7 +382,7 @@ sim::JacobianStructure RobotSystem::jacobianStructure(std::vector<int>* drive_of
 
 void RobotSystem::jacobian(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                            const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
-                           Eigen::Ref<Eigen::MatrixXd> J) const {
+                           Eigen::Ref<Eigen::MatrixXd> J, sim::JacobianKind kind) const {
   const State& st = own<State>(state);
   const int n = model_.nq;
   Eigen::VectorXd& yp = st.jac_y;
@@ -386,11 +393,15 @@ void RobotSystem::jacobian(const sim::PlantState& state, double t, const Eigen::
   st.jac_tau0 = st.tau_out;
   st.jac_qdd0 = st.sig.qdd;
   const Eigen::VectorXd& tau_total = st.tau;
+  const bool with_fext = wrenches_ || !st.user_wrenches.empty();
+  if (kind == sim::JacobianKind::Analytic && !coupled_ && !crba_path_ && !with_fext) {
+    jacobianByJoint(st, t, y, f, inc, J);
+    return;
+  }
   // ∂q̈/∂τ_out = M⁻¹ G⁻ᵀ, column by column; q̈ is affine in the joint torque, so a unit difference is exact to
   // rounding. (The external wrenches st.fext of the base evaluation stay in place.)
   const auto q = y.head(n);
   const auto qd = y.segment(n, n);
-  const bool with_fext = wrenches_ || !st.user_wrenches.empty();
   for (int j = 0; j < n; ++j) {
     st.jac_tau = tau_total;
     if (coupled_)
@@ -412,14 +423,24 @@ void RobotSystem::jacobian(const sim::PlantState& state, double t, const Eigen::
     J.col(j) = (fp - f) / inc[j];
     yp[j] = y[j];
   }
-  // Drive columns: state c of every drive at once.
+  driveColumns(st, t, y, f, inc, J);
+}
+
+void RobotSystem::driveColumns(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                               const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
+                               Eigen::Ref<Eigen::MatrixXd> J) const {
+  // Drive columns: state c of every drive at once (a drive's states act on its own rows and, through its output
+  // torque τ_out,k, on q̈ by the column k of ∂q̈/∂τ_out = st.jac_P).
+  const int n = model_.nq;
+  Eigen::VectorXd& yp = st.jac_y;
+  Eigen::VectorXd& fp = st.jac_f;
   size_t max_m = 0;
   for (const auto& b : st.jac_structure.blocks) max_m = std::max(max_m, b.size());
   const auto& blocks = st.jac_structure.blocks;
   for (size_t c = 0; c < max_m; ++c) {
     for (const auto& b : blocks)
       if (b.size() > c) yp[b[c]] = y[b[c]] + inc[b[c]];
-    evaluate(st, t, yp, fp.data());
+    evaluate(st, t, yp, fp.data(), false);  // q̈'s rows come from τ_out through jac_P
     for (size_t bi = 0; bi < blocks.size(); ++bi) {
       const auto& b = blocks[bi];
       if (b.size() <= c) continue;
@@ -430,6 +451,43 @@ void RobotSystem::jacobian(const sim::PlantState& state, double t, const Eigen::
       yp[s] = y[s];
     }
   }
+}
+
+void RobotSystem::jacobianByJoint(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                  const Eigen::Ref<const Eigen::VectorXd>& f,
+                                  const Eigen::Ref<const Eigen::VectorXd>& inc, Eigen::Ref<Eigen::MatrixXd> J) const {
+  // Without a coupling matrix, external wrenches or the CRBA path, everything but the multibody depends on one joint
+  // each: drive k's states, its output torque and joint k's end stop see only q_k and q̇_k (the controllers read their
+  // own joint; the drives never read q̈). So the hub columns split into
+  //   ∂q̈/∂q_j = (∂ABA/∂q)(:, j) + M⁻¹(:, j) ∂τ_j/∂q_j,   ∂q̈/∂q̇_j = (∂ABA/∂q̇)(:, j) + M⁻¹(:, j) ∂τ_j/∂q̇_j,
+  // with the multibody's part from the analytic ABA derivatives [Carpentier2018] at the joint torques τ of the base
+  // point, and the joint-local parts (∂τ_j and drive j's rows) from two evaluations that perturb every q_j (then
+  // every q̇_j) at once. ∂q̈/∂τ_out = M⁻¹ too. O(n²) instead of the 2n + n evaluations O(n) each of the general path.
+  const int n = model_.nq;
+  Eigen::VectorXd& yp = st.jac_y;
+  Eigen::VectorXd& fp = st.jac_f;
+  st.jac_tau_base = st.tau;
+  multibody::computeAbaDerivatives(model_, st.jac_data, y.head(n), y.segment(n, n), st.jac_tau_base);
+  st.jac_P = st.jac_data.Minv;
+  const auto& blocks = st.jac_structure.blocks;
+  for (int part = 0; part < 2; ++part) {  // 0: the angles q, 1: the rates q̇
+    const int off = part * n;
+    for (int j = 0; j < n; ++j) yp[off + j] = y[off + j] + inc[off + j];
+    evaluate(st, t, yp, fp.data(), false);  // the joint torques and the drives' rows only
+    const Eigen::MatrixXd& dqdd = part == 0 ? st.jac_data.ddq_dq : st.jac_data.ddq_dqd;
+    for (int j = 0; j < n; ++j) {
+      const int s = off + j;
+      if (part == 1) J(j, s) = 1.0;  // q' = q̇
+      J.col(s).segment(n, n) = dqdd.col(j) + st.jac_P.col(j) * ((st.tau[j] - st.jac_tau_base[j]) / inc[s]);
+      yp[s] = y[s];
+    }
+    for (size_t bi = 0; bi < blocks.size(); ++bi) {
+      const int k = st.jac_block_drive[bi];
+      const int s = off + k;
+      for (int r : blocks[bi]) J(r, s) = (fp[r] - f[r]) / inc[s];
+    }
+  }
+  driveColumns(st, t, y, f, inc, J);
 }
 
 const RobotSignals& RobotSystem::driveSignals(const sim::PlantState& state, double t,

@@ -157,7 +157,7 @@ RobotSystem::RobotSystem(multibody::Model model, std::vector<DriveSpec> drives, 
 }
 
 RobotSystem::State::State(const RobotSystem& robot)
-    : PlantStateOf(robot), drives(robot.drives_), data(robot.model_), id_data(robot.id_model_) {
+    : PlantStateOf(robot), drives(robot.drives_), data(robot.model_), id_data(robot.id_model_), jac_data(robot.model_) {
   const int n = robot.model_.nq;
   port.assign(static_cast<size_t>(n), CommandPort::Setpoint);
   applied_port = port;

@@ -138,6 +138,11 @@ struct CvodeOptions {
   /// >= 1, and after every restart that does not reuse it. ROS2 keeps order 2 with an outdated Jacobian (a W-method);
   /// a stale one weakens only the damping of the fastest modes.
   int jacobian_every = 1;
+  /// BDF: let the plant's Jacobian use its analytic parts (sim::JacobianKind::Analytic: for the robot with drives the
+  /// multibody's columns from the analytic ABA derivatives, fewer right-hand sides). false (default): difference
+  /// quotients, as the shipped calibrations were made (BDF's result moves within its tolerance with its Jacobian).
+  /// The fixed-step method always uses the analytic parts. Read by sim::Simulator and sim::simulate.
+  bool analytic_jacobian = false;
 };
 
 /// BDF capped at order 2 with the given tolerances: the default for drive trains. BDF orders 3–5 are not

@@ -108,6 +108,16 @@ class EmptyPlantState final : public PlantStateOf<EmptyPlantState> {
   using PlantStateOf::PlantStateOf;
 };
 
+/// What a plant's Jacobian is made of (Plant::jacobian; CvodeOptions::analytic_jacobian).
+enum class JacobianKind {
+  /// Difference quotients only (organised by the plant's structure: equal to plain ones to rounding). BDF's default:
+  /// the shipped calibrations were made with it, and BDF's results depend on its Jacobian within the tolerances.
+  Differences,
+  /// Analytic parts where the plant has them (the robot with drives: the multibody's columns from the analytic ABA
+  /// derivatives, O(n²) instead of 2n right-hand sides). Always for the fixed-step method.
+  Analytic,
+};
+
 class Plant {
  public:
   Plant();
@@ -162,10 +172,12 @@ class Plant {
   /// CvodeOptions::plant_jacobian is false).
   virtual bool providesJacobian() const { return false; }
   /// J = ∂f/∂y at (t, y) with f = f(t, y), J zero on entry; `inc` holds the difference increment CVODE would use
-  /// per state (DifferenceJacobianFunction). Pure like derivatives(); must respect jacobianStructure().
+  /// per state (DifferenceJacobianFunction); `kind` says whether analytic parts may replace differences (a plant
+  /// without any ignores it). Pure like derivatives(); must respect jacobianStructure().
   virtual void jacobian(const PlantState& /*state*/, double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
                         const Eigen::Ref<const Eigen::VectorXd>& /*f*/,
-                        const Eigen::Ref<const Eigen::VectorXd>& /*inc*/, Eigen::Ref<Eigen::MatrixXd> /*J*/) const {}
+                        const Eigen::Ref<const Eigen::VectorXd>& /*inc*/, Eigen::Ref<Eigen::MatrixXd> /*J*/,
+                        JacobianKind /*kind*/) const {}
   /// Block structure of the Jacobian (empty: dense).
   virtual JacobianStructure jacobianStructure() const { return {}; }
 

@@ -191,6 +191,8 @@ class RobotSystem : public sim::Plant {
     mutable Eigen::MatrixXd jac_P;
     mutable sim::JacobianStructure jac_structure;
     mutable std::vector<int> jac_block_drive;
+    mutable multibody::Data jac_data;  ///< the analytic ABA derivatives of the Jacobian (robot_dynamics.cpp)
+    mutable Eigen::VectorXd jac_tau_base;
     double gauss(double sigma) { return sigma > 0.0 ? sigma * normal(engine) : 0.0; }
     void save(ByteWriter& out) const override;
     void load(ByteReader& in) override;
@@ -341,9 +343,12 @@ class RobotSystem : public sim::Plant {
   /// affine in the joint torques). With the same increments the result equals plain difference quotients of every
   /// column to rounding (tested), at about a quarter of their evaluations on the UR5 twin.
   bool providesJacobian() const override { return true; }
+  /// JacobianKind::Analytic, without a coupling matrix, external wrenches or reflected rotor inertias (the CRBA
+  /// path): the multibody's columns from the analytic ABA derivatives and two evaluations that perturb every joint at
+  /// once (jacobianByJoint, robot_dynamics.cpp); otherwise as above.
   void jacobian(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                 const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
-                Eigen::Ref<Eigen::MatrixXd> J) const override;
+                Eigen::Ref<Eigen::MatrixXd> J, sim::JacobianKind kind) const override;
   sim::JacobianStructure jacobianStructure() const override;
   /// The same, and for each block the index of its drive.
   sim::JacobianStructure jacobianStructure(std::vector<int>* drive_of_block) const;
@@ -352,7 +357,18 @@ class RobotSystem : public sim::Plant {
 
  private:
   // The right-hand side, stage by stage as the signals flow (each fills the state's signals and its part of ẏ).
-  void evaluate(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
+  // `multibody` false: everything up to the joint torques (st.tau) and the drives' rows of ẏ, not q̈ (its rows of
+  // ydot are left as they were).
+  void evaluate(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot,
+                bool multibody = true) const;
+  // The Jacobian's drive columns (the general path and jacobianByJoint), and its joint-local fast path (no coupling,
+  // no external wrenches, ABA): robot_dynamics.cpp.
+  void driveColumns(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                    const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
+                    Eigen::Ref<Eigen::MatrixXd> J) const;
+  void jacobianByJoint(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                       const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
+                       Eigen::Ref<Eigen::MatrixXd> J) const;
   // The reference at t (`anchored`: plus the relative replay's anchors).
   void setpointStage(const State& st, double t, bool anchored = true) const;
   void measurementStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
@@ -375,6 +391,7 @@ class RobotSystem : public sim::Plant {
   void transmissionStage(const State& st, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
   void frictionStage(const State& st, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const;
   void jointTorqueStage(const State& st) const;
+  void jointLoadStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;  // stops, loads
   void multibodyStage(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y) const;
   void rotorReactionStage(const State& st) const;
   void checkJoint(int joint, const char* what) const;
