@@ -153,12 +153,16 @@ struct FixedStepIntegrator::Impl {
                               "], " + stateName(i) + ", = " + formatNumber(f1[i]) +
                               ") at t = " + formatNumber(at + delta) + " s (while differencing it in time)",
                           at + delta, "RHS_NONFINITE", opts.component);
-    for (Eigen::Index j = 0; j < n; ++j)
-      for (Eigen::Index i = 0; i < n; ++i)
-        if (!std::isfinite(J(i, j)))
-          throw SolverError(prefix() + ": the Jacobian has a non-finite entry J(" + std::to_string(i) + ", " +
-                                std::to_string(j) + ") at t = " + formatNumber(at) + " s",
-                            at, "RHS_NONFINITE", opts.component);
+    if (!J.allFinite())
+      for (Eigen::Index j = 0; j < n; ++j)
+        for (Eigen::Index i = 0; i < n; ++i)
+          if (!std::isfinite(J(i, j)))
+            throw SolverError(prefix() + ": the Jacobian has a non-finite entry J(" + std::to_string(i) + ", " +
+                                  std::to_string(j) + ") (" + stateName(i) + " by " + stateName(j) +
+                                  ") at t = " + formatNumber(at) +
+                                  " s: the state has left the model's range (a step too large "
+                                  "for the dynamics, or jacobian_every too large: smaller solver.step or BDF)",
+                              at, "RHS_NONFINITE", opts.component);
     ++stats.jac_evals;
     jac_valid = true;
     steps_since_jac = 0;

@@ -330,8 +330,9 @@ void RobotSystem::rotorReactionStage(const State& st) const {
 }
 
 void RobotSystem::evaluate(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot,
-                           bool multibody) const {
-  setpointStage(st, t);
+                           Pass pass) const {
+  // Under sampled control the right-hand side reads the held controller outputs, not the reference.
+  if (pass == Pass::Signals || !sampled()) setpointStage(st, t);
   measurementStage(st, t, y);
   controllerStage(st, y, ydot);
   powerElectronicsStage(st);
@@ -343,7 +344,7 @@ void RobotSystem::evaluate(const State& st, double t, const Eigen::Ref<const Eig
   const int n = model_.nq;
   Eigen::Map<Eigen::VectorXd> yd(ydot, n_states_);
   yd.head(n) = y.segment(n, n);
-  if (!multibody) return;  // (the Jacobian's drive-local evaluations: q̈ not needed, its rows left as they are)
+  if (pass == Pass::DrivesOnly) return;  // (the Jacobian's drive-local evaluations: its q̈ rows left as they are)
   multibodyStage(st, t, y);
   rotorReactionStage(st);
   yd.segment(n, n) = st.sig.qdd;
@@ -351,7 +352,7 @@ void RobotSystem::evaluate(const State& st, double t, const Eigen::Ref<const Eig
 
 void RobotSystem::derivatives(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                               Eigen::Ref<Eigen::VectorXd> ydot) const {
-  evaluate(own<State>(state), t, y, ydot.data());
+  evaluate(own<State>(state), t, y, ydot.data(), Pass::Derivatives);
 }
 
 sim::JacobianStructure RobotSystem::jacobianStructure() const { return jacobianStructure(nullptr); }
@@ -389,7 +390,7 @@ void RobotSystem::jacobian(const sim::PlantState& state, double t, const Eigen::
   Eigen::VectorXd& fp = st.jac_f;
   yp = y;
   // The base point: the drives' output torques and the total joint torque (drives, end stops) behind q̈.
-  evaluate(st, t, y, fp.data());
+  evaluate(st, t, y, fp.data(), Pass::Derivatives);
   st.jac_tau0 = st.tau_out;
   st.jac_qdd0 = st.sig.qdd;
   const Eigen::VectorXd& tau_total = st.tau;
@@ -419,7 +420,7 @@ void RobotSystem::jacobian(const sim::PlantState& state, double t, const Eigen::
   // Hub columns: whole difference quotients.
   for (int j = 0; j < 2 * n; ++j) {
     yp[j] = y[j] + inc[j];
-    evaluate(st, t, yp, fp.data());
+    evaluate(st, t, yp, fp.data(), Pass::Derivatives);
     J.col(j) = (fp - f) / inc[j];
     yp[j] = y[j];
   }
@@ -440,7 +441,7 @@ void RobotSystem::driveColumns(const State& st, double t, const Eigen::Ref<const
   for (size_t c = 0; c < max_m; ++c) {
     for (const auto& b : blocks)
       if (b.size() > c) yp[b[c]] = y[b[c]] + inc[b[c]];
-    evaluate(st, t, yp, fp.data(), false);  // q̈'s rows come from τ_out through jac_P
+    evaluate(st, t, yp, fp.data(), Pass::DrivesOnly);  // q̈'s rows come from τ_out through jac_P
     for (size_t bi = 0; bi < blocks.size(); ++bi) {
       const auto& b = blocks[bi];
       if (b.size() <= c) continue;
@@ -473,7 +474,7 @@ void RobotSystem::jacobianByJoint(const State& st, double t, const Eigen::Ref<co
   for (int part = 0; part < 2; ++part) {  // 0: the angles q, 1: the rates q̇
     const int off = part * n;
     for (int j = 0; j < n; ++j) yp[off + j] = y[off + j] + inc[off + j];
-    evaluate(st, t, yp, fp.data(), false);  // the joint torques and the drives' rows only
+    evaluate(st, t, yp, fp.data(), Pass::DrivesOnly);  // the joint torques and the drives' rows only
     const Eigen::MatrixXd& dqdd = part == 0 ? st.jac_data.ddq_dq : st.jac_data.ddq_dqd;
     for (int j = 0; j < n; ++j) {
       const int s = off + j;
@@ -493,7 +494,7 @@ void RobotSystem::jacobianByJoint(const State& st, double t, const Eigen::Ref<co
 const RobotSignals& RobotSystem::driveSignals(const sim::PlantState& state, double t,
                                               const Eigen::Ref<const Eigen::VectorXd>& y) const {
   const State& st = own<State>(state);
-  evaluate(st, t, y, st.tmp.data());
+  evaluate(st, t, y, st.tmp.data(), Pass::Signals);
   return st.sig;
 }
 

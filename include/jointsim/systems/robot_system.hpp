@@ -357,10 +357,11 @@ class RobotSystem : public sim::Plant {
 
  private:
   // The right-hand side, stage by stage as the signals flow (each fills the state's signals and its part of ẏ).
-  // `multibody` false: everything up to the joint torques (st.tau) and the drives' rows of ẏ, not q̈ (its rows of
-  // ydot are left as they were).
-  void evaluate(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot,
-                bool multibody = true) const;
+  // Signals: every signal (the reference too); Derivatives: ẏ (under sampled control without the reference, which
+  // only the samples read); DrivesOnly: as Derivatives up to the joint torques (st.tau) and the drives' rows of ẏ,
+  // not q̈ (its rows of ydot are left as they were).
+  enum class Pass { Signals, Derivatives, DrivesOnly };
+  void evaluate(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot, Pass pass) const;
   // The Jacobian's drive columns (the general path and jacobianByJoint), and its joint-local fast path (no coupling,
   // no external wrenches, ABA): robot_dynamics.cpp.
   void driveColumns(const State& st, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
