@@ -694,16 +694,21 @@ class Simulator:
     @staticmethod
     def from_robot(path: PathLike, q0: Optional[Sequence[float]] = None, rtol: float = 1e-6, atol: float = 1e-9,
                    max_order: int = 2, max_step: float = 0.0, max_gamma_change: float = 0.3,
-                   max_state: float = DEFAULT_MAX_STATE) -> "Simulator":
+                   max_state: float = DEFAULT_MAX_STATE, method: str = "bdf", step: float = 0.0) -> "Simulator":
         """A simulator over a robot-with-drives file (e.g. data_path("robots/ur5_drives.yaml")) starting at rest at
         q0 [rad], shape (dof,) (default zeros), with the drives holding it; BDF of order <= max_order with rtol and
         atol [state units], steps of at most max_step [s] (0: unlimited), a new Newton matrix when h*beta0 changes by
         more than max_gamma_change (relative; 0.5 suits a 1 kHz loop, docs/performance.md). max_state: the bound on
-        every state's magnitude (see set_limits; 0: none)."""
+        every state's magnitude (see set_limits; 0: none). method="rosenbrock": the fixed-step method instead of BDF
+        (ROS2, steps of `step` [s] on the grid k*step; docs/design.md "Fixed-step integration"), for a loop closed
+        in Python at a fixed period: a step that divides the period keeps every advance() at the same cost."""
         q = None if q0 is None else _array(q0, "q0")
+        if not isinstance(method, str):
+            raise TypeError(f"method: expected 'bdf' or 'rosenbrock', got {type(method).__name__}")
         core = _core.Simulator.from_robot(_input_file(path, "robot file"), q, _float(rtol, "rtol"),
                                           _float(atol, "atol"), _int(max_order, "max_order"),
-                                          _float(max_step, "max_step"), _float(max_gamma_change, "max_gamma_change"))
+                                          _float(max_step, "max_step"), _float(max_gamma_change, "max_gamma_change"),
+                                          method, _float(step, "step"))
         sim = Simulator(core)
         sim.set_limits(max_state=max_state)
         return sim

@@ -271,10 +271,20 @@ struct PySnapshot {
   }
 };
 
-sim::CvodeOptions solverFrom(double rtol, double atol, int max_order, double max_step, double max_gamma_change) {
+sim::CvodeOptions solverFrom(double rtol, double atol, int max_order, double max_step, double max_gamma_change,
+                             const std::string& method, double step) {
   sim::CvodeOptions o;
   o.max_gamma_change = max_gamma_change;
-  o.method = sim::Method::BDF;
+  if (method == "bdf")
+    o.method = sim::Method::BDF;
+  else if (method == "rosenbrock")
+    o.method = sim::Method::Rosenbrock;
+  else
+    throw InputError("Simulator.from_robot: method: expected 'bdf' or 'rosenbrock' (the fixed-step method), got '" +
+                     method + "'");
+  if (method != "rosenbrock" && step != 0.0)
+    throw InputError("Simulator.from_robot: step: only with method='rosenbrock'");
+  o.fixed_step = step;
   o.rtol = rtol;
   o.atol = atol;
   o.max_order = max_order;
@@ -631,18 +641,19 @@ PYBIND11_MODULE(_core, m) {
       .def_static(
           "from_robot",
           [](const std::string& path, const py::object& q0, double rtol, double atol, int max_order, double max_step,
-             double max_gamma_change) {
+             double max_gamma_change, const std::string& method, double step) {
             auto robot = std::make_shared<systems::RobotSystem>(systems::loadRobotWithDrives(path));
             if (!q0.is_none()) robot->setInitialPositions(Eigen::VectorXd(vec(q0.cast<Array>(), robot->dof(), "q0")));
             PySimulator s;
             s.plant = robot;
             s.robot_ptr = robot.get();
-            s.sim = std::make_unique<sim::Simulator>(s.plant,
-                                                     solverFrom(rtol, atol, max_order, max_step, max_gamma_change));
+            s.sim = std::make_unique<sim::Simulator>(s.plant, solverFrom(rtol, atol, max_order, max_step,
+                                                                         max_gamma_change, method, step));
             return s;
           },
           py::arg("path"), py::arg("q0") = py::none(), py::arg("rtol") = 1e-6, py::arg("atol") = 1e-9,
-          py::arg("max_order") = 2, py::arg("max_step") = 0.0, py::arg("max_gamma_change") = 0.3)
+          py::arg("max_order") = 2, py::arg("max_step") = 0.0, py::arg("max_gamma_change") = 0.3,
+          py::arg("method") = "bdf", py::arg("step") = 0.0)
       .def_property_readonly("name",
                              [](PySimulator& s) {
                                const Use use(s.gate, "Simulator");

@@ -657,3 +657,33 @@ def test_frames_and_paths_of_the_wrong_kind_are_input_errors():
         jointsim.frame_placement(model, np.zeros(6), 3)
     with pytest.raises(jointsim.InputError, match="NUL"):
         jointsim.load_robot(str(jointsim.data_path("robots/ur5.urdf")) + "\0.yaml")
+
+
+def test_fixed_step_method_from_a_robot_file_and_from_an_experiment():
+    """method="rosenbrock": a fixed number of steps per advance (the grid of `step`), the same motion as BDF to far
+    below the drives' resolution; from an experiment file through its solver keys; bad choices raise."""
+    path = jointsim.data_path("robots/ur5_drives.yaml")
+    q0 = [0.3, -1.2, 1.2, -1.5, -1.5708, 0.0]
+    fixed = jointsim.Simulator.from_robot(path, q0, method="rosenbrock", step=2.5e-5)
+    ref = jointsim.Simulator.from_robot(path, q0, rtol=1e-10, atol=1e-12)
+    for sim in (fixed, ref):
+        for k in range(sim.dof):
+            sim.set_port(k, "voltage")
+        sim.set_commands([2.0, -1.0, 1.0, 0.5, -0.5, 1.0])  # V
+    fixed.advance(0.02)
+    ref.advance(0.02)
+    assert fixed.steps == 800  # 0.02 s / 25 µs, no more
+    np.testing.assert_allclose(fixed.joint_positions, ref.joint_positions, atol=1e-6)
+    assert np.abs(fixed.joint_positions - np.array(q0)).max() > 1e-4  # it moved
+    exp = jointsim.data_path("experiments/ur5_excitation.yaml")
+    sampled = jointsim.Simulator.from_experiment(
+        exp, {"+control.rate": 20000, "solver.method": "rosenbrock", "duration": 0.01})
+    sampled.advance(0.01)
+    assert sampled.steps == 200  # one step per 50 µs control period
+    with pytest.raises(jointsim.InputError, match="integer fraction"):
+        jointsim.Simulator.from_experiment(
+            exp, {"+control.rate": 20000, "solver.method": "rosenbrock", "+solver.step": 3e-5})
+    with pytest.raises(jointsim.InputError, match="'bdf' or 'rosenbrock'"):
+        jointsim.Simulator.from_robot(path, method="rk4")
+    with pytest.raises(jointsim.InputError, match="needs its step"):
+        jointsim.Simulator.from_robot(path, method="rosenbrock")  # continuous control: no period to take
