@@ -5,7 +5,10 @@
 // the voltage): damping injected through the compliant gear from the link rate would excite the gear and
 // friction modes the twin models, which a real drive avoids the same way.
 //
-//   pd_voltage_ur5 [ROBOT_WITH_DRIVES.yaml] [DURATION_S] [RTOL]
+//   pd_voltage_ur5 [ROBOT_WITH_DRIVES.yaml] [DURATION_S] [RTOL] [FIXED_STEP_S]
+//
+// FIXED_STEP_S > 0: the fixed-step method (ROS2, solver method rosenbrock; docs/design.md "Fixed-step integration")
+// with that step instead of BDF at RTOL; a step dividing the 1 ms period keeps every loop iteration at the same cost.
 //
 // Prints the tracking error at the end and the real-time factor of the loop; exits 1 when a joint is further
 // than 5 mrad from its reference 1.5 s after the step (the test suite runs it).
@@ -22,6 +25,7 @@ int main(int argc, char** argv) try {
   const std::string robot_file = argc > 1 ? argv[1] : "config/robots/ur5_drives.yaml";
   const double duration = argc > 2 ? std::stod(argv[2]) : 2.0;
   const double rtol = argc > 3 ? std::stod(argv[3]) : 1e-4;
+  const double fixed_step = argc > 4 ? std::stod(argv[4]) : 0.0;
 
   systems::RobotSystem robot = systems::loadRobotWithDrives(robot_file);
   const int n = robot.dof();
@@ -35,6 +39,10 @@ int main(int argc, char** argv) try {
   // 1 kHz"; test SampledPd.LooseToleranceStaysCloseToTightRun); the production rtol 1e-6 is about half as fast.
   sim::CvodeOptions solver = sim::stiffDriveSolver(rtol, 1e-9);
   solver.max_gamma_change = 0.5;  // fewer Newton matrix factorisations at the samples' stops and restarts
+  if (fixed_step > 0.0) {
+    solver.method = sim::Method::Rosenbrock;
+    solver.fixed_step = fixed_step;
+  }
   sim::Simulator sim(robot, solver);
   // The robot is only read; the run's inputs live in the simulator's state.
   for (int k = 0; k < n; ++k) robot.setCommandPort(sim.plantState(), k, systems::CommandPort::Voltage);
@@ -67,6 +75,7 @@ int main(int argc, char** argv) try {
   std::printf("PD voltage control of '%s' at 1 kHz: %.3f s simulated in %.3f s (real-time factor %.1f), %ld restarts\n",
               robot.model().name.c_str(), sim.time(), wall, sim.time() / wall, sim.restarts());
   const sim::SolverStats st = sim.stats();
+  if (fixed_step > 0.0) std::printf("fixed-step method, step %g s\n", fixed_step);
   std::printf("solver (rtol %g): %ld steps, %ld RHS evaluations, %ld Jacobians (+%ld reused at restarts), %ld Newton "
               "matrix factorisations, %ld error test failures\n",
               rtol, st.steps, st.rhs_evals, st.jac_evals, st.jac_reused, st.lin_setups, st.error_test_failures);
