@@ -22,6 +22,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "sim/block_linear_solver.hpp"
+#include "sim/callback_exception.hpp"
 
 static_assert(std::is_same<realtype, double>::value, "SUNDIALS must be built in double precision");
 
@@ -215,16 +216,7 @@ struct CvodeIntegrator::Impl {
     std::ostringstream msg;
     if (callback_exception) {
       t = callback_exception_time;
-      std::string original = "unknown exception";
-      try {
-        std::rethrow_exception(callback_exception);
-      } catch (const ComponentError& e) {
-        component = e.component();
-        original = e.what();
-      } catch (const std::exception& e) {
-        original = e.what();
-      } catch (...) {
-      }
+      const std::string original = callbackExceptionText(callback_exception, component);
       msg << "CVODE integrator";
       if (!component.empty()) msg << " (" << component << ")";
       msg << ": " << callback_exception_source << " threw at t = " << formatTime(t) << " s: " << original << " ["

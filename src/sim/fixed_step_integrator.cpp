@@ -11,6 +11,7 @@
 #include "jointsim/common/error.hpp"
 #include "jointsim/common/text.hpp"
 #include "sim/block_linear_solver.hpp"
+#include "sim/callback_exception.hpp"
 
 namespace jointsim::sim {
 
@@ -82,16 +83,8 @@ struct FixedStepIntegrator::Impl {
     try {
       call();
     } catch (...) {
-      std::string component = opts.component, original = "unknown exception";
-      try {
-        throw;
-      } catch (const ComponentError& e) {
-        component = e.component();
-        original = e.what();
-      } catch (const std::exception& e) {
-        original = e.what();
-      } catch (...) {
-      }
+      std::string component = opts.component;
+      const std::string original = callbackExceptionText(std::current_exception(), component);
       std::throw_with_nested(SolverError(prefix() + ": " + what + " threw at t = " + formatNumber(at) +
                                              " s: " + original + " [flag RHS_EXCEPTION]",
                                          at, "RHS_EXCEPTION", component));
