@@ -125,11 +125,14 @@ std::vector<std::string> tableColumns(const Plant& plant) {
   return columns;
 }
 
+JacobianKind jacobianKind(const CvodeOptions& o) {
+  return o.analytic_jacobian || o.method == Method::Rosenbrock ? JacobianKind::Analytic : JacobianKind::Differences;
+}
+
 void installPlantJacobian(const Plant& plant, const PlantState& state, Integrator& integ) {
   const CvodeOptions& o = integ.options();
   if (!plant.providesJacobian() || !o.plant_jacobian || o.method == Method::Adams) return;
-  const JacobianKind kind =
-      o.analytic_jacobian || o.method == Method::Rosenbrock ? JacobianKind::Analytic : JacobianKind::Differences;
+  const JacobianKind kind = jacobianKind(o);
   integ.setDifferenceJacobian(
       [&plant, &state, kind](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                              const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,

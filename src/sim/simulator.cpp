@@ -131,8 +131,7 @@ void Simulator::build(const CvodeOptions& solver) {
   }
   const CvodeOptions& o = integ_->options();
   if (p->providesJacobian() && o.plant_jacobian && o.method != Method::Adams) {
-    const JacobianKind kind =
-        o.analytic_jacobian || o.method == Method::Rosenbrock ? JacobianKind::Analytic : JacobianKind::Differences;
+    const JacobianKind kind = jacobianKind(o);
     integ_->setDifferenceJacobian(
         [this, p, kind](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                         const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,

@@ -99,6 +99,10 @@ constexpr double kKeepHistoryLimit = 1.0;
 /// integrator's options ask for it (plant_jacobian; BDF or the fixed-step method); before integ.initialize().
 void installPlantJacobian(const Plant& plant, const PlantState& state, Integrator& integ);
 
+/// The Jacobian the plant is asked for under `options`: analytic parts for the fixed-step method or with
+/// analytic_jacobian, difference quotients otherwise.
+JacobianKind jacobianKind(const CvodeOptions& options);
+
 /// The step of the fixed-step method (Method::Rosenbrock) for `plant` given solver.step `step` [s]: 0 takes the plant's
 /// sample period (the control period); with a sampled plant a step must be that period or an integer fraction of it
 /// (returned as T_s / k exactly). InputError naming the plant otherwise.
