@@ -45,6 +45,9 @@ void addRunCommand(CLI::App& app) {
                 "  solver: %ld steps, %ld RHS evaluations, %ld error-test failures\n",
                 r.experiment.c_str(), r.status.c_str(), r.csv_path.c_str(), r.summary_path.c_str(), r.sim_time_s,
                 r.wall_time_s, r.real_time_factor, r.stats.steps, r.stats.rhs_evals, r.stats.error_test_failures);
+    if (r.stats.split_steps > 0)
+      std::printf("  fixed step: %ld steps shortened to follow a growing mode (solver.step too long there)\n",
+                  r.stats.split_steps);
     if (!r.csv_path.empty())
       std::printf("  next:    read the log (one column per signal, SI units) or draw it: %s plot %s\n",
                   programName().c_str(), std::filesystem::path(r.csv_path).parent_path().string().c_str());

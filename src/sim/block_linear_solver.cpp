@@ -47,6 +47,13 @@ void luSolveInPlace(const Eigen::PartialPivLU<Eigen::MatrixXd>& f, Eigen::Vector
   x.swap(work);
 }
 
+/// sign(det A) of A = P⁻¹ L U: the permutation's parity (inside Eigen's determinant()) times the signs of U's
+/// diagonal. The product itself may overflow to ±inf, which keeps its sign; the pivots are non-zero (checked).
+int luSign(const Eigen::PartialPivLU<Eigen::MatrixXd>& f) {
+  if (f.rows() == 0) return 1;
+  return f.determinant() < 0.0 ? -1 : 1;
+}
+
 /// Block elimination of a bordered block-diagonal matrix A (JacobianStructure): with H the hub and B_k the blocks,
 ///   D_k = A(B_k, B_k), C_k = A(B_k, H), E_k = A(H, B_k), W_k = D_k⁻¹ C_k, S = A(H, H) − Σ E_k W_k,
 /// and A x = b is solved by z_k = D_k⁻¹ b_k, x_H = S⁻¹ (b_H − Σ E_k z_k), x_k = z_k − W_k x_H.
@@ -86,6 +93,13 @@ struct BlockPlan {
   Eigen::MatrixXd S;
   Eigen::PartialPivLU<Eigen::MatrixXd> luS;
   Eigen::VectorXd r, xr, wr;
+
+  /// sign(det A) = Π sign(det D_k) · sign(det S).
+  int determinantSign() const {
+    int sign = luSign(luS);
+    for (const auto& f : lu) sign *= luSign(f);
+    return sign;
+  }
 
   /// A pivot that is zero or not finite, or a ratio of smallest to largest pivot below 1e-13 (a lower bound of the
   /// condition number: such a block is at least that ill-conditioned): the dense LU is used instead. A cheap test
@@ -261,6 +275,12 @@ void DirectSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   }
   x = b;
   luSolveInPlace(c.lu, x, impl_->work);
+}
+
+int DirectSolver::determinantSign() const {
+  const EigenDenseContent& c = *static_cast<const EigenDenseContent*>(impl_->holder.get());
+  if (c.plan && c.blocks_factored) return c.plan->determinantSign();
+  return luSign(c.lu);
 }
 
 SUNLinearSolver makeEigenDenseSolver(Eigen::Index n, SUNContext ctx, const JacobianStructure& structure) {

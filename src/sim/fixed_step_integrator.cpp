@@ -23,6 +23,8 @@ constexpr double kNoTime = std::numeric_limits<double>::quiet_NaN();  // unset t
 /// A step shorter than this fraction of the fixed step is not taken: the grid point or stop time this close is
 /// merged with the one after it (rounding of k·h against a stop time computed another way).
 constexpr double kMergeFraction = 1e-6;
+/// Halvings of a step whose linearisation has an unstable real mode it cannot follow (see step()): 2¹⁰ parts.
+constexpr int kMaxHalvings = 10;
 /// Illinois iterations per located root (the bracket shrinks superlinearly; 100 ulp are met in far fewer).
 constexpr int kMaxRootIterations = 100;
 }  // namespace
@@ -49,6 +51,8 @@ struct FixedStepIntegrator::Impl {
   bool jac_valid = false;
   int steps_since_jac = 0;
   double factored_h = kNoTime;
+  // After a step was shortened (step()): the shorter step, kept up to the end the step aimed at [s].
+  double sub_h = 0.0, sub_until = kNoTime;
 
   // Workspace; ft = ∂f/∂t, by a difference quotient with the Jacobian (part of W: as outdated as it).
   Eigen::VectorXd f0, f1, k1, k2, ytmp, rhs2, inc, ft;
@@ -173,6 +177,19 @@ struct FixedStepIntegrator::Impl {
     factored_h = hs;
   }
 
+  /// The error of a step that no halving lets follow an unstable mode: names the state whose own growth rate
+  /// ∂fᵢ/∂yᵢ is largest (where the mode lives, as a rule: a negative damping).
+  SolverError unstableStep(double hs) const {
+    Eigen::Index worst = 0;
+    const double rate = J.diagonal().maxCoeff(&worst);
+    return SolverError(prefix() + ": the step is too large for the dynamics at t = " + formatNumber(t) +
+                           " s: the linearisation has a growing mode faster than 1/(γ·" + formatNumber(hs) +
+                           " s) that a fixed step cannot follow (largest growth rate ∂f/∂y = " + formatNumber(rate) +
+                           " 1/s, on " + stateName(worst) +
+                           "); stopped rather than return a wrong result: a smaller solver.step, or BDF",
+                       t, "STEP_UNSTABLE", opts.component);
+  }
+
   /// End of the next step from t: the next grid point, or the stop time before it.
   double stepEnd() const {
     const double merge = kMergeFraction * h;
@@ -183,13 +200,51 @@ struct FixedStepIntegrator::Impl {
     return tg;
   }
 
-  /// One ROS2 step from (t, y) to t1; fills the Hermite segment.
+  /// One ROS2 step from (t, y) towards t1, or a shorter one (see below); fills the Hermite segment.
+  ///
+  /// A step that cannot follow an instability is shortened. ROS2's stability function R(z) = (1 + (1 − 2γ)z)/(1 − γz)²
+  /// is below 1 in magnitude for real z = hλ > 1.6, so a long step damps a mode that grows (λ > 0) instead of
+  /// following it. On the UR5 drives such modes are the LuGre friction's negative damping: where the bristle
+  /// deflection passes its steady state (σ₀z > g), ∂ż/∂v = 1 − σ₀z/g < 0 and the σ₁ż term of the friction torque
+  /// acts on a wrist joint's small inertia as a damping σ₁(1 − σ₀z/g) < 0, with λ measured from 5e3 to 2e7 1/s for
+  /// a few tens of µs at a break-away. Damping them held a wrist joint at its start for good at h = 100 µs (a wrong
+  /// result with no error; docs/design.md). det(I − γhW) = Π(1 − γhλᵢ) over W's eigenvalues is negative exactly
+  /// when an odd number of them are real with γhλ > 1 (a complex pair contributes |1 − γhλ|² > 0), and the
+  /// factorisation gives its sign for nothing. Such a step is halved (same W) until the sign is positive, then
+  /// quartered, and the steps after it keep that length (each checked again) up to the end this step aimed at (the
+  /// grid point, or a stop time): a remainder of γhλ just below 1 would sit next to R's pole. No halving enough
+  /// (2¹⁰) is an error. The check catches every step in the region where R damps growth (hλ > 1.6); steps with
+  /// 0.15 < hλ < 0.59 are not flagged and follow the growth inaccurately (|R| > 1, but R(0.5) = −9.7). Not caught:
+  /// an even number of such modes, unstable complex pairs, and a W too old to show them (jacobian_every > 1).
   void step(double t1) {
-    const double hs = t1 - t;
+    if (sub_h > 0.0) {
+      const double merge = kMergeFraction * h;
+      if (t >= sub_until - merge)
+        sub_h = 0.0;
+      else if (t1 - t > sub_h)  // (the last one ends where the shortened step aimed: no rounding remainder)
+        t1 = t + sub_h >= sub_until - merge ? std::min(t1, sub_until) : t + sub_h;
+    }
+    double hs = t1 - t;
 
     evalRhs(t, y, f0);
     if (!jac_valid || steps_since_jac >= opts.jacobian_every) evalJacobian(t, y);
     if (factored_h != hs) factor(hs, t);
+    if (solver->determinantSign() < 0) {
+      int halvings = 0;
+      while (solver->determinantSign() < 0) {
+        if (++halvings > kMaxHalvings) throw unstableStep(hs);
+        hs *= 0.5;
+        factor(hs, t);
+      }
+      // γhλ < 1 only moves the step below R's pole (R(0.5) = −9.7 against e^0.5 = 1.65): two more halvings put hλ
+      // below 0.15, where R follows e^{hλ} to 1 %.
+      hs *= 0.25;
+      factor(hs, t);
+      sub_h = hs;
+      sub_until = t1;
+      t1 = t + hs;
+      ++stats.split_steps;
+    }
     // [Verwer1999, eq. 2.2] with W and ∂f/∂t from the last Jacobian evaluation.
     rhs2 = f0 + (kGamma * hs) * ft;
     solver->solve(rhs2, k1);
@@ -334,6 +389,7 @@ void FixedStepIntegrator::initialize(double t0, const Eigen::Ref<const Eigen::Ve
   m.y = y0;
   m.initialized = true;
   m.stepped = m.seg_valid = m.root_pending = m.root_found = false;
+  m.sub_h = 0.0;
   if (!reuse_jacobian) m.jac_valid = false;
   if (m.n_roots > 0) {
     m.evalRoots(t0, m.y, m.g0);

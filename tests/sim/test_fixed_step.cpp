@@ -116,6 +116,74 @@ TEST(FixedStep, AnUnresolvedOscillatorRingsDownAsTheStabilityFunctionPredicts) {
   EXPECT_GT(std::abs(R), 0.5);
 }
 
+// y' = λy with λ > 0 and a step far beyond 1/λ. Unchecked, ROS2 would damp the growth: R(λh) = R(3) = −0.37 per step,
+// so y(0.05) = (−0.37)⁵ = −0.007 instead of e¹⁵ = 3.3e6 — the failure that held a UR5 wrist joint at an unstable
+// equilibrium. The step is halved while det(I − γhW) = 1 − γhλ < 0, then quartered, and that length is kept up to
+// the grid point: the states follow the exact recurrence of that rule, and the growth e^{λt} to the accuracy of ROS2
+// at hλ ≈ 0.09.
+TEST(FixedStep, AGrowingModeFasterThanTheStepIsFollowedByShorterStepsNotDamped) {
+  const double h = 0.01, t_end = 0.05;
+  for (double lambda : {300.0, 1000.0}) {
+    FixedStepIntegrator integ(
+        1, [lambda](double, const auto& y, auto yd) { yd[0] = lambda * y[0]; }, fixedStep(h));
+    integ.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+    Eigen::VectorXd y(1);
+    EXPECT_EQ(integ.advance(t_end, y), t_end);
+    // The rule, step by step: from t towards the next grid point; a step with γhλ > 1 is halved until γhλ ≤ 1, then
+    // quartered, and the next steps keep that length up to that grid point.
+    auto R = [](double z) { return (1.0 + (1.0 - 2.0 * kGamma) * z) / ((1.0 - kGamma * z) * (1.0 - kGamma * z)); };
+    double t = 0.0, yr = 1.0, sub = 0.0, until = 0.0;
+    long steps = 0, splits = 0;
+    while (t < t_end - 1e-12) {
+      const double grid = (std::floor(t / h + 1e-9) + 1.0) * h, merge = 1e-6 * h;
+      if (sub > 0.0 && t >= until - merge) sub = 0.0;
+      double end = grid;
+      if (sub > 0.0 && grid - t > sub) end = t + sub >= until - merge ? until : t + sub;
+      double r = end - t;
+      if (kGamma * r * lambda > 1.0) {
+        until = end;
+        while (kGamma * r * lambda > 1.0) r *= 0.5;
+        r *= 0.25;
+        sub = r;
+        end = t + r;
+        ++splits;
+      }
+      yr *= R(lambda * r);
+      t = end;
+      ++steps;
+    }
+    EXPECT_EQ(integ.stats().split_steps, splits) << lambda;
+    EXPECT_EQ(integ.steps(), steps) << lambda;
+    EXPECT_NEAR(y[0] / yr, 1.0, 1e-9) << lambda;
+    // Against the exact growth: 0.78 (λ = 300) and 0.58 (λ = 1000) of e^{λt} after e¹⁵ and e⁵⁰ (a rate error of 1.7 %
+    // and 1.1 %).
+    const double ratio = y[0] / std::exp(lambda * t_end);
+    EXPECT_GT(ratio, 0.5) << lambda;
+    EXPECT_LT(ratio, 1.0) << lambda;
+  }
+  // A mode no halving resolves (γλh/2¹⁰ > 1): an error naming the time and the state, not a damped result.
+  FixedStepIntegrator fast(
+      1, [](double, const auto& y, auto yd) { yd[0] = 1e9 * y[0]; }, fixedStep(1e-3));
+  fast.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+  Eigen::VectorXd y(1);
+  try {
+    fast.advance(0.01, y);
+    FAIL() << "no error";
+  } catch (const SolverError& e) {
+    EXPECT_TRUE(contains(e.what(), "the step is too large for the dynamics at t = 0 s"));
+    EXPECT_TRUE(contains(e.what(), "on y[0]"));
+    EXPECT_EQ(e.flag(), "STEP_UNSTABLE");
+    EXPECT_EQ(e.time(), 0.0);
+  }
+  // A decaying mode, however fast, is never split (det > 0 for λ < 0).
+  FixedStepIntegrator decay(
+      1, [](double, const auto& y, auto yd) { yd[0] = -1e9 * y[0]; }, fixedStep(1e-3));
+  decay.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+  decay.advance(0.01, y);
+  EXPECT_EQ(decay.stats().split_steps, 0);
+  EXPECT_EQ(decay.steps(), 10);
+}
+
 TEST(FixedStep, ARootIsLocatedOnTheStepAndTheEarliestOfTwoIsReported) {
   // A falling ball y'' = −g from 1 m: y is quadratic in t, which ROS2 and the cubic interpolant reproduce exactly, so
   // the root y = 0 (t = √(2/g)) is located to the root tolerance.

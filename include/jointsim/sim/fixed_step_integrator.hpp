@@ -16,6 +16,11 @@
 /// with the plant's JacobianStructure), plus a Jacobian and one more right-hand side when they are refreshed; there is
 /// no error estimate, no step rejection and no nonlinear iteration that could fail.
 ///
+/// A step whose linearisation has a growing real mode it would damp instead of follow (det(I − γhW) < 0: γhλ > 1) is
+/// shortened — halved until the sign is positive, then quartered, that length kept up to the grid point — and counted
+/// in SolverStats::split_steps; when 2¹⁰ halvings are not enough the run stops (STEP_UNSTABLE). docs/design.md, "Growing
+/// modes", has the measurements on the UR5 drives' LuGre break-aways that made this necessary.
+///
 /// Steps end on the grid k·fixed_step (k integer). A stop time between two grid points (a time event) ends a short
 /// step on it, after which the grid is met again. Root functions are checked at the end of every step; a sign change
 /// is located on the step's cubic Hermite interpolant (from yₙ, f(tₙ, yₙ), yₙ₊₁, f(tₙ₊₁, yₙ₊₁)) by the Illinois
@@ -48,7 +53,8 @@ class FixedStepIntegrator final : public Integrator {
   void initialize(double t0, const Eigen::Ref<const Eigen::VectorXd>& y0, bool reuse_jacobian) override;
   /// Steps up to t_out [s] (or a root, or the stop time before it) and writes y(t) into y_out; returns that time. The
   /// last step may pass t_out (unless a stop time is set there): y(t_out) is then interpolated.
-  /// \throws SolverError (time, component) on a non-finite right-hand side or state, a singular I − γhW, an exception
+  /// \throws SolverError (time, component) on a non-finite right-hand side or state, a singular I − γhW, a growing mode
+  /// no shortened step follows (STEP_UNSTABLE), an exception
   /// of a callback (flag RHS_EXCEPTION, the original nested), max_num_steps steps in one call (CV_TOO_MUCH_WORK) or the
   /// step budget (STEP_BUDGET).
   double advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_out) override;
