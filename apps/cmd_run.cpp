@@ -45,6 +45,10 @@ void addRunCommand(CLI::App& app) {
                 "  solver: %ld steps, %ld RHS evaluations, %ld error-test failures\n",
                 r.experiment.c_str(), r.status.c_str(), r.csv_path.c_str(), r.summary_path.c_str(), r.sim_time_s,
                 r.wall_time_s, r.real_time_factor, r.stats.steps, r.stats.rhs_evals, r.stats.error_test_failures);
+    if (r.period_wall.periods > 0)
+      std::printf("  control period wall time: p50 %.3g µs, p99 %.3g µs, max %.3g µs (%ld periods)\n",
+                  1e6 * r.period_wall.p50_s, 1e6 * r.period_wall.p99_s, 1e6 * r.period_wall.max_s,
+                  r.period_wall.periods);
     if (r.stats.split_steps > 0)
       std::printf("  fixed step: %ld steps shortened to follow a growing mode (solver.step too long there)\n",
                   r.stats.split_steps);

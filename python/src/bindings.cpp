@@ -811,6 +811,17 @@ PYBIND11_MODULE(_core, m) {
                                const Use use(s.gate, "Simulator");
                                return s.sim->stats().steps;
                              })
+      .def_property_readonly("period_wall_times",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               const sim::PeriodWallTimes w = s.sim->periodWallTimes();
+                               py::dict d;
+                               d["periods"] = w.periods;
+                               d["p50"] = w.p50_s;
+                               d["p99"] = w.p99_s;
+                               d["max"] = w.max_s;
+                               return d;
+                             })
       .def_property_readonly("dof",
                              [](PySimulator& s) {
                                const Use use(s.gate, "Simulator");

@@ -216,6 +216,11 @@ std::string summaryJson(Experiment& e, const std::string& started, const Summary
   s["wall_time_s"] = r.wall_time_s;
   s["real_time_factor"] = r.realTimeFactor();
   solverStatsJson(s["solver_stats"], r.stats);
+  if (r.period_wall.periods > 0)
+    s["control_period_wall_time_s"] = {{"periods", r.period_wall.periods},
+                                       {"p50", r.period_wall.p50_s},
+                                       {"p99", r.period_wall.p99_s},
+                                       {"max", r.period_wall.max_s}};
   if (const systems::JointLimitMonitor& m = e.jointLimits(); m.enabled()) {
     auto& j = s["joint_limits"] = nlohmann::ordered_json::object();
     j["mode"] = systems::jointLimitModeName(m.settings().mode);
@@ -386,6 +391,7 @@ RunReport runAndRecord(Experiment& experiment, const RunOptions& options) {
   report.sim_time_s = r.sim_time_s;
   report.wall_time_s = r.wall_time_s;
   report.real_time_factor = r.realTimeFactor();
+  report.period_wall = r.period_wall;
   if (experiment.jointLimits().settings().mode == systems::JointLimitMode::Warn)
     report.warnings = experiment.jointLimits().describe();
   io::writeFileAtomically(report.summary_path, summaryJson(experiment, started, f, r));

@@ -186,6 +186,7 @@ SimulationResult simulate(const Plant& plant, PlantState& state, const SimulateO
     result.samples = sim->samples();
     result.restarts = std::max(0L, sim->restarts() - 1);  // not the start
     result.input_jumps = sim->inputJumps();
+    result.period_wall = sim->periodWallTimes();
     result.sim_time_s = t_reached;
     result.wall_time_s = wall();
   };

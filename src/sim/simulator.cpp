@@ -203,6 +203,7 @@ void Simulator::begin(double t0, const Eigen::VectorXd& y0, std::unique_ptr<Plan
   y_ = y0;
   y_work_ = y0;
   samples_ += Ts_ > 0.0 ? 1 : 0;
+  last_sample_clock_ = std::numeric_limits<double>::quiet_NaN();
   sample_k_ = 1;
   t_sample_ = Ts_ > 0.0 ? t0 + Ts_ : kInf;
   events_list_.clear();
@@ -271,6 +272,7 @@ void Simulator::restore(const Snapshot& snapshot) {
   sample_k_ = snapshot.sample_k_;
   t_sample_ = snapshot.t_sample_;
   seen_revision_ = snapshot.seen_revision_;
+  last_sample_clock_ = std::numeric_limits<double>::quiet_NaN();
   events_list_.clear();
   horizon_ = t_;
   next_event_ = 0;
@@ -443,12 +445,40 @@ void Simulator::refreshEvents(double t_target) {
 }
 
 void Simulator::takeSample() {
+  const double now = clockSeconds();
+  if (!std::isnan(last_sample_clock_)) {
+    const double dt = now - last_sample_clock_;
+    const int bin = dt > 1e-7 ? std::min(kPeriodBins - 1, static_cast<int>(100.0 * std::log10(dt / 1e-7))) : 0;
+    ++period_hist_[static_cast<size_t>(bin)];
+    ++periods_;
+    period_max_ = std::max(period_max_, dt);
+  }
+  last_sample_clock_ = now;
   if (keep_history_ && !jump_) plant_->derivatives(*state_, t_, y_, f_old_);  // before the held inputs jump
   plant_->sample(*state_, t_, y_);
   ++samples_;
   t_sample_ = t0_ + static_cast<double>(++sample_k_) * Ts_;
   inputJumped();
   invalidate();
+}
+
+PeriodWallTimes Simulator::periodWallTimes() const {
+  PeriodWallTimes w;
+  w.periods = periods_;
+  w.max_s = period_max_;
+  if (periods_ == 0) return w;
+  auto quantile = [&](double q) {  // the upper edge of the bin holding the ⌈q·n⌉-th shortest period
+    const auto rank = static_cast<long>(std::ceil(q * static_cast<double>(periods_)));
+    long seen = 0;
+    for (int b = 0; b < kPeriodBins; ++b) {
+      seen += period_hist_[static_cast<size_t>(b)];
+      if (seen >= rank) return std::min(period_max_, 1e-7 * std::pow(10.0, (b + 1) / 100.0));
+    }
+    return period_max_;
+  };
+  w.p50_s = quantile(0.5);
+  w.p99_s = quantile(0.99);
+  return w;
 }
 
 void Simulator::inputJumped() {

@@ -680,6 +680,9 @@ def test_fixed_step_method_from_a_robot_file_and_from_an_experiment():
         exp, {"+control.rate": 20000, "solver.method": "rosenbrock", "duration": 0.01})
     sampled.advance(0.01)
     assert sampled.steps == 200  # one step per 50 µs control period
+    w = sampled.period_wall_times
+    assert w["periods"] == 198  # 201 samples at k·50 µs: the one at reset and the first after it start the clock
+    assert 0.0 < w["p50"] <= w["p99"] <= w["max"]
     with pytest.raises(jointsim.InputError, match="integer fraction"):
         jointsim.Simulator.from_experiment(
             exp, {"+control.rate": 20000, "solver.method": "rosenbrock", "+solver.step": 3e-5})

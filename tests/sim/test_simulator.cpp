@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -243,6 +244,34 @@ class SampledDecay : public sim::Plant {
  private:
   std::vector<std::string> names_{"y[1]"};
 };
+
+// The wall time per control period counts what happens between two samples, the caller's work included: a caller
+// that sleeps 2 ms after every call makes every period at least that long.
+TEST(Simulator, WallTimePerControlPeriodIncludesTheCallersWorkBetweenSamples) {
+  SampledDecay p;
+  sim::Simulator s(p, tight());
+  EXPECT_EQ(s.periodWallTimes().periods, 0);
+  const auto wall0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < 10; ++k) {
+    s.advance(0.1);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  const sim::PeriodWallTimes w = s.periodWallTimes();
+  // Samples at 0 (reset: no clock yet) and at 0.1 … 0.9 (the one due at 1.0 is taken by the next call): the first
+  // sample after the reset starts the clock.
+  EXPECT_EQ(s.samples(), 10);
+  EXPECT_EQ(w.periods, s.samples() - 2);
+  EXPECT_GE(w.p50_s, 2e-3);
+  EXPECT_LE(w.p50_s, w.p99_s);
+  EXPECT_LE(w.p99_s, w.max_s);
+  EXPECT_LE(w.max_s * 0.999, wall);
+  // A restore breaks the chain: the period across it is not counted.
+  const sim::Snapshot snap = s.snapshot();
+  s.restore(snap);
+  s.advance(0.1);
+  EXPECT_EQ(s.periodWallTimes().periods, w.periods);
+}
 
 TEST(Simulator, SamplesAndTimeEventsAtTheirInstantsWhateverTheStep) {
   SampledDecay p;

@@ -137,6 +137,7 @@ struct RunReport {
   double real_time_factor = 0.0;  ///< sim_time_s / wall_time_s
   sim::SolverStats stats;
   std::vector<std::string> warnings;  ///< e.g. joints that left their range (joint_limits: warn), one line each
+  sim::PeriodWallTimes period_wall;   ///< wall time per control period (sampled plants; zero otherwise)
 };
 
 /// The outcome of a run in memory.

@@ -35,6 +35,7 @@
 /// DIVERGED) or by a stop request (sim::Interrupted, flag INTERRUPTED) leaves the simulator at the last internal
 /// step it completed, ready for the next call.
 
+#include <array>
 #include <limits>
 #include <memory>
 #include <string>
@@ -190,6 +191,9 @@ class Simulator {
   /// Input jumps (samples, input changes) integrated through with the history kept (input_jump KeepHistory, where
   /// the jump is small enough: CvodeIntegrator::jumpError ≤ 1; larger ones restart).
   long inputJumps() const { return input_jumps_; }
+  /// Wall-clock time per control period since construction (PeriodWallTimes; a period spanning a reset, setState or
+  /// restore is not counted).
+  PeriodWallTimes periodWallTimes() const;
 
  private:
   // sim::simulate is this simulator with an output grid and the run's budgets: it runs on the caller's plant state,
@@ -244,6 +248,13 @@ class Simulator {
   double horizon_ = 0.0;
   size_t next_event_ = 0;
   long events_ = 0, samples_ = 0, restarts_ = 0, input_jumps_ = 0;
+  // Wall time per control period: a histogram of 100 bins per decade from 1e-7 s (bin 0 holds shorter ones, the
+  // last longer ones), the longest, and the clock at the last sample (NaN: none since a reset/setState/restore).
+  static constexpr int kPeriodBins = 900;
+  std::array<long, kPeriodBins> period_hist_{};
+  long periods_ = 0;
+  double period_max_ = 0.0;
+  double last_sample_clock_ = std::numeric_limits<double>::quiet_NaN();
   // The call's limits and why the right-hand side ended it (empty: it did not).
   AdvanceLimits limits_;
   std::vector<char> bounded_;   // per state: subject to max_state (not Plant::unboundedState)
