@@ -120,6 +120,17 @@ struct BlockPlan {
 
   /// Factorises A (column-major n × n); false when a block or the Schur complement is unusable.
   bool factor(const Eigen::Map<const Eigen::MatrixXd>& A) {
+    return factorEntries([&A](int i, int j) { return A(i, j); });
+  }
+
+  /// Factorises A = I − c·J without forming it (only the structure's entries are read).
+  bool factorIdentityMinus(const Eigen::MatrixXd& J, double c) {
+    return factorEntries([&J, c](int i, int j) { return (i == j ? 1.0 : 0.0) - c * J(i, j); });
+  }
+
+  /// The factorisation, reading A(i, j) through `A`.
+  template <class Entry>
+  bool factorEntries(const Entry& A) {
     const size_t nb = blocks.size();
     const auto h = static_cast<Eigen::Index>(hub.size());
     for (Eigen::Index j = 0; j < h; ++j)
@@ -239,6 +250,15 @@ int eigenFree(SUNLinearSolver S) {
 
 }  // namespace
 
+/// The dense partial-pivoting LU of A into c.lu; false at a zero or non-finite pivot.
+static bool denseFactor(EigenDenseContent& c, const Eigen::MatrixXd& A) {
+  c.lu.compute(A);
+  const auto& m = c.lu.matrixLU();
+  for (Eigen::Index k = 0; k < m.rows(); ++k)
+    if (!(m(k, k) != 0.0) || !std::isfinite(m(k, k))) return false;
+  return true;
+}
+
 struct DirectSolver::Impl {
   // The content's type is local to this file: held type-erased (a field of it would give Impl internal linkage).
   Impl(Eigen::Index n, const JacobianStructure& structure) : holder(std::make_shared<EigenDenseContent>(n)), work(n) {
@@ -247,6 +267,7 @@ struct DirectSolver::Impl {
   EigenDenseContent& content() { return *static_cast<EigenDenseContent*>(holder.get()); }
   std::shared_ptr<void> holder;
   Eigen::VectorXd work;
+  Eigen::MatrixXd dense;  // I − cJ when the block elimination cannot be used (factorIdentityMinus)
 };
 
 DirectSolver::DirectSolver(Eigen::Index n, const JacobianStructure& structure)
@@ -260,11 +281,7 @@ bool DirectSolver::factor(const Eigen::MatrixXd& A) {
     if (c.blocks_factored) return true;
     ++c.dense_fallbacks;
   }
-  c.lu.compute(A);
-  const auto& m = c.lu.matrixLU();
-  for (Eigen::Index k = 0; k < m.rows(); ++k)
-    if (!(m(k, k) != 0.0) || !std::isfinite(m(k, k))) return false;
-  return true;
+  return denseFactor(c, A);
 }
 
 void DirectSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
@@ -275,6 +292,18 @@ void DirectSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   }
   x = b;
   luSolveInPlace(c.lu, x, impl_->work);
+}
+
+bool DirectSolver::factorIdentityMinus(const Eigen::MatrixXd& J, double c) {
+  EigenDenseContent& c_ = impl_->content();
+  if (c_.plan) {
+    c_.blocks_factored = c_.plan->factorIdentityMinus(J, c);
+    if (c_.blocks_factored) return true;
+    ++c_.dense_fallbacks;
+  }
+  impl_->dense = -c * J;
+  impl_->dense.diagonal().array() += 1.0;
+  return denseFactor(c_, impl_->dense);
 }
 
 int DirectSolver::determinantSign() const {

@@ -27,6 +27,8 @@ class DirectSolver {
   DirectSolver& operator=(const DirectSolver&) = delete;
   /// Factorises A (n × n); false when it is singular (a zero pivot of the dense LU).
   bool factor(const Eigen::MatrixXd& A);
+  /// Factorises A = I − c·J; with a structure without forming A (its entries outside the structure are not read).
+  bool factorIdentityMinus(const Eigen::MatrixXd& J, double c);
   /// x = A⁻¹ b (b and x of size n; they may not alias).
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
   /// The sign of det A of the last successful factor(): +1 or −1 (the product of the pivots' signs and of the

@@ -47,7 +47,7 @@ struct FixedStepIntegrator::Impl {
   long step_limit = 0;      // lifetime step budget (0: none)
 
   // Jacobian and the factorised iteration matrix I − γ h_f W.
-  Eigen::MatrixXd J, M;
+  Eigen::MatrixXd J;
   bool jac_valid = false;
   int steps_since_jac = 0;
   double factored_h = kNoTime;
@@ -150,31 +150,37 @@ struct FixedStepIntegrator::Impl {
                               "], " + stateName(i) + ", = " + formatNumber(f1[i]) +
                               ") at t = " + formatNumber(at + delta) + " s (while differencing it in time)",
                           at + delta, "RHS_NONFINITE", opts.component);
-    if (!J.allFinite())
-      for (Eigen::Index j = 0; j < n; ++j)
-        for (Eigen::Index i = 0; i < n; ++i)
-          if (!std::isfinite(J(i, j)))
-            throw SolverError(prefix() + ": the Jacobian has a non-finite entry J(" + std::to_string(i) + ", " +
-                                  std::to_string(j) + ") (" + stateName(i) + " by " + stateName(j) +
-                                  ") at t = " + formatNumber(at) +
-                                  " s: the state has left the model's range (a step too large "
-                                  "for the dynamics, or jacobian_every too large: smaller solver.step or BDF)",
-                              at, "RHS_NONFINITE", opts.component);
     ++stats.jac_evals;
     jac_valid = true;
     steps_since_jac = 0;
     factored_h = kNoTime;
   }
 
+  /// Factorises I − γ·hs·W. A non-finite entry of W is found here, where the factorisation fails (its pivots are then
+  /// not finite), instead of by a scan of every entry at each Jacobian (3 µs of a 30 µs twin step).
   void factor(double hs, double at) {
-    M = -kGamma * hs * J;
-    M.diagonal().array() += 1.0;
     ++stats.lin_setups;
-    if (!solver->factor(M))
+    if (!solver->factorIdentityMinus(J, kGamma * hs)) {
+      nonFiniteJacobianCheck(at);
       throw SolverError(prefix() + ": I - γhW is singular at t = " + formatNumber(at) + " s (step " + formatNumber(hs) +
                             " s)",
                         at, "LSETUP_FAIL", opts.component);
+    }
     factored_h = hs;
+  }
+
+  /// Throws naming the first non-finite entry of W (the Jacobian evaluated at `at`), if there is one.
+  void nonFiniteJacobianCheck(double at) const {
+    if (J.allFinite()) return;
+    for (Eigen::Index j = 0; j < n; ++j)
+      for (Eigen::Index i = 0; i < n; ++i)
+        if (!std::isfinite(J(i, j)))
+          throw SolverError(prefix() + ": the Jacobian has a non-finite entry J(" + std::to_string(i) + ", " +
+                                std::to_string(j) + ") (" + stateName(i) + " by " + stateName(j) +
+                                ") at t = " + formatNumber(at) +
+                                " s: the state has left the model's range (a step too large "
+                                "for the dynamics, or jacobian_every too large: smaller solver.step or BDF)",
+                            at, "RHS_NONFINITE", opts.component);
   }
 
   /// The error of a step that no halving lets follow an unstable mode: names the state whose own growth rate
@@ -370,7 +376,6 @@ FixedStepIntegrator::FixedStepIntegrator(int n, RhsFunction rhs, CvodeOptions op
   m.h = m.opts.fixed_step;
   m.rhs = std::move(rhs);
   m.J.setZero(n, n);
-  m.M.setZero(n, n);
   for (Eigen::VectorXd* v :
        {&m.f0, &m.f1, &m.k1, &m.k2, &m.ytmp, &m.rhs2, &m.inc, &m.seg_y0, &m.seg_f0, &m.seg_y1, &m.seg_f1, &m.y, &m.ft})
     v->setZero(n);
