@@ -1,7 +1,11 @@
 // Robot-with-drives files: the multibody description plus one drive per joint (format in the header).
 #include "jointsim/systems/robot_with_drives.hpp"
 
+#include <algorithm>
+#include <utility>
+
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 #include "jointsim/drive/dc_motor.hpp"
 #include "jointsim/drive/drive_yaml.hpp"
 #include "jointsim/io/yaml.hpp"
@@ -56,17 +60,50 @@ control::JointControllerParams readController(const YamlValue& node) {
 }  // namespace
 
 const std::vector<std::string>& driveComponents() {
-  static const std::vector<std::string> names{"motor", "transmission", "friction"};
+  static const std::vector<std::string> names{"motor", "transmission", "friction", "sensors"};
   return names;
 }
+
+namespace {
+
+/// The sensors' parameter table (the drive file's `sensors` keys), each row with the field it reads and writes.
+std::vector<std::pair<drive::ParameterInfo, double SensorSpec::*>> sensorRows() {
+  using R = drive::ParameterRange;
+  const auto none = drive::ParameterRole::None;
+  return {{{"joint_bias", "rad", 0.0, R{}, none, "constant offset of the measured joint angle"},
+           &SensorSpec::joint_bias},
+          {{"joint_quantum", "rad", 0.0, R::nonNegative(), none, "joint encoder resolution (0: none)"},
+           &SensorSpec::joint_quantum},
+          {{"motor_quantum", "rad", 0.0, R::nonNegative(), none,
+            "motor encoder resolution (0: none; > 0: speed = Δ(quantised angle)/T_s)"},
+           &SensorSpec::motor_quantum},
+          {{"current_quantum", "A", 0.0, R::nonNegative(), none, "current sensor resolution (0: none)"},
+           &SensorSpec::current_quantum},
+          {{"joint_noise", "rad", 0.0, R::nonNegative(), none, "std of Gaussian noise on the joint angle"},
+           &SensorSpec::joint_noise},
+          {{"motor_velocity_noise", "rad/s", 0.0, R::nonNegative(), none, "std of Gaussian noise on the motor speed"},
+           &SensorSpec::motor_velocity_noise},
+          {{"current_noise", "A", 0.0, R::nonNegative(), none, "std of Gaussian noise on the current"},
+           &SensorSpec::current_noise}};
+}
+
+}  // namespace
 
 std::vector<drive::ParameterInfo> driveParameterTable(const DriveSpec& d, const std::string& component) {
   if (component == "motor") return drive::parameterTable(d.motor);
   if (component == "transmission")
     return d.transmission ? d.transmission->parameters() : std::vector<drive::ParameterInfo>{};
   if (component == "friction") return d.friction ? d.friction->parameters() : std::vector<drive::ParameterInfo>{};
+  if (component == "sensors") {
+    std::vector<drive::ParameterInfo> table;
+    for (auto [info, field] : sensorRows()) {
+      info.value = d.sensors.*field;
+      table.push_back(info);
+    }
+    return table;
+  }
   throw InputError("drive of joint '" + d.joint + "': no component '" + component +
-                   "' (expected motor, transmission or friction)");
+                   "' (expected motor, transmission, friction or sensors)");
 }
 
 void applyDriveParameters(std::vector<DriveSpec>& drives, const std::vector<DriveParameterChange>& changes) {
@@ -89,8 +126,20 @@ void applyDriveParameters(std::vector<DriveSpec>& drives, const std::vector<Driv
       } else if (c.component == "friction") {
         if (!d->friction) throw InputError("the drive of joint '" + c.joint + "' has no friction");
         d->friction = d->friction->withParameters(one);
+      } else if (c.component == "sensors") {
+        const auto rows = sensorRows();
+        const auto row = std::find_if(rows.begin(), rows.end(), [&](const auto& r) { return r.first.key == c.key; });
+        if (row == rows.end()) {
+          std::string keys;
+          for (const auto& r : rows) keys += (keys.empty() ? "" : ", ") + r.first.key;
+          throw InputError("sensors: no parameter '" + c.key + "' (the parameters: " + keys + ")");
+        }
+        if (!row->first.range.contains(c.value))
+          throw InputError("sensors: " + c.key + " = " + formatNumber(c.value) + " " + row->first.unit +
+                           " is outside its range " + row->first.range.text());
+        d->sensors.*(row->second) = c.value;
       } else {
-        throw InputError("no component '" + c.component + "' (expected motor, transmission or friction)");
+        throw InputError("no component '" + c.component + "' (expected motor, transmission, friction or sensors)");
       }
     } catch (const InputError& e) {
       throw InputError(at + e.what());

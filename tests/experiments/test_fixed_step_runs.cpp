@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -84,6 +85,55 @@ TEST(FixedStepTwin, AStepTooLongForAGrowingModeIsShortenedOrTheRunStops) {
     EXPECT_THAT(e.what(), HasSubstr("wrist"));
     EXPECT_THAT(e.what(), HasSubstr("smaller solver.step, or BDF"));
     EXPECT_EQ(e.flag(), "STEP_UNSTABLE");
+  }
+}
+
+// config/experiments/ur5_excitation_realtime.yaml: the excitation's trajectory, 20 kHz sampled control, the drives'
+// sensors from its drives: key, the fixed-step method; solver.method=bdf turns it into a CVODE run.
+TEST(FixedStepTwin, TheShippedRealtimeFileIsTheExcitationWithSensorsAndTheFixedStep) {
+  const std::string file = test::sourcePath("config/experiments/ur5_excitation_realtime.yaml");
+  auto run = [&](std::vector<std::string> sets) {
+    sets.push_back("duration=0.02");
+    auto e = experiments::loadExperiment(file, sets);
+    return experiments::runInMemory(*e);
+  };
+  const auto fixed = run({});
+  EXPECT_EQ(fixed.result.stats.steps, 400);  // 0.02 s / 50 µs: one step per control period
+  EXPECT_EQ(fixed.result.stats.last_order, 2);
+  EXPECT_EQ(fixed.result.period_wall.periods, 398);  // 401 samples: the one at t = 0 and the next start the clock
+  const auto bdf = run({"solver.method=bdf"});
+  EXPECT_GT(bdf.result.stats.error_test_failures, 0);  // CVODE (a fixed-step method has no error test)
+  // The same trajectory as ur5_excitation.yaml: the set-points agree to the last bit.
+  auto plain = experiments::loadExperiment(test::sourcePath("config/experiments/ur5_excitation.yaml"),
+                                           {"duration=0.02", "+control.rate=20000"});
+  const auto ref = experiments::runInMemory(*plain);
+  for (const char* c : {"q_set_shoulder_pan_joint[rad]", "q_set_wrist_3_joint[rad]"})
+    EXPECT_EQ(fixed.log[c], ref.log[c]) << c;
+  // The sensors act: the measured currents are quantised to 1 mA, and the noise seed changes the run.
+  const Eigen::VectorXd fb = fixed.log["q_fb_elbow_joint[rad]"];
+  for (Eigen::Index i = 0; i < fb.size(); ++i) EXPECT_NEAR(std::remainder(fb[i], 3.83e-4), 0.0, 1e-12) << i;
+  const auto other = run({"control.seed=2"});
+  EXPECT_NE(fixed.log["current_elbow_joint[A]"], other.log["current_elbow_joint[A]"]);
+}
+
+// A drive's sensors are parameters like any other (driveParameterTable "sensors"): bad keys and values are refused
+// naming the file, the key and the rule.
+TEST(FixedStepTwin, SensorChangesAreCheckedLikeEveryDriveParameter) {
+  const std::string file = test::sourcePath("config/experiments/ur5_excitation.yaml");
+  try {
+    experiments::loadExperiment(file, {"+drives.elbow_joint.sensors.current_noice=0.01"});
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("ur5_excitation.yaml"));
+    EXPECT_THAT(e.what(), HasSubstr("no parameter 'current_noice'"));
+    EXPECT_THAT(e.what(), HasSubstr("current_noise"));
+  }
+  try {
+    experiments::loadExperiment(file, {"+drives.elbow_joint.sensors.current_noise=-1"});
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("drives.elbow_joint.sensors.current_noise"));
+    EXPECT_THAT(e.what(), HasSubstr("outside its range"));
   }
 }
 

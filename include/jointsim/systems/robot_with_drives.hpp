@@ -39,7 +39,7 @@ struct DriveParameterChange {
 
 /// The components of a drive that have parameter tables.
 const std::vector<std::string>& driveComponents();
-/// The parameter table of `component` ("motor", "transmission", "friction") of drive `d`; empty for a drive without
+/// The parameter table of `component` ("motor", "transmission", "friction", "sensors") of drive `d`; empty for a drive without
 /// friction. \throws InputError for another component name.
 std::vector<drive::ParameterInfo> driveParameterTable(const DriveSpec& d, const std::string& component);
 /// Applies `changes` to the drives of their joints (new, validated components). \throws InputError prefixed with

@@ -41,11 +41,11 @@ void flattenNumbers(const YamlValue& node, const std::string& key, const std::st
 std::vector<systems::DriveParameterChange> readDriveChanges(const YamlValue& drives) {
   std::vector<systems::DriveParameterChange> out;
   if (!drives.defined()) return out;
-  drives.expectMap("a mapping {JOINT: {motor|transmission|friction: {KEY: VALUE}}}");
+  drives.expectMap("a mapping {JOINT: {motor|transmission|friction|sensors: {KEY: VALUE}}}");
   for (const std::string& joint : drives.keys()) {
     const YamlValue d = drives[joint];
-    d.expectMap("a mapping {motor|transmission|friction: {KEY: VALUE}} of the drive's parameters to change");
-    d.allowKeys({"motor", "transmission", "friction"});
+    d.expectMap("a mapping {motor|transmission|friction|sensors: {KEY: VALUE}} of the drive's parameters to change");
+    d.allowKeys({"motor", "transmission", "friction", "sensors"});
     for (const std::string& component : systems::driveComponents()) {
       const YamlValue c = d[component];
       if (!c.defined()) continue;
