@@ -50,7 +50,7 @@ void addRunCommand(CLI::App& app) {
                   1e6 * r.period_wall.p50_s, 1e6 * r.period_wall.p99_s, 1e6 * r.period_wall.max_s,
                   r.period_wall.periods);
     if (r.stats.split_steps > 0)
-      std::printf("  fixed step: %ld steps shortened to follow a growing mode (solver.step too long there)\n",
+      std::printf("  fixed step: shortened %ld time(s) to follow a growing mode (solver.step too long there)\n",
                   r.stats.split_steps);
     if (!r.csv_path.empty())
       std::printf("  next:    read the log (one column per signal, SI units) or draw it: %s plot %s\n",
