@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "jointsim/common/text.hpp"
 #include "jointsim/experiments/experiment.hpp"
 
 using namespace jointsim;
@@ -67,9 +68,10 @@ static void NoiseSeeds_FixedStepAgainstBdfReference(benchmark::State& st) {
   double wall_fixed = 0.0, wall_ref = 0.0;
   for (auto _ : st) {
     for (int seed = 1; seed <= kSeeds; ++seed) {
-      auto f = experiments::loadExperiment(
-          file, {"duration=" + std::to_string(kDuration), "log_rate=20000", "control.seed=" + std::to_string(seed),
-                 "+solver.step=" + std::to_string(5e-5 / static_cast<double>(st.range(0)))});
+      auto f =
+          experiments::loadExperiment(file, {"duration=" + std::to_string(kDuration), "log_rate=20000",
+                                             "control.seed=" + std::to_string(seed),
+                                             "+solver.step=" + formatNumber(5e-5 / static_cast<double>(st.range(0)))});
       const auto rf = experiments::runInMemory(*f);
       fixed.push_back(statistics(rf.log, joints));
       wall_fixed += rf.result.wall_time_s;

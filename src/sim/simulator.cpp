@@ -472,7 +472,8 @@ PeriodWallTimes Simulator::periodWallTimes() const {
     long seen = 0;
     for (int b = 0; b < kPeriodBins; ++b) {
       seen += period_hist_[static_cast<size_t>(b)];
-      if (seen >= rank) return std::min(period_max_, 1e-7 * std::pow(10.0, (b + 1) / 100.0));
+      if (seen >= rank)  // (the last bin holds everything longer than 100 s: its quantile is the maximum)
+        return b == kPeriodBins - 1 ? period_max_ : std::min(period_max_, 1e-7 * std::pow(10.0, (b + 1) / 100.0));
     }
     return period_max_;
   };

@@ -100,7 +100,7 @@ TEST(FixedStepTwin, TheShippedRealtimeFileIsTheExcitationWithSensorsAndTheFixedS
   const auto fixed = run({});
   EXPECT_EQ(fixed.result.stats.steps, 400);  // 0.02 s / 50 µs: one step per control period
   EXPECT_EQ(fixed.result.stats.last_order, 2);
-  EXPECT_EQ(fixed.result.period_wall.periods, 398);  // 401 samples: the one at t = 0 and the next start the clock
+  EXPECT_EQ(fixed.result.period_wall.periods, 398);  // 400 samples (0 … 19.95 ms): the first two start the clock
   const auto bdf = run({"solver.method=bdf"});
   EXPECT_GT(bdf.result.stats.error_test_failures, 0);  // CVODE (a fixed-step method has no error test)
   // The same trajectory as ur5_excitation.yaml: the set-points agree to the last bit.
@@ -109,7 +109,7 @@ TEST(FixedStepTwin, TheShippedRealtimeFileIsTheExcitationWithSensorsAndTheFixedS
   const auto ref = experiments::runInMemory(*plain);
   for (const char* c : {"q_set_shoulder_pan_joint[rad]", "q_set_wrist_3_joint[rad]"})
     EXPECT_EQ(fixed.log[c], ref.log[c]) << c;
-  // The sensors act: the measured currents are quantised to 1 mA, and the noise seed changes the run.
+  // The sensors act: the measured joint angle lies on the 2^14 counts/rev grid, and the noise seed changes the run.
   const Eigen::VectorXd fb = fixed.log["q_fb_elbow_joint[rad]"];
   for (Eigen::Index i = 0; i < fb.size(); ++i) EXPECT_NEAR(std::remainder(fb[i], 3.83e-4), 0.0, 1e-12) << i;
   const auto other = run({"control.seed=2"});

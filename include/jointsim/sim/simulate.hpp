@@ -59,7 +59,8 @@ struct SimulateOptions {
 /// from a logarithmic histogram (100 bins per decade from 0.1 µs to 100 s) and are the upper edge of their bin, so at
 /// most 2.3 % above the true quantile; max is exact. All zero without a sampled part.
 struct PeriodWallTimes {
-  long periods = 0;    ///< periods measured (samples after the first since the last reset, setState or restore)
+  long periods = 0;    ///< periods measured since the simulator's construction (a period spanning a reset or a
+                       ///< restore is not one: the first sample after either starts the clock again)
   double p50_s = 0.0;  ///< median [s]
   double p99_s = 0.0;  ///< 99th percentile [s]
   double max_s = 0.0;  ///< longest [s]

@@ -191,8 +191,8 @@ class Simulator {
   /// Input jumps (samples, input changes) integrated through with the history kept (input_jump KeepHistory, where
   /// the jump is small enough: CvodeIntegrator::jumpError ≤ 1; larger ones restart).
   long inputJumps() const { return input_jumps_; }
-  /// Wall-clock time per control period since construction (PeriodWallTimes; a period spanning a reset, setState or
-  /// restore is not counted).
+  /// Wall-clock time per control period since construction (PeriodWallTimes; a period spanning a reset or a restore
+  /// is not counted).
   PeriodWallTimes periodWallTimes() const;
 
  private:
