@@ -23,8 +23,9 @@ constexpr double kNoTime = std::numeric_limits<double>::quiet_NaN();  // unset t
 /// A step shorter than this fraction of the fixed step is not taken: the grid point or stop time this close is
 /// merged with the one after it (rounding of k·h against a stop time computed another way).
 constexpr double kMergeFraction = 1e-6;
-/// Halvings of a step whose linearisation has an unstable real mode it cannot follow (see step()): 2¹⁰ parts.
-constexpr int kMaxHalvings = 10;
+/// Halvings of a step whose linearisation has an unstable real mode it cannot follow (see step()): the shortest
+/// step is 2⁻¹⁶ of the fixed step (15 ns at 1 ms: the UR5 wrists' break-away modes, up to 2e7 1/s, need 30 ns).
+constexpr int kMaxHalvings = 16;
 /// Illinois iterations per located root (the bracket shrinks superlinearly; 100 ulp are met in far fewer).
 constexpr int kMaxRootIterations = 100;
 }  // namespace
@@ -196,6 +197,9 @@ struct FixedStepIntegrator::Impl {
                        t, "STEP_UNSTABLE", opts.component);
   }
 
+  /// The shortest step a shortening may reach [s] (see step()).
+  double shortest() const { return std::ldexp(h, -kMaxHalvings); }
+
   /// End of the next step from t: the next grid point, or the stop time before it.
   double stepEnd() const {
     const double merge = kMergeFraction * h;
@@ -217,37 +221,59 @@ struct FixedStepIntegrator::Impl {
   /// result with no error; docs/design.md). det(I − γhW) = Π(1 − γhλᵢ) over W's eigenvalues is negative exactly
   /// when an odd number of them are real with γhλ > 1 (a complex pair contributes |1 − γhλ|² > 0), and the
   /// factorisation gives its sign for nothing. Such a step is halved (same W) until the sign is positive, then
-  /// quartered, and the steps after it keep that length (each checked again) up to the end this step aimed at (the
-  /// grid point, or a stop time): a remainder of γhλ just below 1 would sit next to R's pole. No halving enough
-  /// (2¹⁰) is an error. The check catches every step in the region where R damps growth (hλ > 1.6); steps with
-  /// 0.15 < hλ < 0.59 are not flagged and follow the growth inaccurately (|R| > 1, but R(0.5) = −9.7). Not caught:
-  /// an even number of such modes, unstable complex pairs, and a W too old to show them (jacobian_every > 1).
+  /// quartered (γhλ < 1 only moves the step below R's pole: R(0.5) = −9.7 against e^0.5 = 1.65; a quarter of it puts
+  /// hλ below 0.15, where R follows e^{hλ} to 1 %), and the sign is checked again (a second growing mode can make
+  /// it positive while the first is still too fast). The steps after it keep that length up to the end the first
+  /// shortened step aimed at (the grid point, or a stop time), each checked again and shortened again if need be;
+  /// each also factors W at 8× its length, and a positive sign there (the growth has slowed 8×, or ended) doubles
+  /// the length, so a break-away of tens of µs does not leave the rest of a long control period in nanosecond steps.
+  /// A remainder to the aim shorter than the step length is taken as it is (shorter: safe). A step below 2⁻¹⁶ of
+  /// the fixed step that still has the sign is an error. Not caught: steps with 0.15 < hλ < 0.59 outside such runs
+  /// (|R| > 1, but not e^{hλ}), an even number of too-fast growing modes, unstable complex pairs, and a W too old to
+  /// show them (jacobian_every > 1).
   void step(double t1) {
-    if (sub_h > 0.0) {
-      const double merge = kMergeFraction * h;
-      if (t >= sub_until - merge)
-        sub_h = 0.0;
-      else if (t1 - t > sub_h)  // (the last one ends where the shortened step aimed: no rounding remainder)
-        t1 = t + sub_h >= sub_until - merge ? std::min(t1, sub_until) : t + sub_h;
-    }
-    double hs = t1 - t;
-
+    const double merge = kMergeFraction * h;
     evalRhs(t, y, f0);
     if (!jac_valid || steps_since_jac >= opts.jacobian_every) evalJacobian(t, y);
+    double aim = t1;  // where a run of shortened steps (this one, or one begun before) ends
+    if (sub_h > 0.0) {
+      if (t >= sub_until - merge) {
+        sub_h = 0.0;
+      } else {
+        aim = std::min(t1, sub_until);
+        // Each step of the run keeps det(I − 4γsW) > 0 (hλ < 0.15, as the first); one at 8× the length allows 2×.
+        factor(8.0 * sub_h, t);
+        if (solver->determinantSign() > 0) {
+          sub_h *= 2.0;
+        } else {
+          factor(4.0 * sub_h, t);
+          if (solver->determinantSign() < 0) ++stats.split_steps;
+          while (solver->determinantSign() < 0) {
+            if (sub_h < shortest()) throw unstableStep(sub_h);
+            sub_h *= 0.5;
+            factor(4.0 * sub_h, t);
+          }
+        }
+        // (the last one ends where the shortened steps aimed: no rounding remainder)
+        t1 = aim - t > sub_h + merge ? t + sub_h : aim;
+      }
+    }
+    double hs = t1 - t;
     if (factored_h != hs) factor(hs, t);
     if (solver->determinantSign() < 0) {
-      int halvings = 0;
-      while (solver->determinantSign() < 0) {
-        if (++halvings > kMaxHalvings) throw unstableStep(hs);
-        hs *= 0.5;
-        factor(hs, t);
-      }
-      // γhλ < 1 only moves the step below R's pole (R(0.5) = −9.7 against e^0.5 = 1.65): two more halvings put hλ
-      // below 0.15, where R follows e^{hλ} to 1 %.
+      auto halveWhileUnstable = [&] {
+        while (solver->determinantSign() < 0) {
+          if (hs < shortest()) throw unstableStep(hs);
+          hs *= 0.5;
+          factor(hs, t);
+        }
+      };
+      halveWhileUnstable();
       hs *= 0.25;
       factor(hs, t);
+      halveWhileUnstable();
       sub_h = hs;
-      sub_until = t1;
+      sub_until = aim;
       t1 = t + hs;
       ++stats.split_steps;
     }

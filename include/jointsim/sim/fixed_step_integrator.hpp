@@ -17,9 +17,10 @@
 /// no error estimate, no step rejection and no nonlinear iteration that could fail.
 ///
 /// A step whose linearisation has a growing real mode it would damp instead of follow (det(I − γhW) < 0: γhλ > 1) is
-/// shortened — halved until the sign is positive, then quartered, that length kept up to the grid point — and counted
-/// in SolverStats::split_steps; when 2¹⁰ halvings are not enough the run stops (STEP_UNSTABLE). docs/design.md, "Growing
-/// modes", has the measurements on the UR5 drives' LuGre break-aways that made this necessary.
+/// shortened — halved until the sign is positive, then quartered, the following steps up to the grid point checked at
+/// 4× and grown back at 8× their length — and counted in SolverStats::split_steps; a step below 2⁻¹⁶ of the fixed step
+/// that still has the sign stops the run (STEP_UNSTABLE). docs/design.md, "Growing modes", has the measurements on the
+/// UR5 drives' LuGre break-aways that made this necessary, and what it does not catch.
 ///
 /// Steps end on the grid k·fixed_step (k integer). A stop time between two grid points (a time event) ends a short
 /// step on it, after which the grid is met again. Root functions are checked at the end of every step; a sign change
