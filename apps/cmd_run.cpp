@@ -52,6 +52,9 @@ void addRunCommand(CLI::App& app) {
     if (r.stats.split_steps > 0)
       std::printf("  fixed step: shortened %ld time(s) to follow a growing mode (solver.step too long there)\n",
                   r.stats.split_steps);
+    if (r.stats.retaken_steps > 0)
+      std::printf("  fixed step: retook %ld step(s) that ran into a growing mode unseen at their start\n",
+                  r.stats.retaken_steps);
     if (!r.csv_path.empty())
       std::printf("  next:    read the log (one column per signal, SI units) or draw it: %s plot %s\n",
                   programName().c_str(), std::filesystem::path(r.csv_path).parent_path().string().c_str());

@@ -201,7 +201,8 @@ void solverStatsJson(nlohmann::ordered_json& out, const sim::SolverStats& s) {
          {"nonlinear_conv_failures", s.nonlinear_conv_failures},
          {"last_order", s.last_order},
          {"last_step_s", s.last_step},
-         {"split_steps", s.split_steps}};
+         {"split_steps", s.split_steps},
+         {"retaken_steps", s.retaken_steps}};
 }
 
 namespace detail {

@@ -164,7 +164,7 @@ TEST(FixedStep, AGrowingModeFasterThanTheStepIsFollowedByShorterStepsNotDamped) 
     EXPECT_GT(ratio, 0.5) << lambda;
     EXPECT_LT(ratio, 1.0) << lambda;
   }
-  // A mode no halving resolves (γλh/2¹⁶ > 1): an error naming the time and the state, not a damped result.
+  // A mode no halving resolves (γλh/2¹² > 1): an error naming the time and the state, not a damped result.
   FixedStepIntegrator fast(
       1, [](double, const auto& y, auto yd) { yd[0] = 1e9 * y[0]; }, fixedStep(1e-3));
   fast.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
@@ -216,6 +216,43 @@ TEST(FixedStep, AGrowthRateThatRisesAndFallsIsFollowedAndTheStepGrowsBackAfterIt
   // Far fewer steps than 10 ms at the shortest length (γλh ≤ 1/4 at λ = 1e4: ≤ 15 µs, over 600 steps).
   EXPECT_LT(integ.steps(), 250);
   EXPECT_EQ(integ.stats().last_step, h);  // the second grid step is not shortened
+}
+
+// y' = λ(t) y with λ rising from −10 1/s to 2000 1/s at 15 ms and falling back at 21 ms (∫λ = 12), stepped at 10 ms:
+// the step from 10 ms starts where λ < 0 and ends inside the growth, which the linearisation at its start cannot
+// show; the step from 20 ms sees it and is shortened, and the step before it is retaken from 10 ms with that length
+// (nothing of it was returned yet). Without the retake (an output at 20 ms prevents it) most of the growth between 15
+// and 20 ms is lost.
+TEST(FixedStep, AStepThatRanIntoAGrowingModeUnseenAtItsStartIsRetaken) {
+  const double h = 0.01, a = 2000.0, b = 10.0, w = 2e-4, ta = 0.015, tb = 0.021;
+  auto lambda = [=](double t) { return 0.5 * a * (std::tanh((t - ta) / w) - std::tanh((t - tb) / w)) - b; };
+  // ∫₀ᵗ λ: (a w / 2) [ln cosh((t − ta)/w) − ln cosh((t − tb)/w)] from 0 to t, minus b t (ln cosh by its stable form).
+  auto lncosh = [](double x) { return std::abs(x) + std::log1p(std::exp(-2.0 * std::abs(x))) - std::log(2.0); };
+  auto F = [=](double t) { return 0.5 * a * w * (lncosh((t - ta) / w) - lncosh((t - tb) / w)); };
+  auto integral = [=](double t) { return F(t) - F(0.0) - b * t; };
+  FixedStepIntegrator integ(
+      1, [lambda](double t, const auto& y, auto yd) { yd[0] = lambda(t) * y[0]; }, fixedStep(h));
+  integ.setDifferenceJacobian(
+      [lambda](double t, const auto&, const auto&, const auto&, auto J) { J(0, 0) = lambda(t); });
+  integ.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+  Eigen::VectorXd y(1);
+  EXPECT_EQ(integ.advance(0.03, y), 0.03);
+  EXPECT_GT(integral(0.03), 11.5);
+  EXPECT_NEAR(std::log(y[0]) / integral(0.03), 1.0, 0.05);
+  EXPECT_EQ(integ.stats().retaken_steps, 1);
+  // Nothing is retaken across an output: the same run returning at 20 ms first keeps the step to 20 ms as it was.
+  FixedStepIntegrator split(
+      1, [lambda](double t, const auto& y, auto yd) { yd[0] = lambda(t) * y[0]; }, fixedStep(h));
+  split.setDifferenceJacobian(
+      [lambda](double t, const auto&, const auto&, const auto&, auto J) { J(0, 0) = lambda(t); });
+  split.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+  split.advance(0.02, y);
+  const double at20 = y[0];
+  split.advance(0.03, y);
+  EXPECT_EQ(split.stats().retaken_steps, 0);
+  // The growth the step to 20 ms missed, as returned (measured: 21 % of the exponent at 20 ms, 35 % at 30 ms).
+  EXPECT_LT(std::log(at20), 0.3 * integral(0.02));
+  EXPECT_LT(std::log(y[0]), 0.5 * integral(0.03));
 }
 
 TEST(FixedStep, ARootIsLocatedOnTheStepAndTheEarliestOfTwoIsReported) {

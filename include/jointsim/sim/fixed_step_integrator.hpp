@@ -18,7 +18,7 @@
 ///
 /// A step whose linearisation has a growing real mode it would damp instead of follow (det(I − γhW) < 0: γhλ > 1) is
 /// shortened — halved until the sign is positive, then quartered, the following steps up to the grid point checked at
-/// 4× and grown back at 8× their length — and counted in SolverStats::split_steps; a step below 2⁻¹⁶ of the fixed step
+/// 4× and grown back at 8× their length — and counted in SolverStats::split_steps; a step below 2⁻¹² of the fixed step
 /// that still has the sign stops the run (STEP_UNSTABLE). docs/design.md, "Growing modes", has the measurements on the
 /// UR5 drives' LuGre break-aways that made this necessary, and what it does not catch.
 ///
