@@ -10,6 +10,7 @@
 #include <cmath>
 #include <complex>
 #include <exception>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -187,6 +188,17 @@ TEST(FixedStep, AGrowingModeFasterThanTheStepIsFollowedByShorterStepsNotDamped) 
   EXPECT_EQ(decay.steps(), 10);
 }
 
+// y' = λ(t) y, y(0) = 1 (exact: y = exp ∫₀ᵗ λ) with its exact Jacobian, stepped at h, initialised.
+template <class Lambda>
+std::unique_ptr<FixedStepIntegrator> growth(Lambda lambda, double h) {
+  auto integ = std::make_unique<FixedStepIntegrator>(
+      1, [lambda](double t, const auto& y, auto yd) { yd[0] = lambda(t) * y[0]; }, fixedStep(h));
+  integ->setDifferenceJacobian(
+      [lambda](double t, const auto&, const auto&, const auto&, auto J) { J(0, 0) = lambda(t); });
+  integ->initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+  return integ;
+}
+
 // y' = λ(t) y with a growth rate that rises from 3.7e3 1/s to 1e4 1/s and falls to −10 1/s within about a millisecond
 // (a Gaussian bump of width 0.5 ms at t = 0.5 ms, like a break-away's negative damping), stepped at 10 ms: y(t) =
 // exp(∫λ) grows by e^{8.2} = 3500 over the bump. The first step is shortened, later ones are shortened again as λ
@@ -200,11 +212,8 @@ TEST(FixedStep, AGrowthRateThatRisesAndFallsIsFollowedAndTheStepGrowsBackAfterIt
   auto integral = [=](double t) {
     return a * w * std::sqrt(pi) / 2.0 * (std::erf((t - tc) / w) + std::erf(tc / w)) - b * t;
   };
-  FixedStepIntegrator integ(
-      1, [lambda](double t, const auto& y, auto yd) { yd[0] = lambda(t) * y[0]; }, fixedStep(h));
-  integ.setDifferenceJacobian(
-      [lambda](double t, const auto&, const auto&, const auto&, auto J) { J(0, 0) = lambda(t); });
-  integ.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+  auto integ_ptr = growth(lambda, h);
+  FixedStepIntegrator& integ = *integ_ptr;
   Eigen::VectorXd y(1);
   // Over the growth: the exponent ∫λ (8.2) to 3 % (ROS2 at hλ ≤ 0.15 where λ peaks: ~2 % in the rate).
   EXPECT_EQ(integ.advance(1e-3, y), 1e-3);
@@ -230,22 +239,16 @@ TEST(FixedStep, AStepThatRanIntoAGrowingModeUnseenAtItsStartIsRetaken) {
   auto lncosh = [](double x) { return std::abs(x) + std::log1p(std::exp(-2.0 * std::abs(x))) - std::log(2.0); };
   auto F = [=](double t) { return 0.5 * a * w * (lncosh((t - ta) / w) - lncosh((t - tb) / w)); };
   auto integral = [=](double t) { return F(t) - F(0.0) - b * t; };
-  FixedStepIntegrator integ(
-      1, [lambda](double t, const auto& y, auto yd) { yd[0] = lambda(t) * y[0]; }, fixedStep(h));
-  integ.setDifferenceJacobian(
-      [lambda](double t, const auto&, const auto&, const auto&, auto J) { J(0, 0) = lambda(t); });
-  integ.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+  auto integ_ptr = growth(lambda, h);
+  FixedStepIntegrator& integ = *integ_ptr;
   Eigen::VectorXd y(1);
   EXPECT_EQ(integ.advance(0.03, y), 0.03);
   EXPECT_GT(integral(0.03), 11.5);
   EXPECT_NEAR(std::log(y[0]) / integral(0.03), 1.0, 0.05);
   EXPECT_EQ(integ.stats().retaken_steps, 1);
   // Nothing is retaken across an output: the same run returning at 20 ms first keeps the step to 20 ms as it was.
-  FixedStepIntegrator split(
-      1, [lambda](double t, const auto& y, auto yd) { yd[0] = lambda(t) * y[0]; }, fixedStep(h));
-  split.setDifferenceJacobian(
-      [lambda](double t, const auto&, const auto&, const auto&, auto J) { J(0, 0) = lambda(t); });
-  split.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+  auto split_ptr = growth(lambda, h);
+  FixedStepIntegrator& split = *split_ptr;
   split.advance(0.02, y);
   const double at20 = y[0];
   split.advance(0.03, y);
