@@ -79,7 +79,8 @@ int main(int argc, char** argv) try {
     for (int k = 0; k < n; ++k) {
       const auto& d = robot.drives()[static_cast<size_t>(k)];
       const double N = d.transmission->ratio();
-      tau_m[k] = tau[k] / N + d.motor.J_M * N * qdd_c[k];
+      // (A rigid gear merges the rotor into the joint: the model's armature N² J_M, inside RNEA's τ, already has it.)
+      tau_m[k] = tau[k] / N + (robot.layout(k).rigid ? 0.0 : d.motor.J_M * N * qdd_c[k]);
     }
     robot.setCommands(sim.plantState(), tau_m);
     sim.advance(dt);
@@ -94,7 +95,9 @@ int main(int argc, char** argv) try {
       "factor %.1f)\n",
       robot.model().name.c_str(), sim.time(), wall, sim.time() / wall);
   const sim::SolverStats st = sim.stats();
-  if (fixed_step > 0.0) std::printf("fixed-step method, step %g s (%ld shortened)\n", fixed_step, st.split_steps);
+  if (fixed_step > 0.0)
+    std::printf("fixed-step method, step %g s (%ld shortened, %ld retaken)\n", fixed_step, st.split_steps,
+                st.retaken_steps);
   std::printf("solver (rtol %g): %ld steps, %ld RHS evaluations, %ld Jacobians, %ld error test failures\n", rtol,
               st.steps, st.rhs_evals, st.jac_evals, st.error_test_failures);
   std::printf("largest tracking error: %.3f mrad during the move, %.3f mrad overall (bound 5 mrad)\n",

@@ -23,11 +23,11 @@ constexpr double kNoTime = std::numeric_limits<double>::quiet_NaN();  // unset t
 /// A step shorter than this fraction of the fixed step is not taken: the grid point or stop time this close is
 /// merged with the one after it (rounding of k·h against a stop time computed another way).
 constexpr double kMergeFraction = 1e-6;
-/// Halvings of a step whose linearisation has an unstable real mode it cannot follow (see step()): the shortest
-/// step is 2⁻¹² of the fixed step. Measured on the UR5 drives (docs/design.md): the 1 kHz PD and computed-torque loops
-/// pass at steps up to 1 ms; the excitation under continuous control, whose results are already off at 250 µs (a
-/// current spike at a break-away), stops at 500 µs instead of returning nonsense (2⁻¹⁶ let it run: 0.06 rad off).
-constexpr int kMaxHalvings = 12;
+/// The shortest step a shortening may take (see step()) is 2⁻¹⁵ of the fixed step: at most 13 halvings of a full step
+/// and the quarter after them. Measured on the UR5 drives (docs/design.md): the 1 kHz PD and computed-torque loops pass
+/// at steps up to 1 ms; the excitation under continuous control, whose results are already off at 250 µs (a current
+/// spike at a break-away), stops at 500 µs instead of returning nonsense (with 2⁻¹⁹ it ran through 0.06 rad off).
+constexpr int kShortestStepExponent = 15;
 /// Illinois iterations per located root (the bracket shrinks superlinearly; 100 ulp are met in far fewer).
 constexpr int kMaxRootIterations = 100;
 }  // namespace
@@ -58,7 +58,8 @@ struct FixedStepIntegrator::Impl {
   double sub_h = 0.0, sub_until = kNoTime;
   // A run of shortened steps that retakes a step (step()): its length does not grow back before this time [s].
   double grow_after = kNoTime;
-  bool last_full = false;  // the last step was taken at its full length (not in a run of shortened steps)
+  double call_t0 = kNoTime;  // the time at which the current advance() call began [s]
+  bool last_full = false;    // the last step was taken at its full length (not in a run of shortened steps)
 
   // Workspace; ft = ∂f/∂t, by a difference quotient with the Jacobian (part of W: as outdated as it).
   Eigen::VectorXd f0, f1, k1, k2, ytmp, rhs2, inc, ft;
@@ -203,7 +204,17 @@ struct FixedStepIntegrator::Impl {
   }
 
   /// The shortest step a shortening may reach [s] (see step()).
-  double shortest() const { return std::ldexp(h, -kMaxHalvings); }
+  double shortest() const { return std::ldexp(h, -kShortestStepExponent); }
+
+  /// Halves `len` while det(I − γ·probe·len·W) < 0 (W factorised at probe·len on entry); STEP_UNSTABLE when the step
+  /// that would be taken (taken·len after the halving) falls below shortest().
+  void halveWhileUnstable(double& len, double probe, double taken) {
+    while (solver->determinantSign() < 0) {
+      if (0.5 * len * taken < shortest()) throw unstableStep(probe * len);
+      len *= 0.5;
+      factor(probe * len, t);
+    }
+  }
 
   /// End of the next step from t: the next grid point, or the stop time before it.
   double stepEnd() const {
@@ -233,8 +244,8 @@ struct FixedStepIntegrator::Impl {
   /// each also factors W at 8× its length, and a positive sign there (the growth has slowed 8×, or ended) doubles
   /// the length, so a break-away of tens of µs does not leave the rest of a long control period in nanosecond steps.
   /// A remainder to the aim shorter than the step length is taken as it is (shorter: safe). When the step before was
-  /// a full one and nothing of it has been returned, it is retaken with the shorter steps (see below). A step below
-  /// 2⁻¹² of the fixed step that still has the sign is an error. Not caught: steps with 0.15 < hλ < 0.59 outside such runs
+  /// a full one and nothing of it has been returned, it is retaken with the shorter steps (see below). A mode that
+  /// would need steps below 2⁻¹⁵ of the fixed step is an error. Not caught: steps with 0.15 < hλ < 0.59 outside such runs
   /// (|R| > 1, but not e^{hλ}), an even number of too-fast growing modes, unstable complex pairs, and a W too old to
   /// show them (jacobian_every > 1).
   void step(double t1) {
@@ -249,17 +260,17 @@ struct FixedStepIntegrator::Impl {
         aim = std::min(t1, sub_until);
         // Each step of the run keeps det(I − 4γsW) > 0 (hλ < 0.15, as the first); one at 8× the length allows 2×
         // (not while retaking a step, before the time where the mode was found).
-        factor(8.0 * sub_h, t);
-        if (solver->determinantSign() > 0 && !(t < grow_after - merge)) {
+        bool grown = false;
+        if (!(t < grow_after - merge)) {
+          factor(8.0 * sub_h, t);
+          grown = solver->determinantSign() > 0;
+        }
+        if (grown) {
           sub_h *= 2.0;
         } else {
           factor(4.0 * sub_h, t);
           if (solver->determinantSign() < 0) ++stats.split_steps;
-          while (solver->determinantSign() < 0) {
-            if (sub_h < shortest()) throw unstableStep(sub_h);
-            sub_h *= 0.5;
-            factor(4.0 * sub_h, t);
-          }
+          halveWhileUnstable(sub_h, 4.0, 1.0);
         }
         // (the last one ends where the shortened steps aimed: no rounding remainder)
         t1 = aim - t > sub_h + merge ? t + sub_h : aim;
@@ -268,25 +279,19 @@ struct FixedStepIntegrator::Impl {
     double hs = t1 - t;
     if (factored_h != hs) factor(hs, t);
     if (solver->determinantSign() < 0) {
-      auto halveWhileUnstable = [&] {
-        while (solver->determinantSign() < 0) {
-          if (hs < shortest()) throw unstableStep(hs);
-          hs *= 0.5;
-          factor(hs, t);
-        }
-      };
-      halveWhileUnstable();
+      halveWhileUnstable(hs, 1.0, 0.25);
       hs *= 0.25;
       factor(hs, t);
-      halveWhileUnstable();
+      halveWhileUnstable(hs, 1.0, 1.0);
       sub_h = hs;
       sub_until = aim;
       ++stats.split_steps;
       // The full step before this one ended here, inside the growing region, which the linearisation at its start
       // could not show: it overshot (at 250 µs on the UR5 excitation a wrist current 3× its range off for a sample).
-      // When nothing of it has been returned yet (it started at or after the last output, no root or stop in it), it
-      // is retaken from its start with the length found here, which does not grow back before here.
-      if (last_full && seg_valid && seg_t1 == t && !(seg_t0 < t_last)) {
+      // When nothing of it has been returned yet (it was taken in this advance() call, which returns only at its end)
+      // and it was longer than the length found here, it is retaken from its start with that length, which does not
+      // grow back before here. (The discarded step stays counted in the steps and the step budget.)
+      if (last_full && seg_valid && seg_t1 == t && !(seg_t0 < call_t0) && seg_t1 - seg_t0 > hs) {
         grow_after = t;
         t = seg_t0;
         y = seg_y0;
@@ -294,7 +299,7 @@ struct FixedStepIntegrator::Impl {
         evalRhs(t, y, f0);
         evalJacobian(t, y);
         factor(hs, t);
-        halveWhileUnstable();
+        halveWhileUnstable(hs, 1.0, 1.0);
         sub_h = hs;
         ++stats.retaken_steps;
       }
@@ -446,6 +451,7 @@ void FixedStepIntegrator::initialize(double t0, const Eigen::Ref<const Eigen::Ve
   m.stepped = m.seg_valid = m.root_pending = m.root_found = false;
   m.sub_h = 0.0;
   m.last_full = false;
+  m.grow_after = kNoTime;
   if (!reuse_jacobian) m.jac_valid = false;
   if (m.n_roots > 0) {
     m.evalRoots(t0, m.y, m.g0);
@@ -484,6 +490,7 @@ double FixedStepIntegrator::advance(double t_out, Eigen::Ref<Eigen::VectorXd> y_
                      " s lies before the last step (t = " + formatNumber(m.t) + " s)");
   }
   long here = 0;
+  m.call_t0 = m.t;
   while (m.t < t_out) {
     if (!std::isnan(m.stop) && m.t >= m.stop) break;
     if (++here > m.opts.max_num_steps)

@@ -179,6 +179,19 @@ TEST(FixedStep, AGrowingModeFasterThanTheStepIsFollowedByShorterStepsNotDamped) 
     EXPECT_EQ(e.flag(), "STEP_UNSTABLE");
     EXPECT_EQ(e.time(), 0.0);
   }
+  // The limit: a full step is halved at most 13 times before its quarter is taken (the shortest step 2⁻¹⁵ of the
+  // fixed step). γλh = 0.9·2¹⁴ needs 14 halvings: an error; 0.9·2¹³ needs 13: followed.
+  for (double scale : {0.9 * 8192.0, 0.9 * 16384.0}) {
+    FixedStepIntegrator edge(
+        1, [scale](double, const auto& y, auto yd) { yd[0] = scale / kGamma * y[0]; }, fixedStep(1.0));
+    edge.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
+    if (scale < 10000.0) {
+      EXPECT_NO_THROW(edge.advance(1e-3, y)) << scale;
+      EXPECT_EQ(edge.stats().last_step, std::ldexp(1.0, -15)) << scale;  // 2⁻¹³ · ¼
+    } else {
+      EXPECT_THROW(edge.advance(1e-3, y), SolverError) << scale;
+    }
+  }
   // A decaying mode, however fast, is never split (det > 0 for λ < 0).
   FixedStepIntegrator decay(
       1, [](double, const auto& y, auto yd) { yd[0] = -1e9 * y[0]; }, fixedStep(1e-3));

@@ -166,11 +166,12 @@ struct SolverStats {
   int last_order = 0;                ///< method order used on the last internal step (0: no step yet)
   double last_step = 0.0;            ///< size of the last internal step [s] (0: no step yet)
   double current_time = 0.0;         ///< CVODE's internal time t_n [s] (may be ahead of time())
-  /// Fixed-step method only: steps shortened (halved, down to 2⁻¹² of the step) because the linearisation had an unstable
+  /// Fixed-step method only: steps shortened (halved, down to 2⁻¹⁵ of the step) because the linearisation had an unstable
   /// real mode the step could not follow (det(I − γhW) < 0; FixedStepIntegrator).
   long split_steps = 0;
   /// Fixed-step method only: full steps retaken from their start with shortened steps because the step after them
-  /// found a growing mode they could not see (split_steps counts these too; FixedStepIntegrator).
+  /// found a growing mode they could not see (split_steps counts these too; the discarded step stays counted in
+  /// steps; FixedStepIntegrator).
   long retaken_steps = 0;
 };
 

@@ -14,13 +14,15 @@
 /// part is forced by time (a fast loop tracking a moving reference): without it such a component is followed to first
 /// order only. A step costs two right-hand sides and two solves with one factorisation of I − γhW (block elimination
 /// with the plant's JacobianStructure), plus a Jacobian and one more right-hand side when they are refreshed; there is
-/// no error estimate, no step rejection and no nonlinear iteration that could fail.
+/// no error estimate, no error-controlled step rejection and no nonlinear iteration that could fail.
 ///
 /// A step whose linearisation has a growing real mode it would damp instead of follow (det(I − γhW) < 0: γhλ > 1) is
 /// shortened — halved until the sign is positive, then quartered, the following steps up to the grid point checked at
-/// 4× and grown back at 8× their length — and counted in SolverStats::split_steps; a step below 2⁻¹² of the fixed step
-/// that still has the sign stops the run (STEP_UNSTABLE). docs/design.md, "Growing modes", has the measurements on the
-/// UR5 drives' LuGre break-aways that made this necessary, and what it does not catch.
+/// 4× and grown back at 8× their length — and counted in SolverStats::split_steps; the full step before it, which ran
+/// into the mode unseen, is retaken with the shorter steps when nothing of it was returned yet
+/// (SolverStats::retaken_steps). A mode that needs steps below 2⁻¹⁵ of the fixed step stops the run (STEP_UNSTABLE).
+/// docs/design.md, "Growing modes", has the measurements on the UR5 drives' LuGre break-aways that made this
+/// necessary, and what it does not catch.
 ///
 /// Steps end on the grid k·fixed_step (k integer). A stop time between two grid points (a time event) ends a short
 /// step on it, after which the grid is met again. Root functions are checked at the end of every step; a sign change
