@@ -2,7 +2,8 @@
 // drives' cascades and motor electrics bypassed: the command is the electromagnetic torque at each rotor). The law
 // inverts the rigid model the user knows — the multibody's RNEA plus each rotor's inertia through its gear ratio:
 //
-//   q̈_c = q̈_r + K_d (q̇_r − q̇) + K_p (q_r − q) + K_i ∫(q_r − q) dt,   τ_m,k = τ_k(q, q̇, q̈_c) / N_k + J_M,k N_k q̈_c,k
+//   q̈_c = q̈_r + K_d (q̇_r − q̇) + K_p (q_r − q) + K_i ∫(q_r − q) dt,
+//   τ_m,k = τ_k(q, q̇, q̈_c) / N_k + J_M,k N_k q̈_c,k   (the rotor term for compliant gears only)
 //
 // with τ = RNEA(q, q̇, q̈_c) = M(q) q̈_c + C(q, q̇) q̇ + g(q) [Siciliano2009, §8.5.2] — and leaves to the feedback
 // what the twin has and the law does not: the strain-wave gears' compliance and losses and the LuGre friction (the

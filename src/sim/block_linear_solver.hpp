@@ -31,8 +31,8 @@ class DirectSolver {
   bool factorIdentityMinus(const Eigen::MatrixXd& J, double c);
   /// x = A⁻¹ b (b and x of size n; they may not alias).
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
-  /// The sign of det A of the last successful factor() or factorIdentityMinus(): +1 or −1 (the product of the pivots' signs and of the
-  /// permutations' parities, over the blocks and the Schur complement: det A = Π det D_k · det S).
+  /// The sign of det A of the last successful factor() or factorIdentityMinus(): +1 or −1 (the product of the pivots'
+  /// signs and of the permutations' parities, over the blocks and the Schur complement: det A = Π det D_k · det S).
   int determinantSign() const;
 
  private:

@@ -245,9 +245,9 @@ struct FixedStepIntegrator::Impl {
   /// the length, so a break-away of tens of µs does not leave the rest of a long control period in nanosecond steps.
   /// A remainder to the aim shorter than the step length is taken as it is (shorter: safe). When the step before was
   /// a full one and nothing of it has been returned, it is retaken with the shorter steps (see below). A mode that
-  /// would need steps below 2⁻¹⁵ of the fixed step is an error. Not caught: steps with 0.15 < hλ < 0.59 outside such runs
-  /// (|R| > 1, but not e^{hλ}), an even number of too-fast growing modes, unstable complex pairs, and a W too old to
-  /// show them (jacobian_every > 1).
+  /// would need steps below 2⁻¹⁵ of the fixed step is an error. Not caught: steps with 0.15 < hλ < 0.59 outside
+  /// such runs (|R| > 1, but not e^{hλ}), an even number of too-fast growing modes, unstable complex pairs, and a W
+  /// too old to show them (jacobian_every > 1).
   void step(double t1) {
     const double merge = kMergeFraction * h;
     evalRhs(t, y, f0);
@@ -296,7 +296,7 @@ struct FixedStepIntegrator::Impl {
         t = seg_t0;
         y = seg_y0;
         if (n_roots > 0) evalRoots(t, y, g0);
-        evalRhs(t, y, f0);
+        f0 = seg_f0;  // (the right-hand side there, as the discarded step evaluated it)
         evalJacobian(t, y);
         factor(hs, t);
         halveWhileUnstable(hs, 1.0, 1.0);

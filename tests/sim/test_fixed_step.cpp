@@ -165,7 +165,8 @@ TEST(FixedStep, AGrowingModeFasterThanTheStepIsFollowedByShorterStepsNotDamped) 
     EXPECT_GT(ratio, 0.5) << lambda;
     EXPECT_LT(ratio, 1.0) << lambda;
   }
-  // A mode no halving resolves (γλh/2¹² > 1): an error naming the time and the state, not a damped result.
+  // A mode no allowed halving resolves (γλh = 1.7e6 needs 21 of at most 13): an error naming the time and the state,
+  // not a damped result.
   FixedStepIntegrator fast(
       1, [](double, const auto& y, auto yd) { yd[0] = 1e9 * y[0]; }, fixedStep(1e-3));
   fast.initialize(0.0, Eigen::VectorXd::Constant(1, 1.0), false);
