@@ -23,6 +23,7 @@ void addBatchCommand(CLI::App& app);
 void addCompareCommand(CLI::App& app);
 void addAgreementCommand(CLI::App& app);
 void addPlotCommand(CLI::App& app);
+void addViewCommand(CLI::App& app);
 void addFmuCommand(CLI::App& app);
 void addValidateCommand(CLI::App& app);
 /// `jointsim identify clamping` and `jointsim identify friction` (added to the `identify` subcommand).

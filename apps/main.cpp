@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
   jointsim::cli::addCompareCommand(app);
   jointsim::cli::addAgreementCommand(app);
   jointsim::cli::addPlotCommand(app);
+  jointsim::cli::addViewCommand(app);
   jointsim::cli::addFmuCommand(app);
   jointsim::cli::addValidateCommand(app);
   // SIGINT and SIGTERM ask the running simulation to stop instead of killing the process, so temporary files are

@@ -51,6 +51,7 @@
 #include "jointsim/report/compare.hpp"
 #include "jointsim/report/dataset.hpp"
 #include "jointsim/report/plot.hpp"
+#include "jointsim/report/view.hpp"
 #include "jointsim/sim/cvode_integrator.hpp"
 #include "jointsim/sim/fixed_step_integrator.hpp"
 #include "jointsim/sim/held_inputs.hpp"

@@ -47,7 +47,7 @@ __all__ = [
     "data_path", "load_robot", "rnea", "aba", "crba", "gravity_torques", "rnea_derivatives", "aba_derivatives",
     "frame_placement", "frame_jacobian", "load_experiment", "run_experiment", "run_experiment_file", "validate_file",
     "run_batch", "write_dataset", "read_dataset", "export_fmu", "identify_clamping", "fit_friction_map", "agreement",
-    "identify_currents",
+    "identify_currents", "view", "ViewPage",
 ]
 
 #: The command ports of a drive (Simulator.set_port).
@@ -490,6 +490,42 @@ def read_dataset(path: PathLike) -> Dataset:
         runs = list(f["runs"].keys()) if "runs" in f else []
         attributes = {r: {k: _text(v) for k, v in f["runs"][r].attrs.items()} for r in runs}
     return Dataset(p, labels, runs, attributes)
+
+
+# ------------------------------------------------------------------------------------------------ viewer
+class ViewPage(str):
+    """The HTML text of a `jointsim view` page (a str). In Jupyter it displays inline, in an iframe of its own
+    (the page's scripts and styles stay apart from the notebook's). save(path) writes it."""
+
+    def _repr_html_(self) -> str:
+        import html as _html
+        return ('<iframe style="width:100%;height:900px;border:1px solid #ccc" sandbox="allow-scripts" srcdoc="'
+                + _html.escape(str(self), quote=True) + '"></iframe>')
+
+    def save(self, path: PathLike) -> pathlib.Path:
+        """Writes the page to path (through a temporary file renamed into place); returns the path."""
+        target = pathlib.Path(_path(path, "path"))
+        tmp = target.with_name(f".{target.name}.tmp.{os.getpid()}")
+        try:
+            tmp.write_text(str(self), encoding="utf-8")
+            os.replace(tmp, target)
+        finally:
+            if tmp.exists():
+                tmp.unlink()
+        return target
+
+
+def view(run_dir: PathLike, output: Optional[PathLike] = None, columns: int = 1000, frames: int = 20000,
+         title: Optional[str] = None) -> ViewPage:
+    """As `jointsim view RUN_DIR`: one self-contained HTML page of a run folder or sweep folder (the arm animated in
+    3D, interactive plots of the experiment type's figures, the summary; docs/view.md), returned as a ViewPage (a str
+    that Jupyter displays inline) and, with output, also written there. columns: slices per plotted series (each
+    keeps its minimum and maximum rows); frames: most animation samples per run. Raises InputError."""
+    page = ViewPage(_core.view_html(_path(run_dir, "run_dir"), _int(columns, "columns"), _int(frames, "frames"),
+                                    "" if title is None else str(title)))
+    if output is not None:
+        page.save(output)
+    return page
 
 
 # ------------------------------------------------------------------------------------------------ FMU export

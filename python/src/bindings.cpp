@@ -38,6 +38,7 @@
 #include "jointsim/multibody/robot_loader.hpp"
 #include "jointsim/report/agreement.hpp"
 #include "jointsim/report/dataset.hpp"
+#include "jointsim/report/view.hpp"
 #include "jointsim/sim/simulate.hpp"
 #include "jointsim/sim/simulator.hpp"
 #include "jointsim/systems/robot_with_drives.hpp"
@@ -594,6 +595,17 @@ PYBIND11_MODULE(_core, m) {
         return d;
       },
       py::arg("source"), py::arg("text"), py::arg("path"), py::arg("output_dir") = "");
+
+  m.def(
+      "view_html",
+      [](const std::string& dir, int columns, int frames, const std::string& title) {
+        report::ViewOptions o;
+        o.columns = columns;
+        o.frames = frames;
+        o.title = title;
+        return interruptible([&] { return report::viewHtml(dir, o); });
+      },
+      py::arg("dir"), py::arg("columns") = 1000, py::arg("frames") = 20000, py::arg("title") = "");
 
   // ------------------------------------------------------------------------------------------ FMU export
   m.def(

@@ -73,6 +73,12 @@ std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::v
   }
 }
 
+std::unique_ptr<Experiment> loadExperimentText(const std::string& text, const std::string& path) {
+  io::InputRecord inputs;
+  const YamlValue root = YamlValue::loadString(text, path);
+  return buildExperiment(root, path, {}, inputs);
+}
+
 namespace {
 
 std::unique_ptr<Experiment> buildExperiment(const YamlValue& root, const std::string& path,

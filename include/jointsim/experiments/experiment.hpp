@@ -16,6 +16,7 @@
 /// to a temporary name and renamed into place; the summary comes last.
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,6 +25,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "jointsim/io/input_files.hpp"
+#include "jointsim/multibody/model.hpp"
 #include "jointsim/sim/plant.hpp"
 #include "jointsim/sim/simulate.hpp"
 #include "jointsim/sim/simulator.hpp"
@@ -50,6 +52,16 @@ struct ExtraTable {
   sim::SignalTable table;
 };
 
+/// The arm of an experiment as a viewer draws it (`jointsim view`, report/view.hpp): its rigid kinematics and, per
+/// joint, the log column that holds the joint's angle.
+struct ArmKinematics {
+  const multibody::Model* model = nullptr;  ///< the rigid arm (owned by the experiment)
+  std::vector<std::string> angle_columns;   ///< (model->nq) base name of each joint's angle column [rad or m]
+  int tcp_frame = -1;                       ///< index in model->frames of the tool centre point (clamped frame)
+  bool clamped = false;                     ///< the TCP is clamped where it is at `q0`
+  Eigen::VectorXd q0;                       ///< start posture [rad] (empty: zeros)
+};
+
 /// A loaded experiment, ready to run. Implemented once per experiment type.
 class Experiment {
  public:
@@ -72,6 +84,8 @@ class Experiment {
   /// The robot with drives of an experiment type that simulates one (tracking; it is plant()), else null: for front
   /// ends that use the robot's own API (its model, drives and motor states) besides the plant interface.
   virtual const systems::RobotSystem* robotSystem() const { return nullptr; }
+  /// The arm a viewer draws, for types that simulate one (tracking, passive_robot, clamping, robotr3_full); else none.
+  virtual std::optional<ArmKinematics> arm() const { return std::nullopt; }
 
   const std::string& name() const { return name_; }  ///< experiment.name
   const std::string& type() const { return type_; }  ///< experiment.type
@@ -153,6 +167,9 @@ struct ExperimentResult {
 /// naming the file, line and key path.
 std::unique_ptr<Experiment> loadExperiment(const std::string& path, const std::vector<std::string>& overrides = {},
                                            const std::vector<systems::Fault>& faults = {});
+/// Builds an experiment from a document given as text (YAML, or JSON such as a summary's parameters.config) as if it
+/// were the file `path`: relative paths in it resolve against the folder of `path` and errors name `path`.
+std::unique_ptr<Experiment> loadExperimentText(const std::string& text, const std::string& path);
 /// A stepping simulator (sim/simulator.hpp) over a loaded experiment's plant with the experiment's solver settings
 /// (e.g. max_step of one log interval); the simulator keeps the experiment alive. The plant is reachable as
 /// simulator->plant() (for `tracking`, a systems::RobotSystem with its command ports).

@@ -215,6 +215,17 @@ class ClampingExperiment : public PlantExperiment<systems::ClampedRobot> {
  public:
   explicit ClampingExperiment(ClampingExperimentSetup s)
       : PlantExperiment(std::move(s.setup)), robot_file_(std::move(s.robot_file)), curves_(s.curves) {}
+  std::optional<ArmKinematics> arm() const override {
+    // The rigid arm; each joint's angle is the `<joint>.joint_angle` column of the axis driving it.
+    const systems::ClampingSetup& s = plant_.setup();
+    ArmKinematics a;
+    a.model = &s.arm;
+    for (const auto& j : s.arm.joint_names) a.angle_columns.push_back(j + ".joint_angle");
+    a.tcp_frame = s.arm.frameIndex(s.clamp.frame.empty() ? s.arm.tip_frame : s.clamp.frame);
+    a.clamped = true;
+    a.q0 = s.q0;
+    return a;
+  }
   void observe(const Eigen::VectorXd& row) override {
     if (!curves_) return;
     // Time, then motor angle and torque of every axis.

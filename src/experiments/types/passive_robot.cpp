@@ -24,6 +24,15 @@ class PassiveRobotExperiment : public PlantExperiment<systems::PassiveRobot> {
       : PlantExperiment(std::move(s.model), std::move(s.params)), robot_file_(std::move(s.robot_file)) {
     setJointLimits(jointLimitMonitor(plant_.model(), plant_, plant_.params().joint_limits));
   }
+  std::optional<ArmKinematics> arm() const override {
+    const multibody::Model& m = plant_.model();
+    ArmKinematics a;
+    a.model = &m;
+    for (const auto& j : m.joint_names) a.angle_columns.push_back("q_" + j);
+    a.tcp_frame = m.frameIndex(m.tip_frame);
+    a.q0 = plant_.params().q0;
+    return a;
+  }
   std::string keyUnit(const std::string& key) const override {
     // Per joint: rad for a revolute, m for a prismatic one.
     const std::string p = detail::keyPattern(key);

@@ -62,6 +62,18 @@ namespace {
 class RobotR3FullExperiment : public PlantExperiment<systems::RobotR3Full> {
  public:
   using PlantExperiment::PlantExperiment;
+  std::optional<ArmKinematics> arm() const override {
+    // The column names of [MSL, RobotR3.FullRobot]: mechanics.r<j>.phi, j = 1..6 from the base. A 1-D shaft
+    // configuration (load_inertia set) has no arm to draw.
+    const systems::RobotR3FullSetup& s = plant_.setup();
+    if (s.load_inertia.size() > 0 || !s.one_axis_prefix.empty()) return std::nullopt;
+    ArmKinematics a;
+    a.model = &s.arm;
+    for (int j = 0; j < s.arm.nq; ++j) a.angle_columns.push_back("mechanics.r" + std::to_string(j + 1) + ".phi");
+    a.tcp_frame = s.arm.frameIndex(s.arm.tip_frame);
+    a.q0 = s.q_begin;
+    return a;
+  }
   std::string keyUnit(const std::string& key) const override {
     return detail::patternKeyUnit(key, {{"path.q_begin[]", "rad"},
                                         {"path.q_end[]", "rad"},

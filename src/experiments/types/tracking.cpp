@@ -138,6 +138,14 @@ class TrackingExperiment : public Experiment {
   }
   sim::Plant& plant() override { return *s_.robot; }
   const systems::RobotSystem* robotSystem() const override { return s_.robot.get(); }
+  std::optional<ArmKinematics> arm() const override {
+    const multibody::Model& m = s_.robot->model();
+    ArmKinematics a;
+    a.model = &m;
+    for (const auto& j : m.joint_names) a.angle_columns.push_back("q_" + j);
+    a.tcp_frame = m.frameIndex(m.tip_frame);
+    return a;
+  }
   std::string keyUnit(const std::string& key) const override {
     const std::string p = detail::keyPattern(key);
     if (p.rfind("drives.", 0) == 0) {  // drives.JOINT.COMPONENT.KEY: the unit of the component's table

@@ -1,0 +1,350 @@
+"""`jointsim view` pages in a real browser: headless Chromium (Debian's chromium and chromium-driver, driven by
+Selenium) opens each page with the network disabled, scrubs to given times through the page's script interface
+(window.jointsimView) and checks what it draws against independent numbers:
+
+- the drawn tool centre point (three.js scene graph) against the library's forward kinematics (jointsim.frame_placement
+  on the model file, at the logged joint angles) and, for the UR5, against the run's own logged TCP columns;
+- every plot cursor readout against the CSV row it names (recomputed from the columns the page says it drew);
+- the cursor and the animation following each other both ways (a time set by the page's interface moves every cursor;
+  a mouse over a plot moves the arm);
+- no console error, no request for any resource, and a hostile run folder's markup shown as text, never run.
+
+A screenshot of each page goes to JOINTSIM_ARTEFACT_DIR (scripts/python-test.sh sets build/test-artefacts), else to
+the test's temporary folder."""
+import csv
+import json
+import math
+import os
+import pathlib
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import jointsim
+
+CHROMIUM = shutil.which("chromium")
+DRIVER = shutil.which("chromedriver")
+
+
+def _browser_or_skip():
+    if CHROMIUM and DRIVER:
+        return
+    message = "headless Chromium and chromedriver are needed (scripts/install-deps.sh --test: chromium chromium-driver)"
+    if os.environ.get("CI"):
+        pytest.fail(message)
+    pytest.skip(message)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    _browser_or_skip()
+    webdriver = pytest.importorskip("selenium.webdriver")
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--enable-unsafe-swiftshader",
+                "--use-angle=swiftshader", "--window-size=1600,1100", "--proxy-server=127.0.0.1:9",
+                "--proxy-bypass-list=<-loopback>"):
+        options.add_argument(arg)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=Service(DRIVER), options=options)
+    # The network off for every page this browser opens (the page must work without it).
+    driver.execute_cdp_cmd("Network.enable", {})
+    driver.execute_cdp_cmd("Network.emulateNetworkConditions",
+                           {"offline": True, "latency": 0, "downloadThroughput": -1, "uploadThroughput": -1})
+    yield driver
+    driver.quit()
+
+
+@pytest.fixture(scope="module")
+def runs(cli, root, tmp_path_factory):
+    """The four runs of the acceptance criteria, run by the CLI, and their pages written by `jointsim view`."""
+    out = tmp_path_factory.mktemp("view_runs")
+    cfg = root / "config"
+    for name in ("ur5_excitation", "irb140_clamping", "robotr3_full_robot"):
+        subprocess.run([str(cli), "run", str(cfg / "experiments" / f"{name}.yaml"), "-o", str(out / name)],
+                       check=True, capture_output=True)
+    subprocess.run([str(cli), "batch", str(cfg / "sweeps" / "ur5_faults.yaml"), "-j", "2", "-o", str(out / "sweep")],
+                   check=True, capture_output=True)
+    pages = {}
+    for name in ("ur5_excitation", "irb140_clamping", "robotr3_full_robot", "sweep"):
+        r = subprocess.run([str(cli), "view", str(out / name), "-o", str(out / f"{name}.html")], check=True,
+                           capture_output=True, text=True)
+        assert "page:" in r.stdout
+        pages[name] = out / f"{name}.html"
+    return out, pages
+
+
+def _artefact(tmp_path: pathlib.Path, name: str) -> pathlib.Path:
+    d = pathlib.Path(os.environ.get("JOINTSIM_ARTEFACT_DIR", tmp_path))
+    d.mkdir(parents=True, exist_ok=True)
+    return d / name
+
+
+def _open(driver, page: pathlib.Path):
+    driver.get_log("browser")  # drop what earlier pages logged
+    driver.get(page.resolve().as_uri())
+    state = driver.execute_script("const v = window.jointsimView; return v ? [v.ready, v.errors] : null;")
+    assert state is not None, "the page script did not run"
+    assert state == [True, []], state
+
+
+def _no_console_error(driver):
+    severe = [e for e in driver.get_log("browser") if e.get("level") == "SEVERE"]
+    assert severe == [], severe
+
+
+def _no_request(driver):
+    # Everything is inline: the page asked the network for nothing (it is off anyway).
+    assert driver.execute_script("return performance.getEntriesByType('resource').map(e => e.name);") == []
+
+
+def _read_csv(path: pathlib.Path):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    names = [h.split("[")[0] for h in rows[0]]
+    data = np.array([[float(v) for v in r] for r in rows[1:]])
+    return names, data
+
+
+def _tcp_fk(model, frame, q):
+    return np.asarray(jointsim.frame_placement(model, q, frame))[:3, 3]
+
+
+def _check_page(driver, page, csv_path, robot_file, times, tmp_path, shot, tcp_columns=None):
+    _open(driver, page)
+    data = driver.execute_script("return window.jointsimView.data;")
+    assert data["arm"] is not None, data.get("arm_note")
+    names, log = _read_csv(csv_path)
+    t_col = names.index("time")
+    model = jointsim.load_robot(robot_file)
+    tcp_frame = data["arm"]["tcp"]["name"]
+    angle_cols = [names.index(j["column"]) for j in data["arm"]["joints"]]
+    # The readouts are checked on the first figure with time plots (a clamping run opens on its curves in the plane).
+    figures = data["runs"][0]["figures"]
+    first_timed = next(k for k, f in enumerate(figures) if any(p["time_axis"] for p in f["panels"]))
+    driver.execute_script("window.jointsimView.selectFigure(arguments[0]);", first_timed)
+    for t in times:
+        row = int(np.argmin(np.abs(log[:, t_col] - t)))
+        t_row = float(log[row, t_col])
+        assert driver.execute_script("return window.jointsimView.setTime(arguments[0]);", t_row) == pytest.approx(t_row)
+        drawn = np.array(driver.execute_script("return window.jointsimView.tcpPosition();"))
+        fk = _tcp_fk(model, tcp_frame, log[row, angle_cols])
+        assert np.max(np.abs(drawn - fk)) < 1e-9, (t_row, drawn, fk)
+        if tcp_columns:
+            logged = log[row, [names.index(c) for c in tcp_columns]]
+            assert np.max(np.abs(drawn - logged)) < 1e-9, (t_row, drawn, logged)
+        # Every time panel's cursor sits at the time, and each readout value is the CSV value of the row it names.
+        panels = driver.execute_script("return window.jointsimView.panels();")
+        checked = 0
+        for k, p in enumerate(panels):
+            if not p["time"]:
+                continue
+            ro = driver.execute_script("return window.jointsimView.readout(arguments[0]);", k)
+            assert ro["cursor"] == pytest.approx(t_row)
+            assert ro["text"].startswith("t = ")
+            for v in ro["values"]:
+                assert v["column"], v
+                series = _series_spec(data, p, v)
+                r = int(np.flatnonzero(log[:, t_col] == v["t"])[0])
+                y = log[r, names.index(series["y_col"])]
+                if series.get("y_minus_col"):
+                    y -= log[r, names.index(series["y_minus_col"])]
+                y = (y - series["offset"]) * series["factor"]
+                # The page keeps 8 significant digits of a plotted value (the readout shows 6).
+                assert v["value"] == pytest.approx(y, rel=1e-7, abs=1e-300), (p["title"], v)
+                if v["unit"]:
+                    assert v["unit"] in ro["text"]
+                checked += 1
+        assert checked > 0
+    path = _artefact(tmp_path, shot)
+    driver.save_screenshot(str(path))
+    assert path.stat().st_size > 10_000
+    assert driver.execute_script("return window.jointsimView.webgl();"), "WebGL (SwiftShader) was not available"
+    _no_console_error(driver)
+    _no_request(driver)
+    return data
+
+
+def _series_spec(data, panel, value):
+    """The series of the shown figure that a readout value belongs to (by column and title)."""
+    run = data["runs"][0]
+    for fig in [run["figures"][panel["figure"]]]:
+        for p in fig["panels"]:
+            if p["title"] != panel["title"]:
+                continue
+            for s in p["series"]:
+                if s.get("y_col") == value["column"] and (s.get("title") or s.get("y_col")) == value["series"]:
+                    return s
+    raise AssertionError(f"no series for {value}")
+
+
+def test_ur5_excitation_page_draws_the_logged_kinematics_and_csv_values(browser, runs, root, tmp_path):
+    out, pages = runs
+    data = _check_page(browser, pages["ur5_excitation"], out / "ur5_excitation" / "ur5_excitation.csv",
+                       root / "config" / "robots" / "ur5.yaml", [0.0, 2.5, 7.314, 10.0], tmp_path,
+                       "view_ur5_excitation.png", tcp_columns=["tcp_x", "tcp_y", "tcp_z"])
+    # Every figure of the type is offered; a second one (currents) reads back as the CSV too.
+    titles = [f["title"] for f in data["runs"][0]["figures"]]
+    assert len(titles) >= 3
+    k = next(i for i, t in enumerate(titles) if "current" in t.lower())
+    browser.execute_script("window.jointsimView.selectFigure(arguments[0]);", k)
+    browser.execute_script("window.jointsimView.setTime(4.0);")
+    ro = browser.execute_script("return window.jointsimView.readout(0);")
+    assert ro["cursor"] == pytest.approx(4.0) and " A" in ro["text"]
+
+
+def test_irb140_clamping_page_draws_the_clamp_and_the_curves(browser, runs, root, tmp_path):
+    out, pages = runs
+    browser_data = _check_page(browser, pages["irb140_clamping"], out / "irb140_clamping" / "irb140_clamping.csv",
+                               root / "config" / "robots" / "irb140.yaml", [0.0, 1.2, 3.0], tmp_path,
+                               "view_irb140_clamping.png")
+    run = browser_data["runs"][0]
+    assert browser_data["arm"]["clamped"] and run["motion"]["clamp"] is not None
+    # The clamp is where the TCP was at the start; the clamped TCP stays within the clamp's compliance of it.
+    clamp = np.array(run["motion"]["clamp"])
+    for t in (0.0, 3.0):
+        browser.execute_script("window.jointsimView.setTime(arguments[0]);", t)
+        tcp = np.array(browser.execute_script("return window.jointsimView.tcpPosition();"))
+        assert np.linalg.norm(tcp - clamp) < 1e-3
+    # The figure that matters comes first: the clamping curves (motor torque against motor angle) in the plane.
+    first = run["figures"][0]
+    assert "clamping curves" in first["title"]
+    assert not first["panels"][0]["time_axis"]
+
+
+def test_robotr3_full_robot_page(browser, runs, root, tmp_path):
+    out, pages = runs
+    _check_page(browser, pages["robotr3_full_robot"], out / "robotr3_full_robot" / "robotr3_full_robot.csv",
+                root / "config" / "robots" / "robotr3.yaml", [0.0, 0.5, 1.0, 1.8], tmp_path,
+                "view_robotr3_full_robot.png")
+
+
+def test_cursor_and_animation_follow_each_other(browser, runs):
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    _, pages = runs
+    _open(browser, pages["robotr3_full_robot"])
+    browser.execute_script("window.jointsimView.setTime(0.25);")
+    overs = browser.find_elements("css selector", "#plots .u-over")
+    assert overs
+    over = overs[0]
+    w = over.size["width"]
+    # The mouse at 3/4 of the first plot's width: the arm follows the cursor (paused), every readout too.
+    ActionChains(browser).move_to_element_with_offset(over, int(w * 0.25), 5).perform()
+    t = browser.execute_script("return window.jointsimView.time();")
+    assert t > 0.5
+    for k, p in enumerate(browser.execute_script("return window.jointsimView.panels();")):
+        if p["time"]:
+            assert browser.execute_script("return window.jointsimView.readout(arguments[0]).cursor;", k) == \
+                pytest.approx(t)
+    # Playing moves the time on.
+    browser.execute_script("window.jointsimView.setTime(0); window.jointsimView.play(true);")
+    browser.execute_script("return new Promise(r => setTimeout(r, 300));")
+    assert browser.execute_script("window.jointsimView.play(false); return window.jointsimView.time();") > 0.05
+
+
+def test_sweep_page_lists_the_runs_with_labels_and_overlays_them(browser, runs, root, tmp_path):
+    out, pages = runs
+    _open(browser, pages["sweep"])
+    data = browser.execute_script("return window.jointsimView.data;")
+    names = [r["name"] for r in data["runs"]]
+    assert len(names) == 25 and names[0] == "nominal"
+    rows = browser.find_elements("css selector", "#runs tr.run")
+    assert len(rows) == 25
+    header = [th.text for th in browser.find_elements("css selector", "#runs th")]
+    assert {"fault_type", "fault_joint", "fault_severity"} <= set(header)
+    # Every run's key signal is overlaid in one panel; choosing a run from the list animates that run.
+    panels = browser.execute_script("return window.jointsimView.panels();")
+    assert len(panels) == 1 and len(panels[0]["series"]) == 25
+    k = names.index("backlash_add-elbow_joint-0.001")
+    rows[k].click()
+    assert "selected" in rows[k].get_attribute("class")
+    names_csv, log = _read_csv(out / "sweep" / names[k] / "ur5_excitation.csv")
+    model = jointsim.load_robot(root / "config" / "robots" / "ur5.yaml")
+    for t in (0.5, 1.5):
+        browser.execute_script("window.jointsimView.setTime(arguments[0]);", t)
+        row = int(np.argmin(np.abs(log[:, 0] - t)))
+        assert log[row, 0] == pytest.approx(t)
+        q = log[row, [names_csv.index(j["column"]) for j in data["arm"]["joints"]]]
+        drawn = np.array(browser.execute_script("return window.jointsimView.tcpPosition();"))
+        assert np.max(np.abs(drawn - _tcp_fk(model, data["arm"]["tcp"]["name"], q))) < 1e-9
+        ro = browser.execute_script("return window.jointsimView.readout(0);")
+        v = ro["values"][k]
+        assert v["series"] == names[k]
+        assert names[k] + ":" in ro["text"]
+    path = _artefact(tmp_path, "view_ur5_fault_sweep.png")
+    browser.save_screenshot(str(path))
+    _no_console_error(browser)
+    _no_request(browser)
+
+
+HOSTILE = '<img src=x onerror="window.pwned=1"><script>window.pwned=2</script>'
+
+
+def _hostile_folder(base: pathlib.Path) -> pathlib.Path:
+    """A run folder whose summary, column names and values are hostile, and a sweep around it."""
+    run = base / "run"
+    run.mkdir(parents=True)
+    columns = ["time[s]", f"q_{HOSTILE}[rad]", "huge[N·m]", "odd</script><b>x</b>[A]"]
+    with open(run / "evil.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(columns)
+        for i, row in enumerate([[0, 1.0, 1e308, "nan"], [0.1, "inf", -1e308, 2.0], [0.2, "-inf", 5e-324, 3.0],
+                                 [0.3, 2.0, 1e300, "nan"]]):
+            w.writerow(row)
+    summary = {"experiment": "evil", "type": HOSTILE, "status": f"ok{HOSTILE}", "csv": str(run / "evil.csv"),
+               "reason": "</script><script>window.pwned=3</script>", "columns": columns,
+               "parameters": {"config": {"experiment": {"name": "evil", "type": HOSTILE}}, HOSTILE: [HOSTILE, 1e308]}}
+    (run / "summary.json").write_text(json.dumps(summary))
+    sweep = base / "sweep"
+    shutil.copytree(run, sweep / "evil")
+    with open(sweep / "manifest.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["run", "status", "wall_time_s", "sim_time_s", "real_time_factor", "output_dir", "overrides",
+                    "fault_type", "fault_joint", "design"])
+        w.writerow(["evil", HOSTILE, "1", "0.3", "0.3", "evil", HOSTILE, HOSTILE, "</script>", "<!--"])
+    return base
+
+
+def test_hostile_folder_shows_its_markup_as_text_and_runs_none_of_it(browser, cli, tmp_path):
+    base = _hostile_folder(tmp_path / "hostile")
+    for folder in ("run", "sweep"):
+        page = tmp_path / f"{folder}.html"
+        subprocess.run([str(cli), "view", str(base / folder), "-o", str(page)], check=True, capture_output=True)
+        html = page.read_text(encoding="utf-8")
+        assert "window.pwned" in html  # the data is there, escaped inside the JSON
+        assert "<script>window.pwned" not in html and "<img src=x" not in html
+        _open(browser, page)
+        assert browser.execute_script("return window.pwned === undefined;")
+        assert browser.execute_script("return document.querySelectorAll('img, b, script:not([nonce]):not([type])')"
+                                      ".length;") == 0
+        text = browser.execute_script("return document.body.innerText;")
+        assert HOSTILE in text
+        data = browser.execute_script("return window.jointsimView.data;")
+        assert data["arm"] is None and data["arm_note"]
+        browser.save_screenshot(str(_artefact(tmp_path, f"view_hostile_{folder}.png")))
+        _no_console_error(browser)
+
+
+def test_python_view_returns_the_page_and_writes_it(runs, tmp_path):
+    out, _ = runs
+    page = jointsim.view(out / "robotr3_full_robot", output=tmp_path / "p.html", columns=50, frames=100)
+    assert isinstance(page, str) and page.startswith("<!DOCTYPE html>")
+    assert (tmp_path / "p.html").read_text(encoding="utf-8") == page
+    assert "srcdoc=" in page._repr_html_()
+    start = page.index('id="jointsim-data">') + len('id="jointsim-data">')
+    data = json.loads(page[start:page.index("</script>", start)])
+    run = data["runs"][0]
+    assert len(run["motion"]["xi"]) <= 100 and len(run["time"]) <= 3 * 50 * 40 + 100
+    for fig in run["figures"]:
+        for p in fig["panels"]:
+            for s in p["series"]:
+                assert len(s.get("xi", s.get("x"))) <= 2 * 50 * (3 if p["time_axis"] else 1) + 1
+    with pytest.raises(jointsim.InputError, match="neither a run folder"):
+        jointsim.view(tmp_path)
+    with pytest.raises(jointsim.InputError, match="columns"):
+        jointsim.view(out / "robotr3_full_robot", columns=1)
