@@ -472,7 +472,8 @@
     const runIdx = [];
     D.runs.forEach(function (r, i) {
       if (!r.key) return;
-      panel.series.push({ title: r.name, x: r.key.x, y: r.key.y, unit: '' });
+      const unit = /\[([^\]]*)\]\s*$/.exec(D.key.ylabel || '');
+      panel.series.push({ title: r.name, x: r.key.x, y: r.key.y, unit: unit ? unit[1] : '' });
       runIdx.push(i);
     });
     if (!panel.series.length) return;
