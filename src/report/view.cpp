@@ -177,6 +177,18 @@ void wholeNumbersAsIntegers(json& j) {
   }
 }
 
+/// The figure that characterises a run of its type: the first whose panels are all curves in the plane (the
+/// clamping curves of a clamping run, the friction map of a rig); -1 when every figure is against time.
+int primaryFigure(const std::vector<experiments::Figure>& figs) {
+  for (size_t k = 0; k < figs.size(); ++k) {
+    const auto& panels = figs[k].panels;
+    if (!panels.empty() &&
+        std::none_of(panels.begin(), panels.end(), [](const experiments::Panel& p) { return p.time_axis; }))
+      return static_cast<int>(k);
+  }
+  return -1;
+}
+
 /// The experiment of a run, rebuilt from its summary's document (parameters.config) as the file it came from;
 /// null with `why` set when that is not possible.
 std::shared_ptr<experiments::Experiment> rebuildExperiment(const RunData& run, std::string& why) {
@@ -375,9 +387,17 @@ json runJson(const RunFolder& run, const std::string& label, const ArmSource& ar
     json m = motionJson(run.data, *arm.arm, o.frames, why);
     if (!m.is_null()) r["motion"] = std::move(m);
   }
+  // A run page: every figure, opening on the one that characterises the type. A sweep: per run only that figure
+  // (overlaid across the runs by the page), to keep the page small.
   r["figures"] = json::array();
-  if (with_figures)
-    for (const auto& f : figuresOf(run.data)) r["figures"].push_back(figureJson(f, run.data, o.columns));
+  const auto figs = figuresOf(run.data);
+  const int primary = primaryFigure(figs);
+  if (with_figures) {
+    for (const auto& f : figs) r["figures"].push_back(figureJson(f, run.data, o.columns));
+    r["first_figure"] = std::max(primary, 0);
+  } else if (primary >= 0) {
+    r["figures"].push_back(figureJson(figs[static_cast<size_t>(primary)], run.data, o.columns));
+  }
   return r;
 }
 

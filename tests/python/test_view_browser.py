@@ -199,6 +199,10 @@ def test_ur5_excitation_page_draws_the_logged_kinematics_and_csv_values(browser,
 
 def test_irb140_clamping_page_draws_the_clamp_and_the_curves(browser, runs, root, tmp_path):
     out, pages = runs
+    # The page opens on the figure that characterises a clamping run: its curves in the plane, one panel per axis.
+    _open(browser, pages["irb140_clamping"])
+    shown = browser.execute_script("return window.jointsimView.panels();")
+    assert len(shown) == 6 and not any(p["time"] for p in shown)
     browser_data = _check_page(browser, pages["irb140_clamping"], out / "irb140_clamping" / "irb140_clamping.csv",
                                root / "config" / "robots" / "irb140.yaml", [0.0, 1.2, 3.0], tmp_path,
                                "view_irb140_clamping.png")
@@ -348,3 +352,37 @@ def test_python_view_returns_the_page_and_writes_it(runs, tmp_path):
         jointsim.view(tmp_path)
     with pytest.raises(jointsim.InputError, match="columns"):
         jointsim.view(out / "robotr3_full_robot", columns=1)
+
+
+def test_rig_sweep_overlays_the_friction_maps_of_its_runs(browser, cli, root, tmp_path):
+    """A sweep of friction-map rig runs: the friction map (the rig's figure in the plane) of every run, overlaid;
+    every drawn point is a (velocity, friction torque) sample of that run's log."""
+    sweep = tmp_path / "rig_sweep.yaml"
+    sweep.write_text(f"""sweep:
+  name: rig_sweep
+  experiment: {root / 'config' / 'experiments' / 'lugre_friction_map.yaml'}
+  set: {{duration: 60}}
+grid:
+  friction.model.sigma0: [150, 400]
+""")
+    out = tmp_path / "out"
+    subprocess.run([str(cli), "batch", str(sweep), "-j", "2", "-o", str(out)], check=True, capture_output=True)
+    subprocess.run([str(cli), "view", str(out), "-o", str(tmp_path / "rig.html")], check=True, capture_output=True)
+    _open(browser, tmp_path / "rig.html")
+    options = [o.text for o in browser.find_elements("css selector", "#figure-select option")]
+    assert len(options) == 2 and "friction map (every run)" in options[1]
+    assert [c.text for c in browser.find_elements("css selector", "#runs td")][2::3] == \
+        ["friction.model.sigma0=150", "friction.model.sigma0=400"]
+    browser.execute_script("window.jointsimView.selectFigure(1);")
+    panels = browser.execute_script("return window.jointsimView.panels();")
+    assert len(panels) == 1 and not panels[0]["time"]
+    data = browser.execute_script("return window.jointsimView.data;")
+    for run in data["runs"]:
+        names, log = _read_csv(out / run["name"] / "lugre_friction_map.csv")
+        samples = next(s for s in run["figures"][0]["panels"][0]["series"] if s.get("y_col"))
+        assert len(samples["x"]) > 100
+        xs, ys = log[:, names.index(samples["x_col"])], log[:, names.index(samples["y_col"])]
+        for x, y in list(zip(samples["x"], samples["y"]))[::25]:
+            assert np.min(np.abs(xs - x) + np.abs(ys - y) / 10) < 1e-6 * (1 + abs(x)), (x, y)
+    assert len(panels[0]["series"]) == 2 * len([r for r in data["runs"] if r["figures"]])
+    _no_console_error(browser)

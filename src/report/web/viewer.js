@@ -329,6 +329,7 @@
     if (emphasis !== undefined) {  // a sweep's overlay: the selected run red and bold, the others grey
       o.width = emphasis ? 2.6 : 1;
       o.stroke = emphasis ? '#d62728' : '#a4adba';
+      if (o.points.show) o.points.fill = emphasis ? '#d62728' : '#a4adba';
     }
     return o;
   }
@@ -376,7 +377,7 @@
       series: [{ label: 'time' }].concat(series.map(function (s, i) {
         return seriesOpts(s, i, emphasisOf ? emphasisOf(i) : undefined);
       })),
-      cursor: { drag: { x: true, y: false } },
+      cursor: { drag: { x: true, y: false }, y: false },
       legend: { live: false, show: series.length <= 12 },
       hooks: { setCursor: [function () { onCursor(c); }] },
     };
@@ -399,7 +400,19 @@
     }
     return { stroke: p, fill: null, clip: null, band: null, gaps: null, flags: 0 };
   }
-  function makeXYChart(panel, box) {
+  // Dots at the points (samples and markers in the plane).
+  function dots(u, si) {
+    const xs = u.data[si][0], ys = u.data[si][1], s = u.series[si];
+    const r = (s._dot || 2) * (window.devicePixelRatio || 1) / 2;
+    const p = new Path2D();
+    for (let i = 0; i < xs.length; ++i) {
+      const x = u.valToPos(xs[i], s.facets[0].scale, true), y = u.valToPos(ys[i], s.facets[1].scale, true);
+      p.moveTo(x + r, y);
+      p.arc(x, y, r, 0, 2 * Math.PI);
+    }
+    return { stroke: null, fill: p, clip: null, band: null, gaps: null, flags: 0 };
+  }
+  function makeXYChart(panel, box, emphasisOf) {
     const series = panel.series.filter(function (s) { return s.x.length > 0; });
     const data = [null].concat(series.map(function (s) {
       const xs = [], ys = [];
@@ -411,14 +424,22 @@
       scales: { x: { time: false, auto: true }, y: { auto: true } },
       axes: [{ label: panel.xlabel }, { label: panel.ylabel, size: 60 }],
       series: [{}].concat(series.map(function (s, i) {
-        const o = seriesOpts(s, i);
+        const o = seriesOpts(s, i, emphasisOf ? emphasisOf(s) : undefined);
         o.facets = [{ scale: 'x', auto: true }, { scale: 'y', auto: true }];
         delete o.scale;
         delete o.spanGaps;
-        if (!o.paths) o.paths = polyline;
+        if (o.points.show) {  // a scatter: dots of the points' colour
+          o.fill = o.points.fill;
+          o._dot = o.points.size;
+          o.paths = dots;
+          o.points = { show: false };
+        } else {
+          o.paths = polyline;
+        }
         return o;
       })),
-      legend: { live: false },
+      legend: { live: false, show: series.length <= 12 },
+      cursor: { y: false },
     };
     const wrap = el('div', 'panel');
     box.appendChild(wrap);
@@ -435,7 +456,9 @@
     const run = D.runs[state.run];
     const box = document.getElementById('plots');
     if (D.kind === 'sweep') {
-      buildOverlay(box);
+      if (k === 1) buildFigureOverlay(box);
+      else buildOverlay(box);
+      state.figure = k;
       return;
     }
     const fig = (run.figures || [])[k];
@@ -451,7 +474,16 @@
     const sel = document.getElementById('figure-select');
     sel.replaceChildren();
     if (D.kind === 'sweep') {
-      sel.appendChild(el('option', null, D.key ? 'key signal of every run: ' + D.key.what : 'no key signal'));
+      const a = el('option', null, D.key ? 'key signal of every run: ' + D.key.what : 'no key signal');
+      a.value = '0';
+      sel.appendChild(a);
+      const f = sweepFigure();
+      if (f) {
+        const b = el('option', null, f.title + ' (every run)');
+        b.value = '1';
+        sel.appendChild(b);
+      }
+      sel.value = String(state.figure);
       return;
     }
     (run.figures || []).forEach(function (f, i) {
@@ -461,7 +493,7 @@
     });
   }
   document.getElementById('figure-select').addEventListener('change', function (e) {
-    if (D.kind !== 'sweep') showFigure(Number(e.target.value));
+    showFigure(Number(e.target.value));
   });
 
   // ---------------------------------------------------------------------------------------------- sweeps
@@ -481,13 +513,45 @@
     state.charts.push(c);
     syncCursors();
   }
+  // The figure that characterises the sweep's type (curves in the plane: clamping curves, friction map), from the
+  // first run that has it.
+  function sweepFigure() {
+    for (const r of D.runs) if (r.figures && r.figures.length) return r.figures[0];
+    return null;
+  }
+  // That figure with every run's curves overlaid, the selected run's in red.
+  function buildFigureOverlay(box) {
+    const f = sweepFigure();
+    if (!f) return;
+    f.panels.forEach(function (p0, pi) {
+      const panel = { title: p0.title + ' (selected run red)', xlabel: p0.xlabel, ylabel: p0.ylabel, series: [] };
+      D.runs.forEach(function (r, ri) {
+        const p = r.figures && r.figures[0] && r.figures[0].panels[pi];
+        if (!p) return;
+        for (const s of p.series) {
+          const o = Object.assign({}, s);
+          o.title = r.name + (s.title ? ' · ' + s.title : '');
+          o.run = ri;
+          panel.series.push(o);
+        }
+      });
+      // Unselected runs first, so that the selected run is drawn on top.
+      panel.series.sort(function (a, b) { return (a.run === state.run) - (b.run === state.run); });
+      state.charts.push(makeXYChart(panel, box, function (s) { return s.run === state.run; }));
+    });
+  }
   function buildRunList() {
     if (D.kind !== 'sweep') return;
     document.getElementById('runs-box').hidden = false;
     const labelKeys = [];
     for (const r of D.runs) for (const kv of r.labels || []) if (labelKeys.indexOf(kv[0]) < 0) labelKeys.push(kv[0]);
+    // The overrides that differ between the runs (those common to all say nothing about a run).
+    const items = D.runs.map(function (r) { return String(r.overrides || '').split('; ').filter(Boolean); });
+    const common = items.length ? items[0].filter(function (x) { return items.every(function (l) { return l.indexOf(x) >= 0; }); }) : [];
+    const varies = items.map(function (l) { return l.filter(function (x) { return common.indexOf(x) < 0; }).join('; '); });
+    const showVaries = labelKeys.length === 0 && varies.some(Boolean);
     const table = el('table'), head = el('tr');
-    for (const h of ['run', 'status'].concat(labelKeys)) head.appendChild(el('th', null, h));
+    for (const h of ['run', 'status'].concat(labelKeys, showVaries ? ['set'] : [])) head.appendChild(el('th', null, h));
     table.appendChild(head);
     D.runs.forEach(function (r, i) {
       const tr = el('tr', 'run');
@@ -495,6 +559,7 @@
       tr.appendChild(el('td', null, r.status));
       const labels = new Map(r.labels || []);
       for (const k of labelKeys) tr.appendChild(el('td', null, labels.has(k) ? labels.get(k) : ''));
+      if (showVaries) tr.appendChild(el('td', null, varies[i]));
       tr.addEventListener('click', function () { selectRun(i); });
       table.appendChild(tr);
     });
@@ -595,8 +660,10 @@
     const range = timeRange(run);
     state.t0 = range[0];
     state.t1 = range[1];
+    if (D.kind !== 'sweep') state.figure = run.first_figure || 0;
     buildFigureSelect(run);
-    showFigure(0);
+    showFigure(state.figure);
+    document.getElementById('figure-select').value = String(state.figure);
     setTime(Math.min(Math.max(state.t, state.t0), state.t1));
   }
 
