@@ -229,6 +229,7 @@ def test_robotr3_full_robot_page(browser, runs, root, tmp_path):
 
 def test_cursor_and_animation_follow_each_other(browser, runs):
     from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.keys import Keys
 
     _, pages = runs
     _open(browser, pages["robotr3_full_robot"])
@@ -245,6 +246,23 @@ def test_cursor_and_animation_follow_each_other(browser, runs):
         if p["time"]:
             assert browser.execute_script("return window.jointsimView.readout(arguments[0]).cursor;", k) == \
                 pytest.approx(t)
+    # Zoom (wheel) and pan (shift-drag) of one plot apply to every time plot; a double-click resets them.
+    full = browser.execute_script("return window.jointsimView.span(0);")
+    for _ in range(3):  # one wheel step per call: uPlot applies a scale change in a microtask
+        browser.execute_script("""const o = document.querySelectorAll('#plots .u-over')[0], r = o.getBoundingClientRect();
+            o.dispatchEvent(new WheelEvent('wheel', {deltaY: -100, clientX: r.left + r.width / 2,
+                                                     clientY: r.top + 10, bubbles: true, cancelable: true}));""")
+    spans = [browser.execute_script("return window.jointsimView.span(arguments[0]);", k)
+             for k, p in enumerate(browser.execute_script("return window.jointsimView.panels();")) if p["time"]]
+    assert len(spans) >= 2 and all(sp == pytest.approx(spans[0]) for sp in spans)
+    assert spans[0][1] - spans[0][0] == pytest.approx(0.8 ** 3 * (full[1] - full[0]), rel=1e-6)
+    ActionChains(browser).key_down(Keys.SHIFT).move_to_element_with_offset(over, 0, 5).click_and_hold() \
+        .move_by_offset(-int(w * 0.2), 0).release().key_up(Keys.SHIFT).perform()
+    panned = browser.execute_script("return window.jointsimView.span(1);")
+    assert panned[1] - panned[0] == pytest.approx(spans[0][1] - spans[0][0], rel=1e-6)
+    assert panned[0] > spans[0][0]
+    ActionChains(browser).double_click(over).perform()
+    assert browser.execute_script("return window.jointsimView.span(1);") == pytest.approx(full)
     # Playing moves the time on.
     browser.execute_script("window.jointsimView.setTime(0); window.jointsimView.play(true);")
     browser.execute_script("return new Promise(r => setTimeout(r, 300));")

@@ -361,6 +361,42 @@
     showReadout(c, t);
     if (!state.playing) setTime(t, c);
   }
+  // One time span for every time plot shown: a zoom (drag, wheel), a pan (shift-drag or middle-drag) or a reset
+  // (double-click) of one applies to all.
+  function setSpan(min, max, from) {
+    if (!(max > min) || state.spanning) return;
+    state.spanning = true;
+    try {
+      for (const c of state.charts) if (c.time && c !== from) c.u.setScale('x', { min: min, max: max });
+    } finally {
+      state.spanning = false;
+    }
+  }
+  function addPanZoom(c) {
+    const u = c.u, over = u.over;
+    over.addEventListener('wheel', function (e) {
+      e.preventDefault();
+      const x = u.posToVal(e.clientX - over.getBoundingClientRect().left, 'x');
+      const min = u.scales.x.min, max = u.scales.x.max, f = e.deltaY < 0 ? 0.8 : 1.25;
+      u.setScale('x', { min: x - (x - min) * f, max: x + (max - x) * f });
+    }, { passive: false });
+    u.root.addEventListener('mousedown', function (e) {
+      if (!over.contains(e.target) || !(e.shiftKey || e.button === 1)) return;
+      e.stopPropagation();
+      e.preventDefault();
+      const x0 = e.clientX, min = u.scales.x.min, max = u.scales.x.max, w = Math.max(over.clientWidth, 1);
+      const move = function (ev) {
+        const d = (ev.clientX - x0) / w * (max - min);
+        u.setScale('x', { min: min - d, max: max - d });
+      };
+      const up = function () {
+        document.removeEventListener('mousemove', move);
+        document.removeEventListener('mouseup', up);
+      };
+      document.addEventListener('mousemove', move);
+      document.addEventListener('mouseup', up);
+    }, true);
+  }
   function makeTimeChart(panel, box, emphasisOf) {
     const series = panel.series.filter(function (s) { return s.x.length > 0; });
     const p = { title: panel.title, series: series, unit: '' };
@@ -379,13 +415,17 @@
       })),
       cursor: { drag: { x: true, y: false }, y: false },
       legend: { live: false, show: series.length <= 12 },
-      hooks: { setCursor: [function () { onCursor(c); }] },
+      hooks: {
+        setCursor: [function () { onCursor(c); }],
+        setScale: [function (u, key) { if (key === 'x' && c.u) setSpan(u.scales.x.min, u.scales.x.max, c); }],
+      },
     };
     const wrap = el('div', 'panel');
     box.appendChild(wrap);
     c.u = new uPlot(opts, data, wrap);
     wrap.appendChild(c.readout);
     c.time = true;
+    addPanZoom(c);
     return c;
   }
   // A polyline through the points in their order (uPlot's own linear paths assume x sorted; a hysteresis loop is not).
@@ -696,6 +736,11 @@
     return { cursor: c.cursor, text: c.readout.textContent, values: c.values };
   };
   api.webgl = function () { return !!arm.renderer; };
+  // The time span [s] plot k shows.
+  api.span = function (k) {
+    const c = state.charts[k];
+    return c && c.time ? [c.u.scales.x.min, c.u.scales.x.max] : null;
+  };
 
   try {
     buildArm();
