@@ -4,7 +4,9 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -60,6 +62,92 @@ BodyInertia fromUrdfInertial(const urdf::Link& link) {
   I.com = X.p;
   I.inertia = X.R * Ic * X.R.transpose();
   return I;
+}
+
+/// The file a URDF mesh name stands for: `file://` and absolute paths as they are, relative ones against the URDF's
+/// folder, `package://PKG/REST` as DIR/PKG/REST for DIR in ROS_PACKAGE_PATH and in the URDF's folder and each of its
+/// parents (a checkout of a description package). Empty when no such file exists.
+std::string findMesh(const std::string& name, const std::string& urdf_file) {
+  namespace fs = std::filesystem;
+  const fs::path base = fs::absolute(fs::path(urdf_file)).parent_path();
+  std::vector<fs::path> candidates;
+  if (name.rfind("file://", 0) == 0) {
+    candidates.emplace_back(name.substr(7));
+  } else if (name.rfind("package://", 0) == 0) {
+    const std::string rest = name.substr(10);
+    std::vector<fs::path> roots;
+    if (const char* env = std::getenv("ROS_PACKAGE_PATH")) {
+      std::stringstream ss(env);
+      for (std::string d; std::getline(ss, d, ':');)
+        if (!d.empty()) roots.emplace_back(d);
+    }
+    for (fs::path d = base; !d.empty(); d = d.parent_path()) {
+      roots.push_back(d);
+      if (d == d.parent_path()) break;
+    }
+    for (const auto& r : roots) candidates.push_back(r / rest);
+  } else {
+    const fs::path p(name);
+    candidates.push_back(p.is_absolute() ? p : base / p);
+  }
+  for (const auto& c : candidates)
+    if (io::isRegularFile(c.string())) return fs::absolute(c).lexically_normal().string();
+  return {};
+}
+
+/// The `<visual>` elements of every link, on the movable body that carries the link (fixed links merged).
+void addUrdfVisuals(const urdf::ModelInterface& urdf_model, const std::string& file, Model& model) {
+  std::vector<std::string> names;
+  for (const auto& [name, link] : urdf_model.links_) names.push_back(name);
+  std::sort(names.begin(), names.end());
+  for (const auto& name : names) {
+    const urdf::Link& link = *urdf_model.links_.at(name);
+    if (!model.hasFrame(name) && name != model.base_name) continue;
+    const Frame frame = name == model.base_name ? Frame{name, -1, Placement{}}
+                                                : model.frames[static_cast<size_t>(model.frameIndex(name))];
+    for (const auto& v : link.visual_array) {
+      if (!v || !v->geometry) continue;
+      Visual out;
+      out.link = name;
+      out.joint = frame.joint;
+      out.placement = frame.placement * fromUrdfPose(v->origin);
+      switch (v->geometry->type) {
+        case urdf::Geometry::BOX: {
+          const auto& b = static_cast<const urdf::Box&>(*v->geometry);
+          out.shape = Visual::Shape::Box;
+          out.size = {b.dim.x, b.dim.y, b.dim.z};
+          break;
+        }
+        case urdf::Geometry::CYLINDER: {
+          const auto& c = static_cast<const urdf::Cylinder&>(*v->geometry);
+          out.shape = Visual::Shape::Cylinder;
+          out.size = {c.radius, c.length, 0.0};
+          break;
+        }
+        case urdf::Geometry::SPHERE: {
+          const auto& s = static_cast<const urdf::Sphere&>(*v->geometry);
+          out.shape = Visual::Shape::Sphere;
+          out.size = {s.radius, 0.0, 0.0};
+          break;
+        }
+        case urdf::Geometry::MESH: {
+          const auto& m = static_cast<const urdf::Mesh&>(*v->geometry);
+          out.shape = Visual::Shape::Mesh;
+          out.size = {m.scale.x, m.scale.y, m.scale.z};
+          out.mesh = m.filename;
+          out.mesh_path = findMesh(m.filename, file);
+          break;
+        }
+        default: continue;
+      }
+      if (!out.size.allFinite()) throw InputError(file + ": link '" + printable(name) + "' <visual>: non-finite size");
+      if (v->material) {
+        const auto& c = v->material->color;
+        out.rgba = {c.r, c.g, c.b, c.a};
+      }
+      model.visuals.push_back(std::move(out));
+    }
+  }
 }
 
 /// Adds the links below `top`, depth first in document order, with an explicit stack (a chain of links as
@@ -492,11 +580,14 @@ Model loadUrdfString(const std::string& xml, const std::string& name) {
   const urdf::LinkConstSharedPtr root = urdf_model->getRoot();
   ModelBuilder builder(urdf_model->getName(), root->name);
   addUrdfSubtree(*root, name, builder);
+  Model model;
   try {
-    return builder.build();
+    model = builder.build();
   } catch (const InputError& e) {
     throw InputError(name + ": " + e.what());
   }
+  addUrdfVisuals(*urdf_model, name, model);
+  return model;
 }
 
 Model loadUrdf(const std::string& path) { return loadUrdfString(io::readInputFile(path, "URDF file"), path); }

@@ -7,6 +7,7 @@
 #include "jointsim/report/view.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -30,6 +31,7 @@
 namespace jointsim::report {
 namespace assets {
 extern const std::string_view kThreeJs, kOrbitControlsJs, kUplotJs, kUplotCss, kViewerJs, kViewerCss, kViewerHtml;
+extern const std::string_view kStlLoaderJs, kObjLoaderJs, kTgaLoaderJs, kColladaLoaderJs;
 }  // namespace assets
 
 namespace {
@@ -245,6 +247,81 @@ json placementJson(const multibody::Placement& X) {
   return j;
 }
 
+std::string base64(const std::string& bytes) {
+  static const char* const kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const unsigned v = (static_cast<unsigned char>(bytes[i]) << 16) | (static_cast<unsigned char>(bytes[i + 1]) << 8) |
+                       static_cast<unsigned char>(bytes[i + 2]);
+    out += {kDigits[(v >> 18) & 63], kDigits[(v >> 12) & 63], kDigits[(v >> 6) & 63], kDigits[v & 63]};
+  }
+  if (i + 1 == bytes.size()) {
+    const unsigned v = static_cast<unsigned char>(bytes[i]) << 16;
+    out += {kDigits[(v >> 18) & 63], kDigits[(v >> 12) & 63], '=', '='};
+  } else if (i + 2 == bytes.size()) {
+    const unsigned v = (static_cast<unsigned char>(bytes[i]) << 16) | (static_cast<unsigned char>(bytes[i + 1]) << 8);
+    out += {kDigits[(v >> 18) & 63], kDigits[(v >> 12) & 63], kDigits[(v >> 6) & 63], '='};
+  }
+  return out;
+}
+
+/// The mesh format of a file name by its extension ("stl", "obj", "dae"), "" for others.
+std::string meshFormat(const std::string& name) {
+  const auto dot = name.rfind('.');
+  if (dot == std::string::npos) return {};
+  std::string ext = name.substr(dot + 1);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == "stl" || ext == "obj" || ext == "dae" ? ext : std::string();
+}
+
+/// The link geometry of the robot file (URDF <visual>): primitives, and meshes embedded (base64) up to
+/// `budget` bytes in all; a mesh not found, of another format or over the budget is listed in `notes`.
+json visualsJson(const multibody::Model& m, long budget, std::vector<std::string>& formats, json& notes) {
+  json out = json::array();
+  long used = 0;
+  for (const multibody::Visual& v : m.visuals) {
+    json j;
+    j["link"] = v.link;
+    j["joint"] = v.joint;
+    j["origin"] = placementJson(v.placement);
+    j["size"] = {v.size.x(), v.size.y(), v.size.z()};
+    if (v.rgba.minCoeff() >= 0) j["rgba"] = {v.rgba[0], v.rgba[1], v.rgba[2], v.rgba[3]};
+    switch (v.shape) {
+      case multibody::Visual::Shape::Box: j["shape"] = "box"; break;
+      case multibody::Visual::Shape::Cylinder: j["shape"] = "cylinder"; break;
+      case multibody::Visual::Shape::Sphere: j["shape"] = "sphere"; break;
+      case multibody::Visual::Shape::Mesh: {
+        j["shape"] = "mesh";
+        j["mesh"] = v.mesh;
+        const std::string format = meshFormat(v.mesh);
+        std::string why;
+        std::string bytes;
+        if (format.empty())
+          why = "not an STL, OBJ or COLLADA (.dae) file";
+        else if (v.mesh_path.empty())
+          why = "file not found";
+        else if ((bytes = io::readBoundedFile(v.mesh_path)).empty())
+          why = "cannot be read";
+        else if (used + static_cast<long>(bytes.size()) > budget)
+          why = "over the page's mesh budget";
+        if (!why.empty()) {
+          notes.push_back("mesh " + v.mesh + " of link " + v.link + " not drawn: " + why);
+          continue;
+        }
+        used += static_cast<long>(bytes.size());
+        j["format"] = format;
+        j["data"] = base64(bytes);
+        if (std::find(formats.begin(), formats.end(), format) == formats.end()) formats.push_back(format);
+        break;
+      }
+    }
+    out.push_back(std::move(j));
+  }
+  return out;
+}
+
 /// The arm's kinematic tree for the page (joint placements, axes, limits, the TCP frame).
 json armJson(const experiments::ArmKinematics& arm) {
   const multibody::Model& m = *arm.model;
@@ -267,6 +344,7 @@ json armJson(const experiments::ArmKinematics& arm) {
   const multibody::Frame& tcp = m.frames[static_cast<size_t>(arm.tcp_frame)];
   a["tcp"] = {{"name", tcp.name}, {"joint", tcp.joint}, {"origin", placementJson(tcp.placement)}};
   a["clamped"] = arm.clamped;
+  a["visuals"] = json::array();
   return a;
 }
 
@@ -432,10 +510,23 @@ void replaceOnce(std::string& s, const std::string& key, std::string_view value)
   s.replace(at, key.size(), value.data(), value.size());
 }
 
-std::string page(const json& data, const std::string& title) {
+std::string page(const json& data, const std::string& title, const std::vector<std::string>& mesh_formats) {
   const std::string payload = inertJson(data);
   const std::string nonce = io::contentHash(payload).substr(5);
   std::string html(assets::kViewerHtml);
+  // The mesh loaders the page needs (three.js's, r111), each in a script element of its own.
+  std::string loaders;
+  auto script = [&](std::string_view code) {
+    loaders.append("<script nonce=\"").append(nonce).append("\">").append(code).append("</script>\n");
+  };
+  for (const auto& f : mesh_formats) {
+    if (f == "stl") script(assets::kStlLoaderJs);
+    if (f == "obj") script(assets::kObjLoaderJs);
+    if (f == "dae") {
+      script(assets::kTgaLoaderJs);
+      script(assets::kColladaLoaderJs);
+    }
+  }
   // The title is the only data-derived text outside the JSON: it goes in escaped as text.
   std::string esc;
   for (char c : title) {
@@ -463,6 +554,7 @@ std::string page(const json& data, const std::string& title) {
   tail = tail.substr(d + 6);
   for (const auto& [key, text] : {std::pair<std::string, std::string_view>{"@THREE@", assets::kThreeJs},
                                   {"@ORBIT@", assets::kOrbitControlsJs},
+                                  {"@LOADERS@", loaders},
                                   {"@UPLOT@", assets::kUplotJs},
                                   {"@APP@", assets::kViewerJs}}) {
     const auto k = tail.find(key);
@@ -477,6 +569,7 @@ std::string page(const json& data, const std::string& title) {
 void checkOptions(const ViewOptions& o) {
   if (o.columns < 10 || o.columns > 100000)
     throw InputError("view: columns " + std::to_string(o.columns) + ": expected 10 to 100000 slices per series");
+  if (o.mesh_bytes < 0) throw InputError("view: mesh budget " + std::to_string(o.mesh_bytes) + ": expected >= 0");
   if (o.frames < 10 || o.frames > 10000000)
     throw InputError("view: frames " + std::to_string(o.frames) + ": expected 10 to 10000000 animation samples");
 }
@@ -568,13 +661,16 @@ std::string viewHtml(const std::string& dir_in, const ViewOptions& options) {
     data["key"] = key;
     if (title.empty()) title = dir.filename().string();
   }
-  if (arm.arm)
+  std::vector<std::string> formats;
+  if (arm.arm) {
     data["arm"] = armJson(*arm.arm);
-  else
+    data["arm"]["visuals"] = visualsJson(*arm.arm->model, options.mesh_bytes, formats, data["notes"]);
+  } else {
     data["arm"] = nullptr;
+  }
   data["arm_note"] = arm.why;
   data["title"] = title;
-  return page(data, title);
+  return page(data, title, formats);
 }
 
 std::string writeView(const std::string& dir, const std::string& output, const ViewOptions& options) {

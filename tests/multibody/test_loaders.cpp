@@ -2,9 +2,11 @@
 // same robot identically, and bad input gives one clear error naming the file, the key path and what was
 // expected.
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 
+#include <Eigen/Geometry>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -350,4 +352,36 @@ TEST(Urdf, TextThatIsNotUtf8IsRefusedBeforeParsing) {
   nul[good.find('\n') + 3] = '\0';
   EXPECT_THAT([&] { loadUrdfString(nul, "nul.urdf"); },
               ::testing::ThrowsMessage<InputError>(HasSubstr("nul.urdf:2: byte 0x00 (NUL)")));
+}
+
+TEST(UrdfVisuals, PrimitivesMeshesAndFixedLinksAreKeptOnTheirMovingBody) {
+  const Model m = loadUrdf(sourcePath("tests/data/visual_arm/urdf/visual_arm.urdf"));
+  ASSERT_EQ(m.visuals.size(), 6u);
+  // Sorted by link name: base_link, link1 (2), link2 (2), tool.
+  const auto& base = m.visuals[0];
+  EXPECT_EQ(base.link, "base_link");
+  EXPECT_EQ(base.joint, -1);
+  EXPECT_EQ(base.shape, Visual::Shape::Box);
+  EXPECT_TRUE(base.size.isApprox(Eigen::Vector3d(0.3, 0.3, 0.05)));
+  EXPECT_TRUE(base.rgba.isApprox(Eigen::Vector4d(0.5, 0.5, 0.5, 1.0)));
+  EXPECT_EQ(m.visuals[1].shape, Visual::Shape::Cylinder);
+  EXPECT_TRUE(m.visuals[1].size.isApprox(Eigen::Vector3d(0.04, 0.5, 0.0)));
+  EXPECT_EQ(m.visuals[1].joint, m.jointIndex("joint1"));
+  EXPECT_EQ(m.visuals[2].shape, Visual::Shape::Sphere);
+  EXPECT_NEAR(m.visuals[2].placement.p.z(), 0.5, 1e-15);
+  // The STL through package://visual_arm/... (the package folder is an ancestor of the URDF's folder).
+  const auto& mesh = m.visuals[3];
+  EXPECT_EQ(mesh.shape, Visual::Shape::Mesh);
+  EXPECT_EQ(mesh.mesh, "package://visual_arm/meshes/link2.stl");
+  EXPECT_EQ(mesh.mesh_path,
+            std::filesystem::path(sourcePath("tests/data/visual_arm/meshes/link2.stl")).lexically_normal().string());
+  EXPECT_NEAR(mesh.placement.R(2, 1), std::sin(0.3), 1e-15);
+  EXPECT_TRUE(m.visuals[4].mesh_path.empty());  // missing.stl: kept, marked as not found
+  // The fixed child link's box is on link2's body: tool frame (0.45 m along x, pitched 0.5 rad) · (0, 0, 0.03).
+  const auto& tool = m.visuals[5];
+  EXPECT_EQ(tool.link, "tool");
+  EXPECT_EQ(tool.joint, m.jointIndex("joint2"));
+  const Eigen::Vector3d expected =
+      Eigen::Vector3d(0.45, 0, 0) + Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY()) * Eigen::Vector3d(0, 0, 0.03);
+  EXPECT_TRUE(tool.placement.p.isApprox(expected, 1e-14));
 }

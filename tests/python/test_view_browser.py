@@ -404,3 +404,38 @@ grid:
             assert np.min(np.abs(xs - x) + np.abs(ys - y) / 10) < 1e-6 * (1 + abs(x)), (x, y)
     assert len(panels[0]["series"]) == 2 * len([r for r in data["runs"] if r["figures"]])
     _no_console_error(browser)
+
+
+def test_urdf_link_geometry_is_drawn_where_the_kinematics_put_it(browser, cli, root, tmp_path):
+    """A URDF arm with visuals (box, cylinder, sphere, an STL found through package://, a box on a fixed child link,
+    a missing mesh): each drawn shape's centre is where the library's forward kinematics puts that link's geometry."""
+    data_dir = root / "tests" / "data" / "visual_arm"
+    run = tmp_path / "run"
+    subprocess.run([str(cli), "run", str(data_dir / "visual_arm_swing.yaml"), "-o", str(run)], check=True,
+                   capture_output=True)
+    subprocess.run([str(cli), "view", str(run), "-o", str(tmp_path / "arm.html")], check=True, capture_output=True)
+    _open(browser, tmp_path / "arm.html")
+    data = browser.execute_script("return window.jointsimView.data;")
+    assert any("missing.stl" in n and "not found" in n for n in data["notes"])
+    assert "missing.stl" in browser.execute_script("return document.getElementById('notes').innerText;")
+    model = jointsim.load_robot(data_dir / "urdf" / "visual_arm.urdf")
+    names, log = _read_csv(run / "visual_arm_swing.csv")
+    rx = np.array([[1, 0, 0], [0, math.cos(0.3), -math.sin(0.3)], [0, math.sin(0.3), math.cos(0.3)]])
+    # Each shape's centre in its link frame, from the URDF: origin + rotation · (centre of the geometry).
+    expected_local = [("base_link", [0, 0, 0.025]), ("link1", [0, 0, 0.25]), ("link1", [0, 0, 0.5]),
+                      ("link2", list(np.array([0.02, 0, 0]) + rx @ np.array([0.2, 0, 0]))), ("tool", [0, 0, 0.03])]
+    for t in (0.0, 0.5, 1.0):
+        row = int(np.argmin(np.abs(log[:, 0] - t)))
+        browser.execute_script("window.jointsimView.setTime(arguments[0]);", float(log[row, 0]))
+        q = log[row, [names.index("q_joint1"), names.index("q_joint2")]]
+        drawn = browser.execute_script("return window.jointsimView.visuals();")
+        assert [d["link"] for d in drawn] == [e[0] for e in expected_local]
+        for d, (link, local) in zip(drawn, expected_local):
+            T = np.asarray(jointsim.frame_placement(model, q, link))
+            want = T[:3, :3] @ np.array(local, dtype=float) + T[:3, 3]
+            # An STL holds float32 vertices (three.js keeps them so): 1e-6 m for the mesh, 1e-9 m for the primitives.
+            tol = 1e-6 if link == "link2" else 1e-9
+            assert np.max(np.abs(np.array(d["center"]) - want)) < tol, (t, link, d["center"], want)
+    browser.save_screenshot(str(_artefact(tmp_path, "view_urdf_visuals.png")))
+    _no_console_error(browser)
+    _no_request(browser)

@@ -49,6 +49,22 @@ struct Frame {
   Placement placement;  ///< pose of the frame in that body's joint frame [m, rad]
 };
 
+/// Visual geometry of a link as its robot file describes it (URDF `<visual>`), for viewers (`jointsim view`); no
+/// algorithm uses it.
+struct Visual {
+  enum class Shape { Box, Cylinder, Sphere, Mesh };
+  int joint = -1;       ///< index of the movable joint whose body carries it; -1 = base
+  Placement placement;  ///< pose of the geometry in that body's joint frame [m, rad]
+  Shape shape = Shape::Box;
+  /// Box: edge lengths along x, y, z [m]; cylinder (axis z): radius, length [m], 0; sphere: radius [m], 0, 0;
+  /// mesh: scale factors along x, y, z [-].
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  std::string mesh;       ///< mesh file as the robot file names it (e.g. package://ur_description/meshes/base.stl)
+  std::string mesh_path;  ///< mesh: the file found for it (absolute), empty when not found
+  Eigen::Vector4d rgba = Eigen::Vector4d::Constant(-1.0);  ///< material colour (0..1), all −1 when none
+  std::string link;                                        ///< the link it belongs to
+};
+
 /// Constant description of a kinematic tree with nq single-degree-of-freedom joints (revolute about an
 /// arbitrary axis or prismatic along one). Joint i moves body i; body frames are the joint frames.
 /// Joints are ordered so that parents[i] < i ("from base to tip" for a serial chain).
@@ -75,6 +91,8 @@ struct Model {
   std::vector<Eigen::Vector3d> first_moment;    ///< (nq) h = m c [kg·m]
   std::vector<Eigen::Matrix3d> inertia_origin;  ///< (nq) I_O [kg·m²]
   std::vector<int> axis_kind;                   ///< (nq) 0, 1, 2: axis is +x, +y, +z exactly; 3: other
+
+  std::vector<Visual> visuals;  ///< visual geometry of the links (URDF `<visual>`), for viewers only
 
   /// Index of the joint with this name; throws InputError naming the known joints if absent.
   int jointIndex(const std::string& name) const;

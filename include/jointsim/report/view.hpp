@@ -25,6 +25,8 @@ struct ViewOptions {
   int columns = 1000;  ///< slices per plotted series for min/max decimation (about the pixel width), 10..100000
   int frames = 20000;  ///< most animation samples per run (rows are strided beyond it), 10..10000000
   std::string title;   ///< page title (empty: the experiment's or sweep folder's name)
+  /// Most bytes of URDF visual meshes (STL, OBJ, COLLADA) embedded in the page; meshes beyond are listed as not drawn.
+  long mesh_bytes = 50'000'000;
 };
 
 /// The page of the run folder (summary.json + CSV log of `jointsim run`) or sweep folder (manifest.csv of

@@ -64,6 +64,7 @@
     box.replaceChildren();
     const notes = [];
     if (!D.arm && D.arm_note) notes.push('No 3D view: ' + D.arm_note + '.');
+    for (const n of D.notes || []) notes.push(n);
     if (run && run.motion_note) notes.push('No motion for this run: ' + run.motion_note + '.');
     if (run && run.error) notes.push('This run has no log: ' + run.error);
     if (run && run.changed_inputs && run.changed_inputs.length)
@@ -144,16 +145,19 @@
     const jointMat = new THREE.MeshLambertMaterial({ color: 0x1f77b4 });
     const tcpMat = new THREE.MeshLambertMaterial({ color: 0xff7f0e });
     const moving = [];
+    // With link geometry from the robot file (URDF <visual>), that is drawn instead of the simple links.
+    const simple = !(A.visuals && A.visuals.length);
     A.joints.forEach(function (j, i) {
       const fixed = new THREE.Object3D();
       placement(fixed, j.origin);
       const parent = j.parent >= 0 ? moving[j.parent] : base;
       parent.add(fixed);
-      rod(parent, new THREE.Vector3(), vec(j.origin.p), r, linkMat);
+      if (simple) rod(parent, new THREE.Vector3(), vec(j.origin.p), r, linkMat);
       const mov = new THREE.Object3D();
       fixed.add(mov);
       moving.push(mov);
       const ax = vec(j.axis).normalize();
+      if (!simple) return;
       if (j.prismatic) rod(fixed, ax.clone().multiplyScalar(-2 * r), ax.clone().multiplyScalar(2 * r), 1.2 * r, jointMat);
       else rod(fixed, ax.clone().multiplyScalar(-1.6 * r), ax.clone().multiplyScalar(1.6 * r), 1.6 * r, jointMat);
       void i;
@@ -162,7 +166,19 @@
     const tcp = new THREE.Object3D();
     placement(tcp, A.tcp.origin);
     tcpParent.add(tcp);
-    rod(tcpParent, new THREE.Vector3(), vec(A.tcp.origin.p), 0.7 * r, linkMat);
+    if (simple) rod(tcpParent, new THREE.Vector3(), vec(A.tcp.origin.p), 0.7 * r, linkMat);
+    const visuals = [];
+    for (const v of A.visuals || []) {
+      const obj = new THREE.Object3D();
+      placement(obj, v.origin);
+      (v.joint >= 0 ? moving[v.joint] : base).add(obj);
+      const rgba = v.rgba || [0.62, 0.68, 0.76, 1];
+      const mat = new THREE.MeshLambertMaterial({ color: new THREE.Color(rgba[0], rgba[1], rgba[2]),
+                                                  transparent: rgba[3] < 1, opacity: rgba[3] });
+      const shape = visualObject(v, mat);
+      if (shape) obj.add(shape);
+      visuals.push({ link: v.link, object: obj, shape: shape });
+    }
     tcp.add(new THREE.Mesh(new THREE.SphereBufferGeometry(1.4 * r, 16, 12), tcpMat));
     tcp.add(new THREE.AxesHelper(5 * r));
     const plate = new THREE.Mesh(new THREE.CylinderBufferGeometry(4 * r, 4 * r, r, 24), linkMat);
@@ -181,6 +197,7 @@
     camera.up.set(0, 0, 1);
     camera.position.set(0.95 * reach, -1.25 * reach, 0.8 * reach);
     Object.assign(arm, { ok: true, scene: scene, camera: camera, moving: moving, tcp: tcp, r: r, reach: reach,
+                         visuals: visuals,
                          pathLine: null, clamp: null, renderer: null });
     try {
       const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
@@ -199,6 +216,48 @@
       note.textContent = 'WebGL is not available in this browser: the arm is not drawn (its kinematics still follow ' +
                          'the time; ' + e.message + ').';
     }
+  }
+  function bytesOf(b64) {
+    const s = atob(b64), a = new Uint8Array(s.length);
+    for (let i = 0; i < s.length; ++i) a[i] = s.charCodeAt(i);
+    return a;
+  }
+  // The three.js object of one URDF visual (its geometry in the visual's frame).
+  function visualObject(v, mat) {
+    const s = v.size;
+    if (v.shape === 'box') return new THREE.Mesh(new THREE.BoxBufferGeometry(s[0], s[1], s[2]), mat);
+    if (v.shape === 'sphere') return new THREE.Mesh(new THREE.SphereBufferGeometry(s[0], 24, 16), mat);
+    if (v.shape === 'cylinder') {  // URDF cylinders lie along z, three.js's along y
+      const m = new THREE.Mesh(new THREE.CylinderBufferGeometry(s[0], s[0], s[1], 24), mat);
+      m.rotation.x = Math.PI / 2;
+      return m;
+    }
+    if (v.shape !== 'mesh' || !v.data) return null;
+    const bytes = bytesOf(v.data);
+    let obj;
+    try {
+      if (v.format === 'stl') {
+        const g = new THREE.STLLoader().parse(bytes.buffer);
+        g.computeVertexNormals();  // many STL writers leave the facet normals zero
+        obj = new THREE.Mesh(g, mat);
+      } else if (v.format === 'obj') {
+        obj = new THREE.OBJLoader().parse(new TextDecoder().decode(bytes));
+        obj.traverse(function (o) { if (o.isMesh && v.rgba) o.material = mat; });
+      } else if (v.format === 'dae') {
+        const collada = new THREE.ColladaLoader().parse(new TextDecoder().decode(bytes), '');
+        obj = collada.scene;
+        obj.quaternion.identity();  // URDF uses the file's own axes (the loader turns Z_UP files to three.js's Y_UP)
+        if (v.rgba) obj.traverse(function (o) { if (o.isMesh) o.material = mat; });
+      }
+    } catch (e) {
+      report('mesh ' + v.mesh + ' of link ' + v.link + ' could not be read: ' + e.message);
+      return null;
+    }
+    if (!obj) return null;
+    const holder = new THREE.Object3D();
+    holder.scale.set(s[0], s[1], s[2]);
+    holder.add(obj);
+    return holder;
   }
   function resize() {
     if (!arm.renderer) return;
@@ -736,6 +795,16 @@
     return { cursor: c.cursor, text: c.readout.textContent, values: c.values };
   };
   api.webgl = function () { return !!arm.renderer; };
+  // Per URDF visual drawn: its link and the centre of its bounding box in the base frame [m] (null when not drawn).
+  api.visuals = function () {
+    if (!arm.ok) return [];
+    arm.scene.updateMatrixWorld(true);
+    return arm.visuals.map(function (v) {
+      if (!v.shape) return { link: v.link, center: null };
+      const c = new THREE.Box3().setFromObject(v.shape).getCenter(new THREE.Vector3());
+      return { link: v.link, center: [c.x, c.y, c.z] };
+    });
+  };
   // The time span [s] plot k shows.
   api.span = function (k) {
     const c = state.charts[k];
