@@ -23,6 +23,9 @@ void addViewCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--frames", opt->view.frames, "Most animation samples per run (the log's rows are strided beyond)")
       ->capture_default_str();
+  cmd->add_option("--mesh-bytes", opt->view.mesh_bytes,
+                  "Most bytes of URDF visual meshes embedded in the page (meshes beyond are listed as not drawn)")
+      ->capture_default_str();
   cmd->add_option("--title", opt->view.title, "Page title (default: the experiment's or the sweep folder's name)");
   cmd->callback([opt] {
     const std::string path = report::writeView(opt->dir, opt->output, opt->view);

@@ -516,13 +516,14 @@ class ViewPage(str):
 
 
 def view(run_dir: PathLike, output: Optional[PathLike] = None, columns: int = 1000, frames: int = 20000,
-         title: Optional[str] = None) -> ViewPage:
+         title: Optional[str] = None, mesh_bytes: int = 50_000_000) -> ViewPage:
     """As `jointsim view RUN_DIR`: one self-contained HTML page of a run folder or sweep folder (the arm animated in
     3D, interactive plots of the experiment type's figures, the summary; docs/view.md), returned as a ViewPage (a str
     that Jupyter displays inline) and, with output, also written there. columns: slices per plotted series (each
-    keeps its minimum and maximum rows); frames: most animation samples per run. Raises InputError."""
+    keeps its minimum and maximum rows); frames: most animation samples per run; mesh_bytes: most bytes of URDF
+    meshes embedded. Raises InputError."""
     page = ViewPage(_core.view_html(_path(run_dir, "run_dir"), _int(columns, "columns"), _int(frames, "frames"),
-                                    "" if title is None else str(title)))
+                                    "" if title is None else str(title), _int(mesh_bytes, "mesh_bytes")))
     if output is not None:
         page.save(output)
     return page

@@ -598,14 +598,16 @@ PYBIND11_MODULE(_core, m) {
 
   m.def(
       "view_html",
-      [](const std::string& dir, int columns, int frames, const std::string& title) {
+      [](const std::string& dir, int columns, int frames, const std::string& title, long mesh_bytes) {
         report::ViewOptions o;
         o.columns = columns;
         o.frames = frames;
         o.title = title;
+        o.mesh_bytes = mesh_bytes;
         return interruptible([&] { return report::viewHtml(dir, o); });
       },
-      py::arg("dir"), py::arg("columns") = 1000, py::arg("frames") = 20000, py::arg("title") = "");
+      py::arg("dir"), py::arg("columns") = 1000, py::arg("frames") = 20000, py::arg("title") = "",
+      py::arg("mesh_bytes") = 50'000'000L);
 
   // ------------------------------------------------------------------------------------------ FMU export
   m.def(
