@@ -75,6 +75,8 @@ std::string findMesh(const std::string& name, const std::string& urdf_file) {
     candidates.emplace_back(name.substr(7));
   } else if (name.rfind("package://", 0) == 0) {
     const std::string rest = name.substr(10);
+    for (const auto& part : fs::path(rest))
+      if (part == "..") return {};  // a package path stays inside its package
     std::vector<fs::path> roots;
     if (const char* env = std::getenv("ROS_PACKAGE_PATH")) {
       std::stringstream ss(env);

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string_view>
 
@@ -77,6 +78,8 @@ std::vector<Eigen::Index> peakRows(const Eigen::VectorXd& y, int slices) {
     for (Eigen::Index i : {lo, hi, gap})
       if (i >= 0) rows.push_back(i);
   }
+  rows.push_back(0);  // the ends, so that the plot spans the whole run
+  rows.push_back(n - 1);
   std::sort(rows.begin(), rows.end());
   rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
   return rows;
@@ -139,7 +142,7 @@ json figureJson(const experiments::Figure& f, const RunData& run, int slices) {
       if (p.time_axis && s.points.empty()) {
         keep = peakRows(y, slices);
       } else {  // a curve in the plane (hysteresis, friction map): evenly strided rows
-        const Eigen::Index n = y.size(), stride = std::max<Eigen::Index>(1, n / (2 * slices));
+        const Eigen::Index n = y.size(), stride = std::max<Eigen::Index>(1, (n + 2 * slices - 1) / (2 * slices));
         for (Eigen::Index i = 0; i < n; i += stride) keep.push_back(i);
         if (n > 0 && keep.back() != n - 1) keep.push_back(n - 1);
       }
@@ -221,8 +224,9 @@ std::shared_ptr<experiments::Experiment> rebuildExperiment(const RunData& run, s
   }
 }
 
-/// Input files whose content changed since the run (their recorded hash no longer matches).
-json changedInputs(const RunData& run) {
+/// Input files whose content changed since the run (their recorded hash no longer matches). Each file is hashed
+/// once per page (`hashes`: path → hash, shared by the runs of a sweep), at most 256 different files in all.
+json changedInputs(const RunData& run, std::map<std::string, std::string>& hashes) {
   json out = json::array();
   if (!run.summary) return out;
   auto in = run.summary->find("inputs");
@@ -232,7 +236,12 @@ json changedInputs(const RunData& run) {
         !f["hash"].is_string())
       continue;
     const std::string path = f["path"].get<std::string>();
-    if (io::fileHash(path) != f["hash"].get<std::string>()) out.push_back(path);
+    auto it = hashes.find(path);
+    if (it == hashes.end()) {
+      if (hashes.size() >= 256) continue;
+      it = hashes.emplace(path, io::fileHash(path)).first;
+    }
+    if (it->second != f["hash"].get<std::string>()) out.push_back(path);
   }
   return out;
 }
@@ -401,6 +410,16 @@ json summaryJson(const RunData& run) {
   return s;
 }
 
+/// What decides a run's arm: its experiment type and robot file (`robot` of its document).
+std::string armKey(const RunData& run) {
+  std::string key = run.type;
+  if (run.summary)
+    if (auto p = run.summary->find("parameters"); p != run.summary->end() && p->is_object())
+      if (auto c = p->find("config"); c != p->end() && c->is_object() && c->contains("robot"))
+        key += "|" + (*c)["robot"].dump();
+  return key;
+}
+
 struct ArmSource {
   std::shared_ptr<experiments::Experiment> experiment;
   std::optional<experiments::ArmKinematics> arm;
@@ -452,7 +471,7 @@ void compactTimes(json& r, const RunData& d) {
 }
 
 json runJson(const RunFolder& run, const std::string& label, const ArmSource& arm, const ViewOptions& o,
-             bool with_figures, std::string& why) {
+             bool with_figures, std::string& why, std::map<std::string, std::string>& hashes) {
   json r;
   r["name"] = label;
   r["experiment"] = run.data.experiment;
@@ -460,7 +479,7 @@ json runJson(const RunFolder& run, const std::string& label, const ArmSource& ar
   r["status"] = run.data.status;
   r["csv"] = run.csv;
   r["summary"] = summaryJson(run.data);
-  r["changed_inputs"] = changedInputs(run.data);
+  r["changed_inputs"] = changedInputs(run.data, hashes);
   if (arm.arm) {
     json m = motionJson(run.data, *arm.arm, o.frames, why);
     if (!m.is_null()) r["motion"] = std::move(m);
@@ -538,6 +557,8 @@ std::string page(const json& data, const std::string& title, const std::vector<s
       esc += "&amp;";
     else if (c == '"')
       esc += "&quot;";
+    else if (c == '@')  // never a placeholder of the template
+      esc += "&#64;";
     else if (static_cast<unsigned char>(c) >= 0x20)
       esc += c;
   }
@@ -592,35 +613,44 @@ std::string viewHtml(const std::string& dir_in, const ViewOptions& options) {
   data["notes"] = json::array();
   std::string title = options.title;
   ArmSource arm;
+  std::map<std::string, std::string> hashes;
   if (is_run) {
     const RunFolder run = loadRunFolder(dir.string());
     arm = armOf(run.data);
     std::string why;
-    json r = runJson(run, run.data.experiment, arm, options, true, why);
+    json r = runJson(run, run.data.experiment, arm, options, true, why, hashes);
+    if (!why.empty()) r["motion_note"] = why;
     compactTimes(r, run.data);
     data["runs"].push_back(std::move(r));
-    if (!why.empty()) arm.why = why;
     if (title.empty()) title = run.data.experiment;
   } else {
     const auto rows = readManifest((dir / "manifest.csv").string());
     json key = nullptr;
     bool first = true;
+    std::string arm_key;
     for (const ManifestRow& row : rows) {
       json r;
       const auto folder = runFolder(dir.string(), row);
       std::optional<RunFolder> run;
       if (folder) try {
           run = loadRunFolder(*folder);
-        } catch (const InputError& e) {
-          r["error"] = e.what();
+        } catch (const InputError&) {
+          // Not the message: it may quote the lines of whatever file a hand-edited summary names as the log.
+          r["error"] = "its folder has no readable summary.json and log (jointsim view on the folder says why)";
         }
       if (run && first) {
         arm = armOf(run->data);
+        arm_key = armKey(run->data);
         first = false;
       }
       std::string why;
       if (run) {
-        r = runJson(*run, row.run, arm, options, false, why);
+        // The page draws one arm: the first run's. A run on another robot is not animated.
+        ArmSource none;
+        none.why = "its robot differs from the first run's (the page draws one arm; jointsim view on its folder)";
+        const bool same_arm = armKey(run->data) == arm_key;
+        r = runJson(*run, row.run, same_arm ? arm : none, options, false, why, hashes);
+        if (!same_arm && arm.arm) why = none.why;
         if (!why.empty()) r["motion_note"] = why;
         // The key signal of the sweep (the first run's type decides it), decimated with its peaks.
         if (key.is_null())

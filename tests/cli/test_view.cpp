@@ -113,10 +113,12 @@ TEST(View, DataCannotLeaveItsScriptElementNorBecomeMarkup) {
   size_t scripts = 0;
   for (auto k = html.find("<script"); k != std::string::npos; k = html.find("<script", k + 1)) ++scripts;
   EXPECT_EQ(scripts, 5u);
+  size_t closes = 0;
+  for (auto k = html.find("</script"); k != std::string::npos; k = html.find("</script", k + 1)) ++closes;
+  EXPECT_EQ(closes, scripts);  // the data's own "</script>" is not among them
   const auto a = html.find("id=\"jointsim-data\">"), b = html.find("</script>", a);
-  const std::string payload = html.substr(a, b - a);
-  EXPECT_EQ(payload.find_first_of("<&", 1), std::string::npos);
-  EXPECT_EQ(payload.find('>', std::string("id=\"jointsim-data\">").size()), std::string::npos);
+  const std::string payload = html.substr(a + 19, b - a - 19);
+  EXPECT_EQ(payload.find_first_of("<>&"), std::string::npos);
   // The text survives as data: the page shows it as text.
   const json d = pageData(html);
   EXPECT_EQ(d["runs"][0]["summary"]["status"], evil);
@@ -194,6 +196,27 @@ TEST(View, ErrorsNameTheFolderAndNothingIsWritten) {
   for (const auto& e : fs::directory_iterator(tmp / "run")) names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end());
   EXPECT_EQ(names, (std::vector<std::string>{"r.csv", "summary.json", "view.html"}));
+}
+
+TEST(View, ASweepRunOnAnotherRobotIsListedButNotAnimatedWithTheFirstRunsArm) {
+  Scratch tmp;
+  for (const auto& [name, robot] : std::vector<std::pair<std::string, std::string>>{
+           {"a", "../robots/ur5_drives.yaml"}, {"b", "../robots/ur5_drives_elastic.yaml"}}) {
+    jointsim::experiments::RunOptions options;
+    options.output_dir = (tmp / "sweep" / name).string();
+    options.overrides = {"duration=0.05", "robot=" + robot};
+    ASSERT_EQ(
+        jointsim::experiments::runExperimentFile(sourcePath("config/experiments/ur5_excitation.yaml"), options).status,
+        "ok");
+  }
+  std::ofstream(tmp / "sweep" / "manifest.csv") << "run,status,wall_time_s,sim_time_s,real_time_factor,output_dir,"
+                                                   "overrides\na,ok,1,0.05,1,a,\nb,ok,1,0.05,1,b,\n";
+  const json d = pageData(jointsim::report::viewHtml((tmp / "sweep").string()));
+  ASSERT_EQ(d["runs"].size(), 2u);
+  EXPECT_TRUE(d["runs"][0].contains("motion"));
+  EXPECT_FALSE(d["runs"][1].contains("motion"));
+  EXPECT_THAT(d["runs"][1]["motion_note"].get<std::string>(), HasSubstr("robot differs"));
+  EXPECT_TRUE(d["runs"][1].contains("key"));  // still overlaid
 }
 
 }  // namespace

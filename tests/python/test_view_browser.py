@@ -149,6 +149,10 @@ def _check_page(driver, page, csv_path, robot_file, times, tmp_path, shot, tcp_c
             for v in ro["values"]:
                 assert v["column"], v
                 series = _series_spec(data, p, v)
+                # The readout names the drawn sample nearest the cursor...
+                xs = np.array([np.nan if x is None else x for x in series["x"]])
+                assert abs(v["t"] - t_row) == pytest.approx(np.nanmin(np.abs(xs - t_row)), abs=1e-12), (t_row, v)
+                # ...and its value is that of the CSV row at the sample's time.
                 r = int(np.flatnonzero(log[:, t_col] == v["t"])[0])
                 y = log[r, names.index(series["y_col"])]
                 if series.get("y_minus_col"):
@@ -324,11 +328,16 @@ def _hostile_folder(base: pathlib.Path) -> pathlib.Path:
     (run / "summary.json").write_text(json.dumps(summary))
     sweep = base / "sweep"
     shutil.copytree(run, sweep / "evil")
+    # A run whose log has a header only (no key signal to overlay, nothing to animate).
+    (sweep / "empty").mkdir()
+    (sweep / "empty" / "evil.csv").write_text("time[s],y[-]\n")
+    (sweep / "empty" / "summary.json").write_text(json.dumps({"experiment": "evil", "type": "custom", "status": "ok"}))
     with open(sweep / "manifest.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["run", "status", "wall_time_s", "sim_time_s", "real_time_factor", "output_dir", "overrides",
                     "fault_type", "fault_joint", "design"])
         w.writerow(["evil", HOSTILE, "1", "0.3", "0.3", "evil", HOSTILE, HOSTILE, "</script>", "<!--"])
+        w.writerow(["empty", "ok", "1", "0", "0", "empty", "", "", "", ""])
     return base
 
 
@@ -348,12 +357,29 @@ def test_hostile_folder_shows_its_markup_as_text_and_runs_none_of_it(browser, cl
         assert HOSTILE in text
         data = browser.execute_script("return window.jointsimView.data;")
         assert data["arm"] is None and data["arm_note"]
+        if folder == "sweep":  # the run without a log: listed, selectable, not overlaid
+            assert len(data["runs"]) == 2
+            assert len(browser.execute_script("return window.jointsimView.panels();")[0]["series"]) == 1
+            browser.execute_script("window.jointsimView.selectRun(1); window.jointsimView.selectRun(0);")
+            assert browser.execute_script("return window.jointsimView.errors;") == []
         browser.save_screenshot(str(_artefact(tmp_path, f"view_hostile_{folder}.png")))
         _no_console_error(browser)
 
 
 def test_python_view_returns_the_page_and_writes_it(runs, tmp_path):
     out, _ = runs
+    # Decimated to 50 slices: per slice at most a minimum, a maximum and a gap row (plus both ends) against time,
+    # at most 100 evenly strided points (plus the last) of a curve in the plane (the clamping curves).
+    for name in ("irb140_clamping", "robotr3_full_robot"):
+        page = jointsim.view(out / name, columns=50, frames=100)
+        start = page.index('id="jointsim-data">') + len('id="jointsim-data">')
+        run = json.loads(page[start:page.index("</script>", start)])["runs"][0]
+        for fig in run["figures"]:
+            for p in fig["panels"]:
+                for s in p["series"]:
+                    n = len(s.get("xi", s.get("x")))
+                    assert n <= (3 * 50 + 2 if p["time_axis"] else 2 * 50 + 1), (name, p["title"], n)
+                    assert n >= (50 if p["time_axis"] else 2 * 50 - 1) or s.get("points"), (name, p["title"], n)
     page = jointsim.view(out / "robotr3_full_robot", output=tmp_path / "p.html", columns=50, frames=100)
     assert isinstance(page, str) and page.startswith("<!DOCTYPE html>")
     assert (tmp_path / "p.html").read_text(encoding="utf-8") == page
@@ -362,10 +388,6 @@ def test_python_view_returns_the_page_and_writes_it(runs, tmp_path):
     data = json.loads(page[start:page.index("</script>", start)])
     run = data["runs"][0]
     assert len(run["motion"]["xi"]) <= 100 and len(run["time"]) <= 3 * 50 * 40 + 100
-    for fig in run["figures"]:
-        for p in fig["panels"]:
-            for s in p["series"]:
-                assert len(s.get("xi", s.get("x"))) <= 2 * 50 * (3 if p["time_axis"] else 1) + 1
     with pytest.raises(jointsim.InputError, match="neither a run folder"):
         jointsim.view(tmp_path)
     with pytest.raises(jointsim.InputError, match="columns"):
@@ -439,3 +461,27 @@ def test_urdf_link_geometry_is_drawn_where_the_kinematics_put_it(browser, cli, r
     browser.save_screenshot(str(_artefact(tmp_path, "view_urdf_visuals.png")))
     _no_console_error(browser)
     _no_request(browser)
+
+
+def test_hostile_joint_link_and_mesh_names_of_an_arm_stay_text(browser, cli, root, tmp_path):
+    """The arm's own names (joints, links, meshes) reach the page too: markup in them is shown, never run."""
+    pkg = tmp_path / "visual_arm"
+    shutil.copytree(root / "tests" / "data" / "visual_arm", pkg)
+    urdf = (pkg / "urdf" / "visual_arm.urdf").read_text()
+    evil = 'x&lt;img src=x onerror=&quot;window.pwned=1&quot;&gt;'
+    urdf = urdf.replace('name="joint1"', f'name="j{evil}"').replace('"link1"', f'"l{evil}"') \
+        .replace("missing.stl", "missing&lt;script&gt;window.pwned=2&lt;/script&gt;.stl")
+    (pkg / "urdf" / "visual_arm.urdf").write_text(urdf)
+    run = tmp_path / "run"
+    subprocess.run([str(cli), "run", str(pkg / "visual_arm_swing.yaml"), "-o", str(run)], check=True,
+                   capture_output=True)
+    subprocess.run([str(cli), "view", str(run), "-o", str(tmp_path / "arm.html")], check=True, capture_output=True)
+    _open(browser, tmp_path / "arm.html")
+    assert browser.execute_script("return window.pwned === undefined;")
+    assert browser.execute_script("return document.querySelectorAll('img, script:not([nonce]):not([type])')"
+                                  ".length;") == 0
+    text = browser.execute_script("return document.body.innerText;")
+    assert 'jx<img src=x onerror="window.pwned=1">' in text  # the joint's gauge
+    assert "missing<script>window.pwned=2</script>.stl" in text  # the note on the mesh not found
+    assert len(browser.execute_script("return window.jointsimView.visuals();")) == 5
+    _no_console_error(browser)

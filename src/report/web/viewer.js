@@ -197,7 +197,7 @@
     camera.up.set(0, 0, 1);
     camera.position.set(0.95 * reach, -1.25 * reach, 0.8 * reach);
     Object.assign(arm, { ok: true, scene: scene, camera: camera, moving: moving, tcp: tcp, r: r, reach: reach,
-                         visuals: visuals,
+                         visuals: visuals, base: base,
                          pathLine: null, clamp: null, renderer: null });
     try {
       const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
@@ -300,15 +300,21 @@
     if (k < 0) k = 0;
     const q = [];
     for (const col of m.q) {
-      let a = col[k], b = k + 1 < ts.length ? col[k + 1] : null;
-      if (a === null) { let i = k; while (i > 0 && col[i] === null) --i; a = col[i]; }
-      if (b === null || ts[k + 1] === null || ts[k + 1] === ts[k] || t <= ts[k]) q.push(a);
-      else q.push(a + (b - a) * Math.min(1, (t - ts[k]) / (ts[k + 1] - ts[k])));
+      // Between the finite samples around t (a non-finite angle is skipped); the nearest one outside them.
+      let i = k, j = k + 1;
+      while (i >= 0 && col[i] === null) --i;
+      while (j < ts.length && col[j] === null) ++j;
+      if (i < 0 && j >= ts.length) q.push(null);
+      else if (i < 0) q.push(col[j]);
+      else if (j >= ts.length || t <= ts[i] || ts[j] === ts[i]) q.push(col[i]);
+      else q.push(col[i] + (col[j] - col[i]) * Math.min(1, (t - ts[i]) / (ts[j] - ts[i])));
     }
     return q;
   }
   function poseArm(q) {
-    if (!arm.ok || !q) return;
+    if (!arm.ok) return;
+    arm.base.visible = !!q;  // a run without motion: no arm drawn
+    if (!q) { render(); return; }
     D.arm.joints.forEach(function (j, i) {
       const v = q[i] === null || !isFinite(q[i]) ? 0 : q[i];
       const ax = vec(j.axis).normalize();
@@ -329,9 +335,9 @@
     D.arm.joints.forEach(function (j, i) {
       let lo = j.lower, hi = j.upper, limited = lo !== null && hi !== null;
       if (!limited) {
-        const vals = run.motion.q[i].filter(function (v) { return v !== null; });
-        lo = Math.min.apply(null, vals.concat([0]));
-        hi = Math.max.apply(null, vals.concat([0]));
+        lo = 0;
+        hi = 0;
+        for (const v of run.motion.q[i]) if (v !== null) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
         if (hi - lo < 1e-6) { lo -= 0.1; hi += 0.1; }
       }
       const row = el('div', 'joint');
@@ -363,14 +369,15 @@
   function plotWidth() {
     return Math.max(300, document.getElementById('plots').clientWidth - 10);
   }
-  // Union of the series' x values (sorted), and each series on it (null where it has no point).
+  // Union of the series' x values (sorted), and each series on it: undefined where it has no sample (uPlot joins
+  // across those), null where its value is not finite (a gap in the line).
   function aligned(series) {
     const set = new Set();
     for (const s of series) for (const x of s.x) if (x !== null) set.add(x);
     const xs = Array.from(set).sort(function (a, b) { return a - b; });
     const at = new Map(xs.map(function (x, i) { return [x, i]; }));
     const ys = series.map(function (s) {
-      const y = new Array(xs.length).fill(null);
+      const y = new Array(xs.length).fill(undefined);
       s.x.forEach(function (x, i) { if (x !== null) y[at.get(x)] = s.y[i]; });
       return y;
     });
@@ -378,7 +385,7 @@
   }
   function seriesOpts(s, i, emphasis) {
     const o = { label: s.title || s.y_col || 'series ' + (i + 1), stroke: COLORS[i % COLORS.length], width: 1.25,
-                spanGaps: true, scale: s.y2 ? 'y2' : 'y', points: { show: false } };
+                spanGaps: false, scale: s.y2 ? 'y2' : 'y', points: { show: false } };
     if (s.style === 1) o.dash = [6, 4];
     if (s.style === 2) { o.stroke = '#000'; o.width = 2.2; }
     if (s.style === 5 || s.style === 6) {
@@ -494,7 +501,7 @@
     let pen = false;
     for (let i = 0; i < xs.length; ++i) {
       const x = u.valToPos(xs[i], s.facets[0].scale, true), y = u.valToPos(ys[i], s.facets[1].scale, true);
-      if (pen) p.lineTo(x, y); else p.moveTo(x, y);
+      if (pen && !(s._breaks && s._breaks.has(i))) p.lineTo(x, y); else p.moveTo(x, y);
       pen = true;
     }
     return { stroke: p, fill: null, clip: null, band: null, gaps: null, flags: 0 };
@@ -513,9 +520,18 @@
   }
   function makeXYChart(panel, box, emphasisOf) {
     const series = panel.series.filter(function (s) { return s.x.length > 0; });
+    // Points with a non-finite coordinate are left out; the curve is broken there (s._breaks: the points after one).
     const data = [null].concat(series.map(function (s) {
       const xs = [], ys = [];
-      s.x.forEach(function (x, i) { if (x !== null && s.y[i] !== null) { xs.push(x); ys.push(s.y[i]); } });
+      s._breaks = new Set();
+      let gap = false;
+      s.x.forEach(function (x, i) {
+        if (x === null || s.y[i] === null) { gap = true; return; }
+        if (gap && xs.length) s._breaks.add(xs.length);
+        gap = false;
+        xs.push(x);
+        ys.push(s.y[i]);
+      });
       return [xs, ys];
     }));
     const opts = {
@@ -524,6 +540,7 @@
       axes: [{ label: panel.xlabel }, { label: panel.ylabel, size: 60 }],
       series: [{}].concat(series.map(function (s, i) {
         const o = seriesOpts(s, i, emphasisOf ? emphasisOf(s) : undefined);
+        o._breaks = s._breaks;
         o.facets = [{ scale: 'x', auto: true }, { scale: 'y', auto: true }];
         delete o.scale;
         delete o.spanGaps;
@@ -602,7 +619,7 @@
                     series: [] };
     const runIdx = [];
     D.runs.forEach(function (r, i) {
-      if (!r.key) return;
+      if (!r.key || !r.key.x.length) return;  // (the chart leaves out series without points)
       const unit = /\[([^\]]*)\]\s*$/.exec(D.key.ylabel || '');
       panel.series.push({ title: r.name, x: r.key.x, y: r.key.y, unit: unit ? unit[1] : '' });
       runIdx.push(i);
