@@ -273,13 +273,9 @@ PlotScript plotScript(const std::string& run_dir, const std::string& fig_dir, co
   if (options.width < 200 || options.height < 150 || options.width > 10000 || options.height > 10000)
     throw InputError("plot size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
                      " pixels: expected a width of 200 to 10000 and a height of 150 to 10000");
-  if (!io::isDirectory(run_dir)) throw InputError(run_dir + ": no such run folder");
-  const fs::path dir = fs::absolute(run_dir).lexically_normal();
-  const bool is_run = io::isRegularFile((dir / "summary.json").string());
-  const bool is_sweep = !is_run && io::isRegularFile((dir / "manifest.csv").string());
-  if (!is_run && !is_sweep)
-    throw InputError(run_dir + ": neither a run folder (summary.json and the CSV log of `jointsim run`) nor a sweep "
-                               "folder (manifest.csv of `jointsim batch`)");
+  const OutputFolder folder = outputFolder(run_dir);
+  const fs::path dir = folder.path;
+  const bool is_run = folder.is_run;
 
   // What to draw.
   std::vector<Figure> figures;

@@ -19,6 +19,18 @@
 namespace jointsim::report {
 namespace fs = std::filesystem;
 
+OutputFolder outputFolder(const std::string& dir) {
+  if (!io::isDirectory(dir)) throw InputError(dir + ": no such run folder");
+  const fs::path abs = fs::absolute(dir).lexically_normal();
+  OutputFolder out;
+  out.path = abs.string();
+  out.is_run = io::isRegularFile((abs / "summary.json").string());
+  if (!out.is_run && !io::isRegularFile((abs / "manifest.csv").string()))
+    throw InputError(dir + ": neither a run folder (summary.json and the CSV log of `jointsim run`) nor a sweep "
+                           "folder (manifest.csv of `jointsim batch`)");
+  return out;
+}
+
 RunFolder loadRunFolder(const std::string& run_dir) {
   RunFolder run;
   run.dir = fs::absolute(run_dir).lexically_normal().string();

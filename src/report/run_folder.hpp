@@ -22,6 +22,14 @@ struct RunFolder {
 /// experiment name or an unreadable CSV.
 RunFolder loadRunFolder(const std::string& run_dir);
 
+/// A folder given to `jointsim plot` or `jointsim view`: its absolute path and whether it is a run folder
+/// (summary.json) or else a sweep folder (manifest.csv). InputError for a missing folder or one that is neither.
+struct OutputFolder {
+  std::string path;
+  bool is_run = false;
+};
+OutputFolder outputFolder(const std::string& dir);
+
 /// One row of a sweep's manifest.csv.
 struct ManifestRow {
   std::string run, status, output_dir, overrides;

@@ -599,13 +599,9 @@ void checkOptions(const ViewOptions& o) {
 
 std::string viewHtml(const std::string& dir_in, const ViewOptions& options) {
   checkOptions(options);
-  if (!io::isDirectory(dir_in)) throw InputError(dir_in + ": no such run or sweep folder");
-  const fs::path dir = fs::absolute(dir_in).lexically_normal();
-  const bool is_run = io::isRegularFile((dir / "summary.json").string());
-  const bool is_sweep = !is_run && io::isRegularFile((dir / "manifest.csv").string());
-  if (!is_run && !is_sweep)
-    throw InputError(dir_in + ": neither a run folder (summary.json and the CSV log of `jointsim run`) nor a sweep "
-                              "folder (manifest.csv of `jointsim batch`)");
+  const OutputFolder folder = outputFolder(dir_in);
+  const fs::path dir = folder.path;
+  const bool is_run = folder.is_run;
   json data;
   data["format"] = "jointsim-view 1";
   data["kind"] = is_run ? "run" : "sweep";
