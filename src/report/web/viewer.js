@@ -283,6 +283,7 @@
       arm.pathLine = new THREE.Line(g, new THREE.LineBasicMaterial({ color: 0xff7f0e }));
       arm.scene.add(arm.pathLine);
     }
+    if (!arm.framed && pts.length) frameCamera(pts);
     if (m.clamp) {
       const s = 5 * arm.r;
       arm.clamp = new THREE.Mesh(new THREE.BoxBufferGeometry(s, s, s),
@@ -290,6 +291,18 @@
       arm.clamp.position.copy(vec(m.clamp));
       arm.scene.add(arm.clamp);
     }
+  }
+  // Points the camera once at the arm's workspace of the first run shown: the base and the TCP's path.
+  function frameCamera(pts) {
+    arm.framed = true;
+    if (!arm.controls) return;
+    const box = new THREE.Box3().setFromPoints(pts.concat([new THREE.Vector3(0, 0, 0)]));
+    const c = box.getCenter(new THREE.Vector3());
+    const radius = Math.max(0.5 * box.getSize(new THREE.Vector3()).length(), 0.35 * arm.reach);
+    const dist = 1.15 * radius / Math.sin(0.5 * arm.camera.fov * Math.PI / 180);
+    arm.controls.target.copy(c);
+    arm.camera.position.copy(c).addScaledVector(new THREE.Vector3(1, -1.3, 0.75).normalize(), dist);
+    arm.controls.update();
   }
   // Joint angles of the current run at time t: linear between the logged samples (exact at a sample).
   function anglesAt(run, t) {
