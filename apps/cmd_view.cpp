@@ -1,5 +1,6 @@
 // `jointsim view RUN_DIR [-o FILE.html]`: one self-contained interactive HTML page of a run or sweep folder.
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include "cli_common.hpp"
@@ -29,14 +30,10 @@ void addViewCommand(CLI::App& app) {
   cmd->add_option("--title", opt->view.title, "Page title (default: the experiment's or the sweep folder's name)");
   cmd->callback([opt] {
     const std::string path = report::writeView(opt->dir, opt->output, opt->view);
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    long bytes = -1;
-    if (f) {
-      std::fseek(f, 0, SEEK_END);
-      bytes = std::ftell(f);
-      std::fclose(f);
-    }
-    std::printf("page: %s (%.1f MB); open it in a browser (no server needed)\n", path.c_str(), bytes / 1.0e6);
+    std::error_code ec;
+    const auto bytes = std::filesystem::file_size(path, ec);
+    std::printf("page: %s (%.1f MB); open it in a browser (no server needed)\n", path.c_str(),
+                ec ? 0.0 : static_cast<double>(bytes) / 1.0e6);
   });
 }
 

@@ -100,7 +100,6 @@ json figureJson(const experiments::Figure& f, const RunData& run, int slices) {
   jf["title"] = f.title;
   jf["stem"] = f.stem;
   jf["panels"] = json::array();
-  const Eigen::Index rows = run.data.rows();
   for (const experiments::Panel& p : f.panels) {
     json jp;
     jp["title"] = p.title;
@@ -155,7 +154,6 @@ json figureJson(const experiments::Figure& f, const RunData& run, int slices) {
       }
       js[timed ? "rows" : "x"] = std::move(jx);
       js["y"] = std::move(jy);
-      (void)rows;
       jp["series"].push_back(std::move(js));
     }
     jf["panels"].push_back(std::move(jp));
@@ -523,16 +521,29 @@ std::string inertJson(const json& j) {
   return out;
 }
 
-void replaceOnce(std::string& s, const std::string& key, std::string_view value) {
-  const auto at = s.find(key);
-  if (at == std::string::npos) throw Error("viewer template: no " + key);
-  s.replace(at, key.size(), value.data(), value.size());
+/// The template with every @KEY@ replaced by its value, in one pass: an inserted text (a library, the data, the
+/// title) is never scanned for placeholders. Error when the template names a key without a value.
+std::string fillTemplate(std::string_view tpl, const std::map<std::string, std::string_view>& values) {
+  std::string out;
+  size_t pos = 0;
+  for (auto at = tpl.find('@'); at != std::string_view::npos; at = tpl.find('@', pos)) {
+    const auto end = tpl.find('@', at + 1);
+    const auto it =
+        end == std::string_view::npos ? values.end() : values.find(std::string(tpl.substr(at + 1, end - at - 1)));
+    if (it == values.end()) {  // a lone '@' of the template's own text
+      out.append(tpl.substr(pos, at + 1 - pos));
+      pos = at + 1;
+      continue;
+    }
+    out.append(tpl.substr(pos, at - pos)).append(it->second);
+    pos = end + 1;
+  }
+  return out.append(tpl.substr(pos));
 }
 
 std::string page(const json& data, const std::string& title, const std::vector<std::string>& mesh_formats) {
   const std::string payload = inertJson(data);
   const std::string nonce = io::contentHash(payload).substr(5);
-  std::string html(assets::kViewerHtml);
   // The mesh loaders the page needs (three.js's, r111), each in a script element of its own.
   std::string loaders;
   auto script = [&](std::string_view code) {
@@ -557,34 +568,19 @@ std::string page(const json& data, const std::string& title, const std::vector<s
       esc += "&amp;";
     else if (c == '"')
       esc += "&quot;";
-    else if (c == '@')  // never a placeholder of the template
-      esc += "&#64;";
     else if (static_cast<unsigned char>(c) >= 0x20)
       esc += c;
   }
-  replaceOnce(html, "@TITLE@", esc);
-  for (auto k = html.find("@NONCE@"); k != std::string::npos; k = html.find("@NONCE@", k + nonce.size()))
-    html.replace(k, 7, nonce);
-  // Order matters: each replacement's text is never scanned again (the libraries may contain '@').
-  const auto at = html.find("@STYLE@");
-  std::string tail = html.substr(at + 7);
-  html.resize(at);
-  html.append(assets::kUplotCss).append("\n").append(assets::kViewerCss);
-  const auto d = tail.find("@DATA@");
-  html.append(tail, 0, d).append(payload);
-  tail = tail.substr(d + 6);
-  for (const auto& [key, text] : {std::pair<std::string, std::string_view>{"@THREE@", assets::kThreeJs},
-                                  {"@ORBIT@", assets::kOrbitControlsJs},
-                                  {"@LOADERS@", loaders},
-                                  {"@UPLOT@", assets::kUplotJs},
-                                  {"@APP@", assets::kViewerJs}}) {
-    const auto k = tail.find(key);
-    if (k == std::string::npos) throw Error("viewer template: no " + key);
-    html.append(tail, 0, k).append(text);
-    tail = tail.substr(k + key.size());
-  }
-  html.append(tail);
-  return html;
+  const std::string style = std::string(assets::kUplotCss) + "\n" + std::string(assets::kViewerCss);
+  return fillTemplate(assets::kViewerHtml, {{"TITLE", esc},
+                                            {"NONCE", nonce},
+                                            {"STYLE", style},
+                                            {"DATA", payload},
+                                            {"THREE", assets::kThreeJs},
+                                            {"ORBIT", assets::kOrbitControlsJs},
+                                            {"LOADERS", loaders},
+                                            {"UPLOT", assets::kUplotJs},
+                                            {"APP", assets::kViewerJs}});
 }
 
 void checkOptions(const ViewOptions& o) {
@@ -651,8 +647,9 @@ std::string viewHtml(const std::string& dir_in, const ViewOptions& options) {
         // The key signal of the sweep (the first run's type decides it), decimated with its peaks.
         if (key.is_null())
           if (auto k = keySignal(run->data))
-            key = {{"x", k->x},           {"y", k->y},           {"y_minus", k->y_minus}, {"factor", k->factor},
-                   {"xlabel", k->xlabel}, {"ylabel", k->ylabel}, {"what", k->what}};
+            key = {
+                {"x", k->x},           {"y", k->y},           {"y_minus", k->y_minus}, {"factor", k->factor},
+                {"xlabel", k->xlabel}, {"ylabel", k->ylabel}, {"what", k->what},       {"unit", labelUnit(k->ylabel)}};
         if (!key.is_null()) {
           const RunData& d = run->data;
           const int x = d.col(key["x"].get<std::string>()), y = d.col(key["y"].get<std::string>());

@@ -633,8 +633,7 @@
     const runIdx = [];
     D.runs.forEach(function (r, i) {
       if (!r.key || !r.key.x.length) return;  // (the chart leaves out series without points)
-      const unit = /\[([^\]]*)\]\s*$/.exec(D.key.ylabel || '');
-      panel.series.push({ title: r.name, x: r.key.x, y: r.key.y, unit: unit ? unit[1] : '' });
+      panel.series.push({ title: r.name, x: r.key.x, y: r.key.y, unit: D.key.unit || '' });
       runIdx.push(i);
     });
     if (!panel.series.length) return;
@@ -707,13 +706,13 @@
     if (run.key) for (const x of run.key.x) if (x !== null) { lo = Math.min(lo, x); hi = Math.max(hi, x); }
     return isFinite(lo) ? [lo, hi] : [0, 0];
   }
-  function syncCursors() {
+  // Every time plot's cursor (but that of `from`, the plot the mouse moves over) to the current time.
+  function syncCursors(from) {
     state.syncing = true;
     try {
       for (const c of state.charts) {
-        if (!c.time) continue;
-        const left = c.u.valToPos(state.t, 'x');
-        c.u.setCursor({ left: left, top: c.u.cursor.top > 0 ? c.u.cursor.top : 20 }, false);
+        if (!c.time || c === from) continue;
+        c.u.setCursor({ left: c.u.valToPos(state.t, 'x'), top: c.u.cursor.top > 0 ? c.u.cursor.top : 20 }, false);
         showReadout(c, state.t);
       }
     } finally {
@@ -731,19 +730,7 @@
     slider.value = String(state.t1 > state.t0 ? Math.round(1e6 * (t - state.t0) / (state.t1 - state.t0)) : 0);
     document.getElementById('time-label').textContent =
         't = ' + t.toFixed(4) + ' s / ' + state.t1.toFixed(3) + ' s';
-    if (from !== undefined) {
-      state.syncing = true;
-      try {
-        for (const c of state.charts) if (c.time && c !== from) {
-          c.u.setCursor({ left: c.u.valToPos(t, 'x'), top: c.u.cursor.top > 0 ? c.u.cursor.top : 20 }, false);
-          showReadout(c, t);
-        }
-      } finally {
-        state.syncing = false;
-      }
-    } else {
-      syncCursors();
-    }
+    syncCursors(from);
   }
   slider.addEventListener('input', function () {
     setTime(state.t0 + (state.t1 - state.t0) * Number(slider.value) / 1e6);
