@@ -22,9 +22,9 @@ namespace {
 // A SUNLinearSolver (matrix-based, direct) over SUNDenseMatrix storage: setup factorises the Newton
 // matrix with Eigen::PartialPivLU (blocked, vectorised), solve applies it. The solves allocate nothing.
 
-/// x = A⁻¹ x with A = P⁻¹ L U from `f` (x holds b on entry), by column-oriented substitution: for the 10–20 states
-/// of a drive block a plain loop over contiguous columns is several times faster than Eigen's blocked triangular
-/// solver, whose panel logic is tuned for large matrices.
+/// x = A⁻¹ x with A = P⁻¹ L U from `f` (x holds b on entry), by column-oriented substitution (the dense fallback of
+/// DirectSolver): for up to a hundred states a plain loop over contiguous columns is several times faster than
+/// Eigen's blocked triangular solver, whose panel logic is tuned for large matrices.
 void luSolveInPlace(const Eigen::PartialPivLU<Eigen::MatrixXd>& f, Eigen::VectorXd& x, Eigen::VectorXd& work) {
   const Eigen::MatrixXd& lu = f.matrixLU();
   const Eigen::Index m = lu.rows();
@@ -54,68 +54,128 @@ int luSign(const Eigen::PartialPivLU<Eigen::MatrixXd>& f) {
   return f.determinant() < 0.0 ? -1 : 1;
 }
 
+/// Partial-pivoting LU of a small dense matrix in place, A = P⁻¹ L U (L unit lower, U upper), for the drive blocks
+/// and the hub's Schur complement of a BlockPlan (10–20 states). Eigen's PartialPivLU spends most of its time at these
+/// sizes in the set-up of its expressions per column; a plain right-looking elimination over contiguous columns that
+/// skips the zero entries of the sparse blocks I − γhJ is cheaper. The arithmetic is Eigen's (unblocked_lu, used
+/// below 16 rows): the pivot is the first largest magnitude of the column, the column is divided by it, the trailing
+/// matrix gets a − l·u, and the substitutions divide by U's diagonal. Skipping a zero multiplier leaves an entry as
+/// a − l·0 would, so up to 16 rows the factors and solutions are bit for bit Eigen's: the outputs of the shipped UR5,
+/// RobotR3 and replay experiments (CVODE and fixed step) were compared byte for byte before and after.
+struct SmallLu {
+  Eigen::MatrixXd a;     // the matrix to factorise (filled by the caller), then L and U
+  std::vector<int> piv;  // at step k, row k was swapped with row piv[k] (LAPACK's ipiv, 0-based)
+  int sign = 1;          // sign(det A): the permutation's parity times the signs of the pivots
+
+  void resize(Eigen::Index m) {
+    a.resize(m, m);
+    piv.assign(static_cast<size_t>(m), 0);
+  }
+
+  /// Factorises `a` in place. False when a pivot is zero or not finite, or the smallest pivot magnitude is below
+  /// 1e-13 of the largest (a lower bound of the condition number: such a matrix is at least that ill-conditioned). A
+  /// cheap test in place of a condition estimate, which cost 10 % of a sampled-control run; an ill-conditioned block
+  /// that passes only slows CVODE's Newton iteration (its residual is the right-hand side itself), which it answers
+  /// with a fresh Jacobian or a smaller step.
+  bool factor() {
+    const Eigen::Index m = a.rows();
+    double* __restrict d = a.data();
+    double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+    sign = 1;
+    for (Eigen::Index k = 0; k < m; ++k) {
+      double* __restrict ck = d + k * m;
+      Eigen::Index p = k;
+      double best = std::abs(ck[k]);
+      for (Eigen::Index i = k + 1; i < m; ++i)
+        if (std::abs(ck[i]) > best) {
+          best = std::abs(ck[i]);
+          p = i;
+        }
+      if (!(best > 0.0) || !std::isfinite(best)) return false;
+      piv[static_cast<size_t>(k)] = static_cast<int>(p);
+      if (p != k) {
+        sign = -sign;
+        for (Eigen::Index j = 0; j < m; ++j) std::swap(d[j * m + k], d[j * m + p]);
+      }
+      if (ck[k] < 0.0) sign = -sign;
+      lo = std::min(lo, best);
+      hi = std::max(hi, best);
+      const double pivot = ck[k];
+      for (Eigen::Index i = k + 1; i < m; ++i) ck[i] /= pivot;
+      for (Eigen::Index j = k + 1; j < m; ++j) {
+        double* __restrict cj = d + j * m;
+        const double u = cj[k];
+        if (u == 0.0) continue;
+        for (Eigen::Index i = k + 1; i < m; ++i) cj[i] -= ck[i] * u;
+      }
+    }
+    return lo > 1e-13 * hi;
+  }
+
+  /// x = A⁻¹ x (x holds b on entry, m entries) with the factors of the last factor() that returned true.
+  void solveInPlace(double* __restrict x) const {
+    const Eigen::Index m = a.rows();
+    const double* __restrict d = a.data();
+    for (Eigen::Index k = 0; k < m; ++k) {
+      const int p = piv[static_cast<size_t>(k)];
+      if (p != k) std::swap(x[k], x[p]);
+    }
+    for (Eigen::Index j = 0; j < m; ++j) {  // L (unit lower)
+      const double xj = x[j];
+      if (xj == 0.0) continue;
+      const double* __restrict col = d + j * m;
+      for (Eigen::Index i = j + 1; i < m; ++i) x[i] -= col[i] * xj;
+    }
+    for (Eigen::Index j = m - 1; j >= 0; --j) {  // U
+      const double* __restrict col = d + j * m;
+      const double xj = x[j] / col[j];
+      x[j] = xj;
+      if (xj == 0.0) continue;
+      for (Eigen::Index i = 0; i < j; ++i) x[i] -= col[i] * xj;
+    }
+  }
+};
+
 /// Block elimination of a bordered block-diagonal matrix A (JacobianStructure): with H the hub and B_k the blocks,
 ///   D_k = A(B_k, B_k), C_k = A(B_k, H), E_k = A(H, B_k), W_k = D_k⁻¹ C_k, S = A(H, H) − Σ E_k W_k,
 /// and A x = b is solved by z_k = D_k⁻¹ b_k, x_H = S⁻¹ (b_H − Σ E_k z_k), x_k = z_k − W_k x_H.
 /// A part usually couples to few hub states (a drive to its own joint's angle and rate): only the non-zero columns
 /// Z_k of C_k enter W_k and the update of S (columns Z_k only), found at each factorisation. The blocks and S are
-/// kept as LU factors (no inverses): for 14-state drive blocks against a 12-state hub this makes a factorisation
-/// about three times cheaper than inverting, which matters where setups are frequent (sampled control stops at
-/// every sample; each stop and restart changes the step and thus the Newton matrix). Every workspace is sized once
-/// here.
+/// kept as LU factors (SmallLu; no inverses): for 14-state drive blocks against a 12-state hub this makes a
+/// factorisation about three times cheaper than inverting, which matters where setups are frequent (sampled control
+/// stops at every sample; each stop and restart changes the step and thus the Newton matrix; the fixed-step method
+/// factorises at every step). Every workspace is sized once here.
 struct BlockPlan {
   explicit BlockPlan(const JacobianStructure& st) : hub(st.hub), blocks(st.blocks) {
     const auto h = static_cast<Eigen::Index>(hub.size());
     for (const auto& B : blocks) {
       const auto m = static_cast<Eigen::Index>(B.size());
-      D.emplace_back(m, m);
       C.emplace_back(m, h);
       W.emplace_back(m, h);
       E.emplace_back(h, m);
-      lu.emplace_back(m);
+      lu.emplace_back().resize(m);
       z.emplace_back(m);
-      wk.emplace_back(m);
       cols.emplace_back();
       cols.back().reserve(static_cast<size_t>(h));
     }
-    S.resize(h, h);
-    luS = Eigen::PartialPivLU<Eigen::MatrixXd>(h);
+    luS.resize(h);
     r.resize(h);
     xr.resize(h);
-    wr.resize(h);
   }
   std::vector<int> hub;
   std::vector<std::vector<int>> blocks;
-  std::vector<Eigen::MatrixXd> D, C, W, E;
-  std::vector<Eigen::PartialPivLU<Eigen::MatrixXd>> lu;
-  std::vector<Eigen::VectorXd> z, wk;
+  std::vector<Eigen::MatrixXd> C, W, E;
+  std::vector<SmallLu> lu;  // D_k, then its factors
+  std::vector<Eigen::VectorXd> z;
   std::vector<std::vector<Eigen::Index>> cols;  // Z_k: the hub columns where C_k is not zero
-  Eigen::MatrixXd S;
-  Eigen::PartialPivLU<Eigen::MatrixXd> luS;
-  Eigen::VectorXd r, xr, wr;
+  SmallLu luS;                                  // S, then its factors
+  Eigen::VectorXd r, xr;
 
   /// sign(det A) = Π sign(det D_k) · sign(det S).
   int determinantSign() const {
-    int sign = luSign(luS);
-    for (const auto& f : lu) sign *= luSign(f);
+    int sign = luS.sign;
+    for (const auto& f : lu) sign *= f.sign;
     return sign;
-  }
-
-  /// A pivot that is zero or not finite, or a ratio of smallest to largest pivot below 1e-13 (a lower bound of the
-  /// condition number: such a block is at least that ill-conditioned): the dense LU is used instead. A cheap test
-  /// in place of a condition estimate, which cost 10 % of a sampled-control run; an ill-conditioned block that
-  /// passes only slows the Newton iteration (its residual is the right-hand side itself), which CVODE answers with
-  /// a fresh Jacobian or a smaller step.
-  static bool usable(const Eigen::PartialPivLU<Eigen::MatrixXd>& f) {
-    const auto& m = f.matrixLU();
-    double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
-    for (Eigen::Index k = 0; k < m.rows(); ++k) {
-      const double p = std::abs(m(k, k));
-      if (!(p > 0.0) || !std::isfinite(p)) return false;
-      lo = std::min(lo, p);
-      hi = std::max(hi, p);
-    }
-    return m.rows() == 0 || lo > 1e-13 * hi;
   }
 
   /// Factorises A (column-major n × n); false when a block or the Schur complement is unusable.
@@ -133,15 +193,16 @@ struct BlockPlan {
   bool factorEntries(const Entry& A) {
     const size_t nb = blocks.size();
     const auto h = static_cast<Eigen::Index>(hub.size());
+    Eigen::MatrixXd& S = luS.a;
     for (Eigen::Index j = 0; j < h; ++j)
       for (Eigen::Index i = 0; i < h; ++i) S(i, j) = A(hub[static_cast<size_t>(i)], hub[static_cast<size_t>(j)]);
     for (size_t k = 0; k < nb; ++k) {
       const auto& B = blocks[k];
       const auto m = static_cast<Eigen::Index>(B.size());
+      Eigen::MatrixXd& D = lu[k].a;
       for (Eigen::Index j = 0; j < m; ++j)
-        for (Eigen::Index i = 0; i < m; ++i) D[k](i, j) = A(B[static_cast<size_t>(i)], B[static_cast<size_t>(j)]);
-      lu[k].compute(D[k]);
-      if (!usable(lu[k])) return false;
+        for (Eigen::Index i = 0; i < m; ++i) D(i, j) = A(B[static_cast<size_t>(i)], B[static_cast<size_t>(j)]);
+      if (!lu[k].factor()) return false;
       cols[k].clear();
       for (Eigen::Index j = 0; j < h; ++j) {
         bool nonzero = false;
@@ -155,13 +216,12 @@ struct BlockPlan {
         for (Eigen::Index i = 0; i < h; ++i) E[k](i, j) = A(hub[static_cast<size_t>(i)], B[static_cast<size_t>(j)]);
       for (Eigen::Index j : cols[k]) {
         z[k] = C[k].col(j);
-        luSolveInPlace(lu[k], z[k], wk[k]);
+        lu[k].solveInPlace(z[k].data());
         W[k].col(j) = z[k];
         S.col(j).noalias() -= E[k] * z[k];
       }
     }
-    luS.compute(S);
-    return usable(luS);
+    return luS.factor();
   }
 
   /// Solves with the factors formed at setup. CVODE's Newton iteration evaluates its residual with the
@@ -174,11 +234,11 @@ struct BlockPlan {
     for (size_t k = 0; k < nb; ++k) {
       const auto& B = blocks[k];
       for (size_t i = 0; i < B.size(); ++i) z[k][static_cast<Eigen::Index>(i)] = b[B[i]];
-      luSolveInPlace(lu[k], z[k], wk[k]);
+      lu[k].solveInPlace(z[k].data());
       r.noalias() -= E[k] * z[k];
     }
     xr = r;
-    luSolveInPlace(luS, xr, wr);
+    luS.solveInPlace(xr.data());
     for (Eigen::Index i = 0; i < h; ++i) x[hub[static_cast<size_t>(i)]] = xr[i];
     for (size_t k = 0; k < nb; ++k) {
       const auto& B = blocks[k];
