@@ -140,6 +140,7 @@ void Simulator::build(const CvodeOptions& solver) {
     if (!structure.empty() && o.dense_solver == CvodeOptions::DenseSolver::Eigen)
       integ_->setJacobianStructure(std::move(structure));
   }
+  integ_->setTimeInvariance([this, p] { return p->timeInvariant(*state_); });
   if (p->rootCount() > 0)
     integ_->setRootFunction(p->rootCount(), [this, p](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                                                       Eigen::Ref<Eigen::VectorXd> g) { p->roots(*state_, t, y, g); });

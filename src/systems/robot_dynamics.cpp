@@ -357,6 +357,12 @@ void RobotSystem::derivatives(const sim::PlantState& state, double t, const Eige
 
 sim::JacobianStructure RobotSystem::jacobianStructure() const { return jacobianStructure(nullptr); }
 
+bool RobotSystem::timeInvariant(const sim::PlantState& state) const {
+  // evaluate() reads t in the reference (continuous control only), the sensor faults' episodes (continuous control
+  // only: a sampled controller reads the held measurement), the load-torque profiles and the wrench function.
+  return sampled() && !wrenches_ && !load_profiles_.dependsOnTime(own<State>(state).loads);
+}
+
 sim::JacobianStructure RobotSystem::jacobianStructure(std::vector<int>* drive_of_block) const {
   sim::JacobianStructure s;
   const int n = model_.nq;
@@ -389,16 +395,20 @@ void RobotSystem::jacobian(const sim::PlantState& state, double t, const Eigen::
   Eigen::VectorXd& yp = st.jac_y;
   Eigen::VectorXd& fp = st.jac_f;
   yp = y;
+  const bool with_fext = wrenches_ || !st.user_wrenches.empty();
+  if (kind == sim::JacobianKind::Analytic && !coupled_ && !crba_path_ && !with_fext) {
+    // The base point's drive output torques and joint torques; its q̈ is not needed (the ABA derivatives below bring
+    // their own), so no multibody pass.
+    evaluate(st, t, y, fp.data(), Pass::DrivesOnly);
+    st.jac_tau0 = st.tau_out;
+    jacobianByJoint(st, t, y, f, inc, J);
+    return;
+  }
   // The base point: the drives' output torques and the total joint torque (drives, end stops) behind q̈.
   evaluate(st, t, y, fp.data(), Pass::Derivatives);
   st.jac_tau0 = st.tau_out;
   st.jac_qdd0 = st.sig.qdd;
   const Eigen::VectorXd& tau_total = st.tau;
-  const bool with_fext = wrenches_ || !st.user_wrenches.empty();
-  if (kind == sim::JacobianKind::Analytic && !coupled_ && !crba_path_ && !with_fext) {
-    jacobianByJoint(st, t, y, f, inc, J);
-    return;
-  }
   // ∂q̈/∂τ_out = M⁻¹ G⁻ᵀ, column by column; q̈ is affine in the joint torque, so a unit difference is exact to
   // rounding. (The external wrenches st.fext of the base evaluation stay in place.)
   const auto q = y.head(n);

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <vector>
@@ -121,6 +123,23 @@ TEST(FixedStepTwin, TheShippedRealtimeFileIsTheExcitationWithSensorsAndTheFixedS
   for (Eigen::Index i = 0; i < fb.size(); ++i) EXPECT_NEAR(std::remainder(fb[i], 3.83e-4), 0.0, 1e-12) << i;
   const auto other = run({"control.seed=2"});
   EXPECT_NE(fixed.log["current_elbow_joint[A]"], other.log["current_elbow_joint[A]"]);
+  // Under sampled control the twin's right-hand side does not depend on t (RobotSystem::timeInvariant): no difference
+  // in time per Jacobian (and the analytic Jacobian counts none of its own). A load-torque profile of time makes it
+  // depend on t again: one right-hand side per Jacobian.
+  EXPECT_EQ(fixed.result.stats.rhs_evals_jacobian, 0);
+  EXPECT_EQ(fixed.result.stats.jac_evals, 400);
+  const test::TempDir tmp;
+  std::ifstream in(file);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string robot = "robot: ../robots/ur5_drives.yaml";
+  ASSERT_NE(text.find(robot), std::string::npos);
+  text.replace(text.find(robot), robot.size(), "robot: " + test::sourcePath("config/robots/ur5_drives.yaml"));
+  std::ofstream(tmp / "loaded.yaml")
+      << text << "\ninputs:\n  elbow_joint.load_torque: {type: sine, amplitude: 2, frequency: 5}\n";
+  const auto loaded =
+      experiments::runInMemory(*experiments::loadExperiment((tmp / "loaded.yaml").string(), {"duration=0.02"}));
+  EXPECT_EQ(loaded.result.stats.rhs_evals_jacobian, loaded.result.stats.jac_evals);
+  EXPECT_GT(loaded.result.stats.jac_evals, 0);
 }
 
 // A drive's sensors are parameters like any other (driveParameterTable "sensors"): bad keys and values are refused

@@ -224,6 +224,9 @@ class Integrator {
   virtual SolverStats stats() const = 0;
   virtual long steps() const = 0;
   virtual const CvodeOptions& options() const = 0;
+  /// `invariant()` true when f does not depend on t explicitly at the current state (Plant::timeInvariant), asked at
+  /// each Jacobian evaluation; an integrator that does not use ∂f/∂t ignores it (CVODE).
+  virtual void setTimeInvariance(std::function<bool()> /*invariant*/) {}
 };
 
 /// CVODE integrator for y' = f(t, y), y in R^n.

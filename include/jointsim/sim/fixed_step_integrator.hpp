@@ -13,7 +13,8 @@
 /// step's Nyquist frequency is damped, not resolved (docs/design.md, "Fixed-step integration"). fₜ matters where a stiff
 /// part is forced by time (a fast loop tracking a moving reference): without it such a component is followed to first
 /// order only. A step costs two right-hand sides and two solves with one factorisation of I − γhW (block elimination
-/// with the plant's JacobianStructure), plus a Jacobian and one more right-hand side when they are refreshed; there is
+/// with the plant's JacobianStructure), plus a Jacobian and one more right-hand side (fₜ; none for a right-hand side
+/// declared time invariant, setTimeInvariance: a plant under sampled control) when they are refreshed; there is
 /// no error estimate, no error-controlled step rejection and no nonlinear iteration that could fail.
 ///
 /// A step whose linearisation has a growing real mode it would damp instead of follow (det(I − γhW) < 0: γhλ > 1) is
@@ -65,6 +66,8 @@ class FixedStepIntegrator final : public Integrator {
   void setStepLimit(long steps) override;
   void setDifferenceJacobian(DifferenceJacobianFunction jacobian) override;
   void setJacobianStructure(JacobianStructure structure) override;
+  /// While `invariant()` is true, fₜ = 0 without the difference in time (its right-hand side is saved).
+  void setTimeInvariance(std::function<bool()> invariant) override;
   /// 0: a fixed-step method carries no history across an input jump (the next step starts from f with the new inputs).
   double jumpError(const Eigen::Ref<const Eigen::VectorXd>& f_old, const Eigen::Ref<const Eigen::VectorXd>& f_new,
                    double h_max) const override;

@@ -50,6 +50,12 @@ struct InputProfiles {
   double value(const HeldInputs& in, std::size_t k, double t) const {
     return in.held[k] ? in.value[k] : (profile[k] ? profile[k]->value(t) : 0.0);
   }
+  /// Whether a port is driven by its profile now (not held): the inputs then depend on time.
+  bool dependsOnTime(const HeldInputs& in) const {
+    for (std::size_t k = 0; k < profile.size(); ++k)
+      if (profile[k] && !in.held[k]) return true;
+    return false;
+  }
   /// The profiles' breakpoints in (0, t_end), to add to a plant's time events.
   std::vector<double> breakpoints(double t_end) const;
 };

@@ -180,6 +180,10 @@ class Plant {
                         JacobianKind /*kind*/) const {}
   /// Block structure of the Jacobian (empty: dense).
   virtual JacobianStructure jacobianStructure() const { return {}; }
+  /// True when derivatives() does not depend on t itself for this state, between its time events and samples (f is
+  /// f(y) there: held inputs, no reference or profile of time): the fixed-step method then takes ∂f/∂t = 0 instead of
+  /// differencing it (one right-hand side per Jacobian). False, the default, is always safe.
+  virtual bool timeInvariant(const PlantState& /*state*/) const { return false; }
 
   /// What continuous state `i` is, for messages ("q_elbow_joint [rad]"); empty when the plant does not say.
   virtual std::string stateName(int /*i*/) const { return {}; }

@@ -350,6 +350,9 @@ class RobotSystem : public sim::Plant {
                 const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
                 Eigen::Ref<Eigen::MatrixXd> J, sim::JacobianKind kind) const override;
   sim::JacobianStructure jacobianStructure() const override;
+  /// Under sampled control, without a wrench function of time and without a load-torque port driven by its profile:
+  /// the right-hand side reads only held values and y.
+  bool timeInvariant(const sim::PlantState& state) const override;
   /// The same, and for each block the index of its drive.
   sim::JacobianStructure jacobianStructure(std::vector<int>* drive_of_block) const;
   void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
