@@ -808,6 +808,26 @@ void JacobianStructure::validate(int n) const {
   for (int i = 0; i < n; ++i)
     if (!seen[static_cast<size_t>(i)])
       throw InputError("Jacobian structure: state " + std::to_string(i) + " is in neither the hub nor a block");
+  std::vector<char> in_hub(static_cast<size_t>(std::max(0, n)), 0);
+  for (int i : hub) in_hub[static_cast<size_t>(i)] = 1;
+  for (const auto* lists : {&block_hub_columns, &block_hub_rows}) {
+    const char* what = lists == &block_hub_columns ? "block_hub_columns" : "block_hub_rows";
+    if (lists->empty()) continue;
+    if (lists->size() != blocks.size())
+      throw InputError(std::string("Jacobian structure: ") + what + ": expected one list per block (" +
+                       std::to_string(blocks.size()) + "), got " + std::to_string(lists->size()));
+    for (const auto& list : *lists) {
+      std::vector<char> listed(static_cast<size_t>(n), 0);
+      for (int i : list) {
+        if (i < 0 || i >= n || !in_hub[static_cast<size_t>(i)])
+          throw InputError(std::string("Jacobian structure: ") + what + ": state " + std::to_string(i) +
+                           " is not a hub state");
+        if (listed[static_cast<size_t>(i)]++)
+          throw InputError(std::string("Jacobian structure: ") + what + ": state " + std::to_string(i) +
+                           " listed twice");
+      }
+    }
+  }
 }
 
 bool CvodeIntegrator::rootFound() const { return impl_->root_found; }

@@ -383,6 +383,13 @@ sim::JacobianStructure RobotSystem::jacobianStructure(std::vector<int>* drive_of
     if (b.empty()) continue;
     s.blocks.push_back(std::move(b));
     if (drive_of_block) drive_of_block->push_back(k);
+    if (!coupled_) {
+      // Drive k reads its own joint's angle and rate only (φ = q without a coupling matrix; its controller and
+      // sensors read joint k) and acts on the accelerations only (through τ_k and M⁻¹; q' = q̇ does not see it).
+      s.block_hub_columns.push_back({k, n + k});
+      s.block_hub_rows.emplace_back();
+      for (int i = n; i < 2 * n; ++i) s.block_hub_rows.back().push_back(i);
+    }
   }
   return s;
 }

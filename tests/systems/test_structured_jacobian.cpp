@@ -1,8 +1,10 @@
 // The robot-with-drives Jacobian built from its structure (hub = multibody, one block per drive) and the block
 // elimination of the Newton matrix: against plain difference quotients of the whole right-hand side, against
 // the dense LU, and whole runs against CVODE's own dense difference-quotient Jacobian.
+#include <algorithm>
 #include <cmath>
 #include <memory>
+#include <utility>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -16,6 +18,7 @@
 #include "jointsim/sim/simulate.hpp"
 #include "jointsim/systems/robot_system.hpp"
 #include "jointsim/systems/robot_with_drives.hpp"
+#include "sim/block_linear_solver.hpp"
 #include "test_util.hpp"
 
 using namespace jointsim;
@@ -81,7 +84,7 @@ Eigen::MatrixXd centralDifferences(const sim::Plant& p, const sim::PlantState& s
 /// accelerations' rows of the multibody's columns may instead equal central differences: the joint-local path takes
 /// the multibody's part from the analytic ABA derivatives, which the forward differences miss by their truncation
 /// error (1e-6 of a column with rigid gears at these increments).
-void expectStructuredEqualsPlain(const systems::RobotSystem& sys, unsigned seed) {
+void expectStructuredEqualsPlain(const systems::RobotSystem& sys, unsigned seed, bool coupled = false) {
   const Eigen::VectorXd y = movingState(sys, seed);
   const Eigen::Index n = y.size();
   Eigen::VectorXd f(n);
@@ -119,6 +122,21 @@ void expectStructuredEqualsPlain(const systems::RobotSystem& sys, unsigned seed)
         for (int j : st.blocks[b]) EXPECT_EQ(plain(i, j), 0.0) << "drive " << a << " row " << i << ", col " << j;
     }
   }
+  // The declared couplings of a block to the hub (the elimination reads nothing else): every other entry of the
+  // block's rows in the hub's columns, and of the hub's rows in the block's columns, is zero.
+  EXPECT_EQ(st.block_hub_columns.empty(), coupled);  // (a coupling matrix mixes the joints: no lists)
+  for (size_t a = 0; a < st.block_hub_columns.size(); ++a)
+    for (int j : st.hub) {
+      const auto& c = st.block_hub_columns[a];
+      if (std::find(c.begin(), c.end(), j) != c.end()) continue;
+      for (int i : st.blocks[a]) EXPECT_EQ(plain(i, j), 0.0) << "drive " << a << " row " << i << ", hub col " << j;
+    }
+  for (size_t a = 0; a < st.block_hub_rows.size(); ++a)
+    for (int i : st.hub) {
+      const auto& r = st.block_hub_rows[a];
+      if (std::find(r.begin(), r.end(), i) != r.end()) continue;
+      for (int j : st.blocks[a]) EXPECT_EQ(plain(i, j), 0.0) << "drive " << a << " hub row " << i << ", col " << j;
+    }
 }
 
 TEST(StructuredJacobian, Ur5TwinEqualsPlainDifferenceQuotients) {
@@ -161,7 +179,7 @@ TEST(StructuredJacobian, SampledControlAndCoupledRigidDrivesEqualPlainDifference
     G(5, 3) = -0.1;
     G(5, 4) = 0.3;
     systems::RobotSystem sys(ur5, drives, G);
-    expectStructuredEqualsPlain(sys, 4);
+    expectStructuredEqualsPlain(sys, 4, true);
     // Without the coupling: the joint-local path (analytic ABA derivatives, the rigid rotors as armature), also with
     // end stops acting (a joint range the moving state lies beyond).
     systems::RobotSystem plain(ur5, drives);
@@ -215,6 +233,67 @@ TEST(StructuredJacobian, BlockEliminationSolvesLikeTheDenseLu) {
   EXPECT_THROW(integ.setJacobianStructure({{0}, {{1, 2, 6}, {3, 4}}}), InputError);
   EXPECT_THROW(integ.setJacobianStructure({{0, 5}, {{1, 2, 6}, {3, 4, 4}}}), InputError);
   EXPECT_THROW(integ.setJacobianStructure({{0, 5, 9}, {{1, 2, 6}, {3, 4}}}), InputError);
+  // The optional lists of a block's hub couplings: one list per block, hub states only, each once.
+  EXPECT_THROW(integ.setJacobianStructure({{0, 5}, {{1, 2, 6}, {3, 4}}, {{0, 5}}, {}}), InputError);
+  EXPECT_THROW(integ.setJacobianStructure({{0, 5}, {{1, 2, 6}, {3, 4}}, {{0, 5}, {0, 1}}, {}}), InputError);
+  EXPECT_THROW(integ.setJacobianStructure({{0, 5}, {{1, 2, 6}, {3, 4}}, {}, {{0, 5}, {5, 5}}}), InputError);
+}
+
+TEST(StructuredJacobian, DeclaredHubCouplingsOfABlockAreAllTheEliminationReads) {
+  // Block {3, 4} reads only hub state 0 and acts only on hub row 5; block {1, 2, 6} reads hub state 5 only and acts
+  // on both hub rows. Declared so, the elimination skips the other entries: the same solution as the dense LU and
+  // the matrix exponential. Declared too narrowly (block {3, 4} said not to act on row 5), it solves another system.
+  Eigen::MatrixXd A(7, 7);
+  A << -1, 0.5, 0, 0, 0, 0.3, -0.1,    //
+      0, -900, 40, 0, 0, 1, 7,         //
+      0, 30, -50, 0, 0, 0, 2,          //
+      1, 0, 0, -3000, 200, 0, 0,       //
+      0.7, 0, 0, -200, -10, 0, 0,      //
+      0.1, 0.3, 0, 0.4, 0.2, -2, 0.1,  //
+      0, 5, 1, 0, 0, 0, -20;
+  Eigen::VectorXd y0(7);
+  y0 << 1, -1, 0.5, 2, 0.3, -0.7, 0.1;
+  auto run = [&](const sim::JacobianStructure* st) {
+    sim::CvodeOptions o = sim::stiffDriveSolver(1e-10, 1e-12);
+    sim::CvodeIntegrator integ(
+        7, [&](double, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) { yd = A * y; }, o,
+        [&](double, const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
+            Eigen::Ref<Eigen::MatrixXd> J) { J = A; });
+    if (st) integ.setJacobianStructure(*st);
+    integ.initialize(0.0, y0);
+    Eigen::VectorXd y(7);
+    integ.advance(0.5, y);
+    return std::make_pair(Eigen::VectorXd(y), integ.stats());
+  };
+  Eigen::EigenSolver<Eigen::MatrixXd> es(A);
+  const Eigen::VectorXcd c = es.eigenvectors().fullPivLu().solve(y0.cast<std::complex<double>>());
+  const Eigen::VectorXd exact =
+      (es.eigenvectors() * (es.eigenvalues() * 0.5).array().exp().matrix().asDiagonal() * c).real();
+  const sim::JacobianStructure declared{{0, 5}, {{1, 2, 6}, {3, 4}}, {{5}, {0}}, {{0, 5}, {5}}};
+  const auto [dense, s_dense] = run(nullptr);
+  const auto [lists, s_lists] = run(&declared);
+  EXPECT_LE((lists - exact).cwiseAbs().maxCoeff(), 1e-8);
+  EXPECT_LE((lists - dense).cwiseAbs().maxCoeff(), 1e-8);
+  // One solve with I − 0.01 A (both entry points): the dense LU's solution to rounding; declared too narrowly (block
+  // {3, 4} said to act on row 0 instead of 5), another system's.
+  const sim::JacobianStructure wrong{{0, 5}, {{1, 2, 6}, {3, 4}}, {{5}, {0}}, {{0, 5}, {0}}};
+  const Eigen::MatrixXd M = Eigen::MatrixXd::Identity(7, 7) - 0.01 * A;
+  const Eigen::VectorXd b = y0, want = M.partialPivLu().solve(b);
+  for (const auto* st : {&declared, &wrong}) {
+    sim::DirectSolver by_entries(7, *st), by_matrix(7, *st);
+    ASSERT_TRUE(by_entries.factorIdentityMinus(A, 0.01));
+    ASSERT_TRUE(by_matrix.factor(M));
+    Eigen::VectorXd x1(7), x2(7);
+    by_entries.solve(b, x1);
+    by_matrix.solve(b, x2);
+    if (st == &declared) {
+      EXPECT_LE((x1 - want).cwiseAbs().maxCoeff(), 1e-14);
+      EXPECT_LE((x2 - want).cwiseAbs().maxCoeff(), 1e-14);
+      EXPECT_EQ(by_entries.determinantSign(), M.determinant() < 0 ? -1 : 1);
+    } else {
+      EXPECT_GT((x1 - want).cwiseAbs().maxCoeff(), 1e-4);
+    }
+  }
 }
 
 TEST(StructuredJacobian, TwinRunsAgreeWithCvodeDenseDifferenceQuotients) {

@@ -41,8 +41,17 @@ enum class Method {
 struct JacobianStructure {
   std::vector<int> hub;                  ///< states coupled to every other state
   std::vector<std::vector<int>> blocks;  ///< groups coupled only to themselves and to the hub
+  /// Optional (empty: every hub state), one list per block: the hub states the block's rows may depend on (the
+  /// Jacobian's entries of the block's rows are zero in every other hub column).
+  std::vector<std::vector<int>> block_hub_columns{};
+  /// Optional (empty: every hub state), one list per block: the hub states whose rows may depend on the block's
+  /// states (the entries of the block's columns are zero in every other hub row). With both, the block elimination
+  /// reads and updates only these entries: a drive that reads its own joint's angle and rate and acts on the
+  /// accelerations costs O(n) of the hub, not O(n²).
+  std::vector<std::vector<int>> block_hub_rows{};
   bool empty() const { return blocks.empty(); }
-  /// InputError unless every index 0..n−1 appears exactly once.
+  /// InputError unless every index 0..n−1 appears exactly once, and the optional lists (one per block) name hub
+  /// states, each once.
   void validate(int n) const;
 };
 
