@@ -403,6 +403,40 @@ int DirectSolver::determinantSign() const {
   return luSign(c.lu);
 }
 
+std::vector<EntryRun> structureRuns(const JacobianStructure& st, int n) {
+  std::vector<EntryRun> runs;
+  if (st.empty()) return runs;
+  std::vector<std::vector<int>> rows(static_cast<size_t>(n));
+  for (int j : st.hub) {
+    rows[static_cast<size_t>(j)] = st.hub;
+    for (size_t k = 0; k < st.blocks.size(); ++k) {
+      const bool reads =
+          st.block_hub_columns.empty() ||
+          std::find(st.block_hub_columns[k].begin(), st.block_hub_columns[k].end(), j) != st.block_hub_columns[k].end();
+      if (reads)
+        rows[static_cast<size_t>(j)].insert(rows[static_cast<size_t>(j)].end(), st.blocks[k].begin(),
+                                            st.blocks[k].end());
+    }
+  }
+  for (size_t k = 0; k < st.blocks.size(); ++k)
+    for (int j : st.blocks[k]) {
+      rows[static_cast<size_t>(j)] = st.blocks[k];
+      const std::vector<int>& hub_rows = st.block_hub_rows.empty() ? st.hub : st.block_hub_rows[k];
+      rows[static_cast<size_t>(j)].insert(rows[static_cast<size_t>(j)].end(), hub_rows.begin(), hub_rows.end());
+    }
+  for (int j = 0; j < n; ++j) {
+    std::vector<int>& r = rows[static_cast<size_t>(j)];
+    std::sort(r.begin(), r.end());
+    for (size_t i = 0; i < r.size();) {
+      size_t e = i + 1;
+      while (e < r.size() && r[e] == r[e - 1] + 1) ++e;
+      runs.push_back({j, r[i], static_cast<int>(e - i)});
+      i = e;
+    }
+  }
+  return runs;
+}
+
 SUNLinearSolver makeEigenDenseSolver(Eigen::Index n, SUNContext ctx, const JacobianStructure& structure) {
   SUNLinearSolver S = SUNLinSolNewEmpty(ctx);
   if (S == nullptr) return nullptr;

@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 
 #include <memory>
+#include <vector>
 
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_linearsolver.h>
@@ -16,6 +17,15 @@ namespace jointsim::sim {
 /// block-diagonal form (falling back to the dense LU for a block or Schur complement that is singular or
 /// ill-conditioned); solve applies the factors without allocating. nullptr when SUNDIALS cannot allocate it.
 SUNLinearSolver makeEigenDenseSolver(Eigen::Index n, SUNContext ctx, const JacobianStructure& structure);
+
+/// The entries of an n × n matrix inside `structure` (hub × hub, each block × itself, a block's rows × the hub columns
+/// it may read, the hub rows it may act on × its columns) as runs of consecutive rows of one column, in column order:
+/// what a plant Jacobian may write, so the only entries the Jacobian's zeroing, copies and scalings need to touch
+/// (the others stay 0). Empty for an empty structure.
+struct EntryRun {
+  int col, row, len;
+};
+std::vector<EntryRun> structureRuns(const JacobianStructure& structure, int n);
 
 /// The same direct solver without SUNDIALS (FixedStepIntegrator's I − γhJ): factor() then any number of solve()s, which
 /// allocate nothing.

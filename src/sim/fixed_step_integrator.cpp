@@ -52,10 +52,9 @@ struct FixedStepIntegrator::Impl {
 
   // Jacobian and the factorised iteration matrix I − γ h_f W.
   Eigen::MatrixXd J;
-  // With a structure: per column j the rows a plant Jacobian may write (zero_rows[zero_start[j] .. zero_start[j+1]));
-  // only these are zeroed before each one (the others stay 0 from the start: 8 % of a step at 24 drives was the
-  // memset of the whole n × n).
-  std::vector<int> zero_rows, zero_start;
+  // With a structure: the entries a plant Jacobian may write; only these are zeroed before each one (the others stay
+  // 0 from the start: 8 % of a step at 24 drives was the memset of the whole n × n).
+  std::vector<EntryRun> zero_runs;
   bool jac_valid = false;
   int steps_since_jac = 0;
   double factored_h = kNoTime;
@@ -139,13 +138,11 @@ struct FixedStepIntegrator::Impl {
       inc[j] = std::max(std::sqrt(kEps) * std::abs(state[j]), min_inc * (opts.rtol * std::abs(state[j]) + atol));
     }
     if (djac) {
-      if (zero_start.empty()) {
+      if (zero_runs.empty()) {
         J.setZero();
       } else {
         double* d = J.data();
-        for (Eigen::Index j = 0; j < n; ++j)
-          for (int k = zero_start[static_cast<size_t>(j)]; k < zero_start[static_cast<size_t>(j) + 1]; ++k)
-            d[j * n + zero_rows[static_cast<size_t>(k)]] = 0.0;
+        for (const EntryRun& r : zero_runs) std::fill_n(d + static_cast<Eigen::Index>(r.col) * n + r.row, r.len, 0.0);
       }
       guarded("Jacobian", at, [&] { djac(at, state, f0, inc, J); });
     } else {
@@ -573,35 +570,7 @@ void FixedStepIntegrator::setJacobianStructure(JacobianStructure structure) {
   m.structure = std::move(structure);
   m.solver = std::make_unique<DirectSolver>(m.n, m.structure);
   m.factored_h = kNoTime;
-  // The rows of each column inside the structure: hub columns — the hub and every block that may read them; a
-  // block's columns — the block and the hub rows it may act on.
-  const JacobianStructure& st = m.structure;
-  std::vector<std::vector<int>> rows(static_cast<size_t>(m.n));
-  for (int j : st.hub) {
-    rows[static_cast<size_t>(j)] = st.hub;
-    for (size_t k = 0; k < st.blocks.size(); ++k) {
-      const bool reads =
-          st.block_hub_columns.empty() ||
-          std::find(st.block_hub_columns[k].begin(), st.block_hub_columns[k].end(), j) != st.block_hub_columns[k].end();
-      if (reads)
-        rows[static_cast<size_t>(j)].insert(rows[static_cast<size_t>(j)].end(), st.blocks[k].begin(),
-                                            st.blocks[k].end());
-    }
-  }
-  for (size_t k = 0; k < st.blocks.size(); ++k)
-    for (int j : st.blocks[k]) {
-      rows[static_cast<size_t>(j)] = st.blocks[k];
-      const std::vector<int>& hub_rows = st.block_hub_rows.empty() ? st.hub : st.block_hub_rows[k];
-      rows[static_cast<size_t>(j)].insert(rows[static_cast<size_t>(j)].end(), hub_rows.begin(), hub_rows.end());
-    }
-  m.zero_rows.clear();
-  m.zero_start.assign(1, 0);
-  for (auto& r : rows) {
-    std::sort(r.begin(), r.end());  // (memory order)
-    m.zero_rows.insert(m.zero_rows.end(), r.begin(), r.end());
-    m.zero_start.push_back(static_cast<int>(m.zero_rows.size()));
-  }
-  if (st.empty()) m.zero_start.clear();
+  m.zero_runs = structureRuns(m.structure, m.n);
 }
 
 double FixedStepIntegrator::jumpError(const Eigen::Ref<const Eigen::VectorXd>&,

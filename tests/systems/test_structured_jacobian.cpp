@@ -296,6 +296,37 @@ TEST(StructuredJacobian, DeclaredHubCouplingsOfABlockAreAllTheEliminationReads) 
   }
 }
 
+TEST(StructuredJacobian, TheStructuresEntriesAreWhatTheMatrixOperationsTouch) {
+  // structureRuns (the entries the Jacobian's zeroing, copies and A = cA + I touch) against the structure's
+  // definition entry by entry, with and without the blocks' declared hub couplings: hub × hub, block × itself, a
+  // block's rows × the hub columns it reads, the hub rows it acts on × its columns; each entry once, the diagonal in.
+  for (bool lists : {false, true}) {
+    sim::JacobianStructure st{{0, 5}, {{1, 2, 6}, {3, 4}}};
+    if (lists) {
+      st.block_hub_columns = {{5}, {0}};
+      st.block_hub_rows = {{0, 5}, {5}};
+    }
+    const int n = 7;
+    Eigen::MatrixXi want = Eigen::MatrixXi::Zero(n, n), got = Eigen::MatrixXi::Zero(n, n);
+    auto has = [](const std::vector<int>& v, int x) { return std::find(v.begin(), v.end(), x) != v.end(); };
+    for (int i : st.hub)
+      for (int j : st.hub) want(i, j) = 1;
+    for (size_t k = 0; k < st.blocks.size(); ++k)
+      for (int a : st.blocks[k]) {
+        for (int b : st.blocks[k]) want(a, b) = 1;
+        for (int h : st.hub) {
+          if (!lists || has(st.block_hub_columns[k], h)) want(a, h) = 1;
+          if (!lists || has(st.block_hub_rows[k], h)) want(h, a) = 1;
+        }
+      }
+    for (const sim::EntryRun& r : sim::structureRuns(st, n))
+      for (int i = 0; i < r.len; ++i) got(r.row + i, r.col) += 1;
+    EXPECT_EQ(got, want) << (lists ? "with lists" : "without lists");
+    EXPECT_EQ(got.diagonal().minCoeff(), 1);
+  }
+  EXPECT_TRUE(sim::structureRuns(sim::JacobianStructure{}, 3).empty());
+}
+
 TEST(StructuredJacobian, TwinRunsAgreeWithCvodeDenseDifferenceQuotients) {
   // 0.3 s of the UR5 excitation at rtol 1e-9: the structured Jacobian with block elimination and CVODE's own dense
   // difference quotients with a dense LU reach the same states (both errors are far below the difference
