@@ -72,7 +72,7 @@ struct SmallLu {
     piv.assign(static_cast<size_t>(m), 0);
   }
 
-  /// Factorises `a` in place. False when a pivot is zero or not finite, or the smallest pivot magnitude is below
+  /// Factorises `a` in place. False when a pivot or a multiplier is zero or not finite, or the smallest pivot magnitude is below
   /// 1e-13 of the largest (a lower bound of the condition number: such a matrix is at least that ill-conditioned). A
   /// cheap test in place of a condition estimate, which cost 10 % of a sampled-control run; an ill-conditioned block
   /// that passes only slows CVODE's Newton iteration (its residual is the right-hand side itself), which it answers
@@ -81,6 +81,8 @@ struct SmallLu {
     const Eigen::Index m = a.rows();
     double* __restrict d = a.data();
     double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+    double multipliers = 0.0;  // Σ|l_ik| ≤ m²: finite unless an entry is NaN or ±∞ (which a skipped zero multiplier
+                               // would otherwise leave in L unseen)
     sign = 1;
     for (Eigen::Index k = 0; k < m; ++k) {
       double* __restrict ck = d + k * m;
@@ -101,7 +103,10 @@ struct SmallLu {
       lo = std::min(lo, best);
       hi = std::max(hi, best);
       const double pivot = ck[k];
-      for (Eigen::Index i = k + 1; i < m; ++i) ck[i] /= pivot;
+      for (Eigen::Index i = k + 1; i < m; ++i) {
+        ck[i] /= pivot;
+        multipliers += std::abs(ck[i]);
+      }
       for (Eigen::Index j = k + 1; j < m; ++j) {
         double* __restrict cj = d + j * m;
         const double u = cj[k];
@@ -109,7 +114,7 @@ struct SmallLu {
         for (Eigen::Index i = k + 1; i < m; ++i) cj[i] -= ck[i] * u;
       }
     }
-    return lo > 1e-13 * hi;
+    return lo > 1e-13 * hi && std::isfinite(multipliers);
   }
 
   /// x = A⁻¹ x (x holds b on entry, m entries) with the factors of the last factor() that returned true.
@@ -287,6 +292,28 @@ struct EigenDenseContent {
   std::unique_ptr<BlockPlan> plan;  // block elimination (JacobianStructure); null: dense LU
   bool blocks_factored = false;     // the last setup used the plan (else the dense LU)
   long dense_fallbacks = 0;
+  std::vector<EntryRun> runs;  // with a plan: the structure's entries (structureRuns), all the dense fallback reads
+  Eigen::MatrixXd fallback;    // with a plan: the dense fallback's matrix
+
+  void usePlan(const JacobianStructure& structure, Eigen::Index n) {
+    plan = std::make_unique<BlockPlan>(structure);
+    runs = structureRuns(structure, static_cast<int>(n));
+    fallback.setZero(n, n);
+  }
+
+  /// With a plan, the matrix the dense fallback factorises: scale·A(i, j) + shift·δ_ij inside the structure and 0
+  /// outside it, i.e. the matrix the block elimination reads. Whatever a Jacobian left outside its structure (where
+  /// the structured zeroing and scaling do not reach) is thus ignored by both, as documented.
+  const Eigen::MatrixXd& fallbackMatrix(const double* A, double scale, double shift) {
+    const Eigen::Index n = fallback.rows();
+    double* d = fallback.data();
+    for (const EntryRun& r : runs) {
+      const Eigen::Index at = static_cast<Eigen::Index>(r.col) * n + r.row;
+      for (int i = 0; i < r.len; ++i) d[at + i] = scale * A[at + i];
+    }
+    fallback.diagonal().array() += shift;  // (the diagonal lies in the structure)
+    return fallback;
+  }
 };
 
 EigenDenseContent* eigenContent(SUNLinearSolver S) { return static_cast<EigenDenseContent*>(S->content); }
@@ -304,8 +331,10 @@ int eigenSetup(SUNLinearSolver S, SUNMatrix A) {
       return SUNLS_SUCCESS;
     }
     ++c->dense_fallbacks;
+    c->lu.compute(c->fallbackMatrix(SM_DATA_D(A), 1.0, 0.0));
+  } else {
+    c->lu.compute(Eigen::Map<const Eigen::MatrixXd>(SM_DATA_D(A), n, n));
   }
-  c->lu.compute(Eigen::Map<const Eigen::MatrixXd>(SM_DATA_D(A), n, n));
   // A zero pivot means a singular Newton matrix: report it as recoverable, as SUNLinSol_Dense does.
   const auto& m = c->lu.matrixLU();
   for (Eigen::Index k = 0; k < n; ++k)
@@ -353,12 +382,12 @@ static bool denseFactor(EigenDenseContent& c, const Eigen::MatrixXd& A) {
 struct DirectSolver::Impl {
   // The content's type is local to this file: held type-erased (a field of it would give Impl internal linkage).
   Impl(Eigen::Index n, const JacobianStructure& structure) : holder(std::make_shared<EigenDenseContent>(n)), work(n) {
-    if (!structure.empty()) content().plan = std::make_unique<BlockPlan>(structure);
+    if (!structure.empty()) content().usePlan(structure, n);
   }
   EigenDenseContent& content() { return *static_cast<EigenDenseContent*>(holder.get()); }
   std::shared_ptr<void> holder;
   Eigen::VectorXd work;
-  Eigen::MatrixXd dense;  // I − cJ when the block elimination cannot be used (factorIdentityMinus)
+  Eigen::MatrixXd dense;  // I − cJ without a structure (factorIdentityMinus)
 };
 
 DirectSolver::DirectSolver(Eigen::Index n, const JacobianStructure& structure)
@@ -371,6 +400,7 @@ bool DirectSolver::factor(const Eigen::MatrixXd& A) {
     c.blocks_factored = c.plan->factor(Eigen::Map<const Eigen::MatrixXd>(A.data(), A.rows(), A.cols()));
     if (c.blocks_factored) return true;
     ++c.dense_fallbacks;
+    return denseFactor(c, c.fallbackMatrix(A.data(), 1.0, 0.0));
   }
   return denseFactor(c, A);
 }
@@ -391,6 +421,7 @@ bool DirectSolver::factorIdentityMinus(const Eigen::MatrixXd& J, double c) {
     c_.blocks_factored = c_.plan->factorIdentityMinus(J, c);
     if (c_.blocks_factored) return true;
     ++c_.dense_fallbacks;
+    return denseFactor(c_, c_.fallbackMatrix(J.data(), -c, 1.0));
   }
   impl_->dense = -c * J;
   impl_->dense.diagonal().array() += 1.0;
@@ -448,7 +479,7 @@ SUNLinearSolver makeEigenDenseSolver(Eigen::Index n, SUNContext ctx, const Jacob
   S->ops->lastflag = eigenLastFlag;
   S->ops->free = eigenFree;
   auto* content = new EigenDenseContent(n);
-  if (!structure.empty()) content->plan = std::make_unique<BlockPlan>(structure);
+  if (!structure.empty()) content->usePlan(structure, n);
   S->content = content;
   return S;
 }

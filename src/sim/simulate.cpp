@@ -131,6 +131,7 @@ JacobianKind jacobianKind(const CvodeOptions& o) {
 
 void installPlantJacobian(const Plant& plant, const PlantState& state, Integrator& integ) {
   const CvodeOptions& o = integ.options();
+  integ.setTimeInvariance([&plant, &state] { return plant.timeInvariant(state); });
   if (!plant.providesJacobian() || !o.plant_jacobian || o.method == Method::Adams) return;
   const JacobianKind kind = jacobianKind(o);
   integ.setDifferenceJacobian(

@@ -3,6 +3,7 @@
 // the dense LU, and whole runs against CVODE's own dense difference-quotient Jacobian.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <utility>
 
@@ -18,6 +19,9 @@
 #include "jointsim/sim/simulate.hpp"
 #include "jointsim/systems/robot_system.hpp"
 #include "jointsim/systems/robot_with_drives.hpp"
+#include <nvector/nvector_serial.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
 #include "sim/block_linear_solver.hpp"
 #include "test_util.hpp"
 
@@ -325,6 +329,64 @@ TEST(StructuredJacobian, TheStructuresEntriesAreWhatTheMatrixOperationsTouch) {
     EXPECT_EQ(got.diagonal().minCoeff(), 1);
   }
   EXPECT_TRUE(sim::structureRuns(sim::JacobianStructure{}, 3).empty());
+}
+
+TEST(StructuredJacobian, TheDenseFallbackReadsOnlyTheStructuresEntriesAsTheEliminationDoes) {
+  // Hub {0}, blocks {1} and {2}: J(1, 2) and J(2, 1) lie outside the structure, and a Jacobian may leave anything
+  // there (the structured zeroing does not reach them). With J(1, 1) = 1/c the block {1} of I − cJ is exactly 0, so
+  // the elimination fails and the dense LU takes over: it must solve the structure's matrix (outside entries 0), not
+  // the one in memory, through all three entry points (by entries, by matrix, CVODE's linear solver).
+  const double c = 0.5;
+  Eigen::MatrixXd J(3, 3);
+  J << -1, 3, 0.5,  //
+      4, 2, 1e3,    // J(1, 1) = 1/c
+      -2, -1e3, -6;
+  Eigen::MatrixXd Js = J;
+  Js(1, 2) = Js(2, 1) = 0.0;
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(3, 3);
+  const Eigen::VectorXd b = Eigen::Vector3d(1.0, -2.0, 0.5);
+  const Eigen::VectorXd want = (I - c * Js).partialPivLu().solve(b);
+  const Eigen::VectorXd garbage = (I - c * J).partialPivLu().solve(b);
+  ASSERT_GT((want - garbage).cwiseAbs().maxCoeff(), 1e-3);  // the outside entries matter if read
+  const sim::JacobianStructure st{{0}, {{1}, {2}}};
+  sim::DirectSolver by_entries(3, st), by_matrix(3, st);
+  ASSERT_TRUE(by_entries.factorIdentityMinus(J, c));
+  ASSERT_TRUE(by_matrix.factor(I - c * J));
+  Eigen::VectorXd x1(3), x2(3);
+  by_entries.solve(b, x1);
+  by_matrix.solve(b, x2);
+  EXPECT_LE((x1 - want).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LE((x2 - want).cwiseAbs().maxCoeff(), 1e-14);
+
+  SUNContext ctx = nullptr;
+  ASSERT_EQ(SUNContext_Create(nullptr, &ctx), 0);
+  SUNMatrix A = SUNDenseMatrix(3, 3, ctx);
+  N_Vector nb = N_VNew_Serial(3, ctx), nx = N_VNew_Serial(3, ctx);
+  SUNLinearSolver LS = sim::makeEigenDenseSolver(3, ctx, st);
+  ASSERT_TRUE(A && nb && nx && LS);
+  Eigen::Map<Eigen::MatrixXd>(SM_DATA_D(A), 3, 3) = I - c * J;
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(nb), 3) = b;
+  EXPECT_EQ(SUNLinSolSetup(LS, A), 0);
+  EXPECT_EQ(SUNLinSolSolve(LS, A, nx, nb, 0.0), 0);
+  EXPECT_LE((Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(nx), 3) - want).cwiseAbs().maxCoeff(), 1e-14);
+  SUNLinSolFree(LS);
+  N_VDestroy(nx);
+  N_VDestroy(nb);
+  SUNMatDestroy(A);
+  SUNContext_Free(&ctx);
+}
+
+TEST(StructuredJacobian, ANonFiniteEntryOfABlockFailsTheFactorisationEvenBehindAZeroMultiplier) {
+  // Block {1, 2} of I − cJ is [[1, 0], [NaN, 1]]: the NaN is never a pivot and its column's update is skipped (its
+  // U entry is 0), so without a check it would stay in L unseen. The factorisation must fail (so that the fixed step
+  // names the entry), by the elimination and by the dense fallback alike.
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 3);
+  J(0, 0) = -1.0;
+  J(2, 1) = std::numeric_limits<double>::quiet_NaN();
+  sim::DirectSolver solver(3, sim::JacobianStructure{{0}, {{1, 2}}});
+  EXPECT_FALSE(solver.factorIdentityMinus(J, 0.1));
+  J(2, 1) = 3.0;
+  EXPECT_TRUE(solver.factorIdentityMinus(J, 0.1));
 }
 
 TEST(StructuredJacobian, TwinRunsAgreeWithCvodeDenseDifferenceQuotients) {

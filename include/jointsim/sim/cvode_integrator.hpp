@@ -191,7 +191,8 @@ using RhsFunction =
     std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> ydot)>;
 
 /// Dense Jacobian J = df/dy (n x n, column-major; J(i, j) = d ydot_i / d y_j) at (t, y), with
-/// `ydot` = f(t, y) already evaluated. J is zero on entry, so only non-zeros need to be written.
+/// `ydot` = f(t, y) already evaluated. J is zero on entry, so only non-zeros need to be written (with a
+/// JacobianStructure: zero inside the structure; entries outside it are never read, whatever they hold).
 /// May throw like RhsFunction.
 using JacobianFunction =
     std::function<void(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -308,9 +309,10 @@ class CvodeIntegrator final : public Integrator {
   /// at construction or CVODE's dense difference quotients; BDF only; call before initialize().
   void setDifferenceJacobian(DifferenceJacobianFunction jacobian) override;
   /// Factorise the Newton matrix by block elimination over `structure` (validated here; BDF with the Eigen
-  /// dense solver only; call before initialize()). The Jacobian must respect the structure: entries between
-  /// two blocks are ignored. A block (or the hub's Schur complement) that is numerically singular falls back
-  /// to the dense LU for that factorisation.
+  /// dense solver only; call before initialize()). The Jacobian must respect the structure: entries outside it
+  /// (between two blocks, or hub couplings a block did not declare) are ignored, taken as 0. A block (or the hub's
+  /// Schur complement) that is numerically singular falls back to the dense LU for that factorisation, of the same
+  /// matrix (the structure's entries, 0 elsewhere).
   void setJacobianStructure(JacobianStructure structure) override;
 
   /// Where an input jumped at time() (the integrator stopped there), the local error the multistep history would

@@ -109,7 +109,9 @@ using OutputSink = std::function<void(const Eigen::VectorXd& row)>;
 constexpr double kKeepHistoryLimit = 1.0;
 
 /// Gives `integ` the plant's own Jacobian and its block structure when the plant provides them and the
-/// integrator's options ask for it (plant_jacobian; BDF or the fixed-step method); before integ.initialize().
+/// integrator's options ask for it (plant_jacobian; BDF or the fixed-step method), and the plant's time invariance
+/// (Plant::timeInvariant of `state`, asked at each Jacobian); before integ.initialize(). `plant` and `state` must
+/// outlive `integ`.
 void installPlantJacobian(const Plant& plant, const PlantState& state, Integrator& integ);
 
 /// The Jacobian the plant is asked for under `options`: analytic parts for the fixed-step method or with
