@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <locale>
 #include <random>
 #include <sstream>
@@ -247,13 +248,34 @@ void RobotSystem::transmissionStage(const State& st, const Eigen::Ref<const Eige
 
 void RobotSystem::frictionStage(const State& st, const Eigen::Ref<const Eigen::VectorXd>& y, double* ydot) const {
   // On the gear output shaft, driven by the gear output torque.
+  // A model that reads only v and at most one state is memoised per drive (State::FrictionMemo): the same bits in, the
+  // same bits out, as evaluate() is pure.
+  auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; };
   for (int k = 0; k < model_.nq; ++k) {
     const DriveSpec& d = st.drives[static_cast<size_t>(k)];
     const DriveLayout& L = layout_[static_cast<size_t>(k)];
-    st.sig.tau_friction[k] = d.friction ? d.friction->evaluate({st.phid[k], st.sig.tau_gear[k]},
-                                                               L.friction >= 0 ? y.data() + L.friction : nullptr,
-                                                               L.friction >= 0 ? ydot + L.friction : nullptr)
-                                        : 0.0;
+    if (!d.friction) {
+      st.sig.tau_friction[k] = 0.0;
+      continue;
+    }
+    const double* z = L.friction >= 0 ? y.data() + L.friction : nullptr;
+    double* zdot = L.friction >= 0 ? ydot + L.friction : nullptr;
+    const double v = st.phid[k], z0 = L.n_friction == 1 ? z[0] : 0.0;
+    const bool memoised = L.n_friction <= 1 && !d.friction->readsDrivingTorque();
+    State::FrictionMemo& m = st.friction_memo[static_cast<size_t>(k)];
+    if (memoised && m.model == d.friction && same(m.v, v) && same(m.z, z0)) {
+      st.sig.tau_friction[k] = m.tau;
+      if (zdot) zdot[0] = m.zdot;
+      continue;
+    }
+    st.sig.tau_friction[k] = d.friction->evaluate({v, st.sig.tau_gear[k]}, z, zdot);
+    if (memoised) {
+      if (m.model != d.friction) m.model = d.friction;
+      m.v = v;
+      m.z = z0;
+      m.tau = st.sig.tau_friction[k];
+      m.zdot = zdot ? zdot[0] : 0.0;
+    }
   }
   // A bearing defect of the output shaft: τ_b = A sin(order · φ_out), with the amplitude of its schedule.
   for (size_t i = 0; i < faults_.size(); ++i)
@@ -358,9 +380,15 @@ void RobotSystem::derivatives(const sim::PlantState& state, double t, const Eige
 sim::JacobianStructure RobotSystem::jacobianStructure() const { return jacobianStructure(nullptr); }
 
 bool RobotSystem::timeInvariant(const sim::PlantState& state) const {
-  // evaluate() reads t in the reference (continuous control only), the sensor faults' episodes (continuous control
-  // only: a sampled controller reads the held measurement), the load-torque profiles and the wrench function.
-  return sampled() && !wrenches_ && !load_profiles_.dependsOnTime(own<State>(state).loads);
+  // evaluate() reads t in the reference and the sensor faults' episodes (both only through a continuous controller: a
+  // sampled one reads the held measurement and outputs, a voltage or motor-torque port bypasses it), the load-torque
+  // profiles and the wrench function. (Parameter faults change at time events, between which they are constant.)
+  const State& st = own<State>(state);
+  if (wrenches_ || load_profiles_.dependsOnTime(st.loads)) return false;
+  if (sampled()) return true;
+  for (const CommandPort port : st.port)
+    if (controllerDriven(port)) return false;
+  return true;
 }
 
 sim::JacobianStructure RobotSystem::jacobianStructure(std::vector<int>* drive_of_block) const {
@@ -449,19 +477,29 @@ void RobotSystem::driveColumns(const State& st, double t, const Eigen::Ref<const
                                Eigen::Ref<Eigen::MatrixXd> J) const {
   // Drive columns: state c of every drive at once (a drive's states act on its own rows and, through its output
   // torque τ_out,k, on q̈ by the column k of ∂q̈/∂τ_out = st.jac_P).
+  // A drive on a port that replaces its continuous controller (voltage, motor torque) holds the controller's states
+  // (ẋ = 0) and reads none of them: their columns are exactly 0 and need no evaluation (they are its block's last
+  // states; J is zero there on entry).
   const int n = model_.nq;
   Eigen::VectorXd& yp = st.jac_y;
   Eigen::VectorXd& fp = st.jac_f;
-  size_t max_m = 0;
-  for (const auto& b : st.jac_structure.blocks) max_m = std::max(max_m, b.size());
   const auto& blocks = st.jac_structure.blocks;
+  size_t max_m = 0;
+  for (size_t bi = 0; bi < blocks.size(); ++bi) {
+    const int k = st.jac_block_drive[bi];
+    size_t m = blocks[bi].size();
+    if (!sampled() && !controllerDriven(st.port[static_cast<size_t>(k)]))
+      m -= static_cast<size_t>(layout_[static_cast<size_t>(k)].n_controller);
+    st.jac_block_columns[bi] = m;
+    max_m = std::max(max_m, m);
+  }
   for (size_t c = 0; c < max_m; ++c) {
-    for (const auto& b : blocks)
-      if (b.size() > c) yp[b[c]] = y[b[c]] + inc[b[c]];
+    for (size_t bi = 0; bi < blocks.size(); ++bi)
+      if (st.jac_block_columns[bi] > c) yp[blocks[bi][c]] = y[blocks[bi][c]] + inc[blocks[bi][c]];
     evaluate(st, t, yp, fp.data(), Pass::DrivesOnly);  // q̈'s rows come from τ_out through jac_P
     for (size_t bi = 0; bi < blocks.size(); ++bi) {
       const auto& b = blocks[bi];
-      if (b.size() <= c) continue;
+      if (st.jac_block_columns[bi] <= c) continue;
       const int s = b[c];
       for (int r : b) J(r, s) = (fp[r] - f[r]) / inc[s];
       const int k = st.jac_block_drive[bi];

@@ -194,6 +194,8 @@ RobotSystem::State::State(const RobotSystem& robot)
   llt.compute(Eigen::MatrixXd::Identity(n, n));  // a defined status before the first use (the object is copied)
   // The Jacobian's workspace, sized here: jacobian() does not allocate.
   jac_structure = robot.jacobianStructure(&jac_block_drive);
+  jac_block_columns.assign(jac_block_drive.size(), 0);
+  friction_memo.resize(robot.drives_.size());
   jac_y.setZero(robot.n_states_);
   jac_f.setZero(robot.n_states_);
   jac_tau0.setZero(n);

@@ -260,6 +260,42 @@ TEST(CommandPorts, SetpointVoltageSetpointSwitchOnTheUr5TwinIsBumpless) {
   EXPECT_LT(worst, std::max(2.0 * drift, 1e-4));        // no excursion beyond the open-loop drift
 }
 
+TEST(CommandPorts, TheTwinIsTimeInvariantOnlyWhenEveryDriveBypassesItsController) {
+  // The excitation's twin (continuous control, a Fourier reference of t). While a controller runs, f(t, y) moves with
+  // t; with every drive on the voltage or motor-torque port nothing in f reads t (the reference and the sensor faults'
+  // episodes reach it only through a controller), so timeInvariant() may say so: f is then bit for bit the same at
+  // any t, and the fixed-step method differences no ∂f/∂t (one right-hand side less per Jacobian).
+  std::shared_ptr<experiments::Experiment> e =
+      experiments::loadExperiment(test::sourcePath("config/experiments/ur5_excitation.yaml"));
+  sim::CvodeOptions o;
+  o.method = sim::Method::Rosenbrock;
+  o.fixed_step = 1e-3;
+  sim::Simulator s(e->plant(), o);
+  const auto& r = dynamic_cast<const systems::RobotSystem&>(s.plant());
+  Eigen::VectorXd y = s.state();
+  y.segment(6, 6).setConstant(0.1);  // moving joints
+  Eigen::VectorXd f1(y.size()), f2(y.size());
+  auto differs = [&] {
+    r.derivatives(s.plantState(), 2.3, y, f1);
+    r.derivatives(s.plantState(), 4.1, y, f2);
+    return (f1 - f2).cwiseAbs().maxCoeff();
+  };
+  EXPECT_FALSE(r.timeInvariant(s.plantState()));
+  EXPECT_GT(differs(), 1e-3);
+  for (int k = 0; k < 6; ++k)
+    r.setCommandPort(s.plantState(), k, k < 3 ? CommandPort::Voltage : CommandPort::MotorTorque);
+  EXPECT_TRUE(r.timeInvariant(s.plantState()));
+  EXPECT_EQ(differs(), 0.0);
+  for (CommandPort driven : {CommandPort::Setpoint, CommandPort::MotorVelocity, CommandPort::Current}) {
+    r.setCommandPort(s.plantState(), 4, driven);
+    EXPECT_FALSE(r.timeInvariant(s.plantState())) << static_cast<int>(driven);
+  }
+  r.setCommandPort(s.plantState(), 4, CommandPort::Voltage);
+  s.advance(0.01);
+  EXPECT_EQ(s.stats().rhs_evals_jacobian, 0);
+  EXPECT_EQ(s.stats().jac_evals, 10);
+}
+
 // A load torque at the joint (the `j1.load_torque` input) with the motor torque held at 0: q̈ = τ_L / (J_l + N² J_M)
 // (the rigid gear's rotor turns with the joint); released, the joint coasts at the speed it reached.
 TEST(CommandPorts, LoadTorqueAcceleratesTheJointInertiaAndIsReleased) {

@@ -3,6 +3,8 @@
 // the dense LU, and whole runs against CVODE's own dense difference-quotient Jacobian.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <utility>
@@ -88,11 +90,13 @@ Eigen::MatrixXd centralDifferences(const sim::Plant& p, const sim::PlantState& s
 /// accelerations' rows of the multibody's columns may instead equal central differences: the joint-local path takes
 /// the multibody's part from the analytic ABA derivatives, which the forward differences miss by their truncation
 /// error (1e-6 of a column with rigid gears at these increments).
-void expectStructuredEqualsPlain(const systems::RobotSystem& sys, unsigned seed, bool coupled = false) {
+void expectStructuredEqualsPlain(const systems::RobotSystem& sys, unsigned seed, bool coupled = false,
+                                 const std::function<void(sim::PlantState&)>& setup = {}) {
   const Eigen::VectorXd y = movingState(sys, seed);
   const Eigen::Index n = y.size();
   Eigen::VectorXd f(n);
   const auto state = sys.makeState();
+  if (setup) setup(*state);
   sys.start(*state, 0.37, y);
   sys.derivatives(*state, 0.37, y, f);
   const Eigen::VectorXd inc = increments(y);
@@ -147,6 +151,56 @@ TEST(StructuredJacobian, Ur5TwinEqualsPlainDifferenceQuotients) {
   systems::RobotSystem sys = twin();
   expectStructuredEqualsPlain(sys, 1);
   expectStructuredEqualsPlain(sys, 2);
+  // Drives on ports that bypass the controller (whose states then get no column evaluation: the plain columns must
+  // be exactly 0) beside drives whose controller runs from another entry.
+  expectStructuredEqualsPlain(sys, 4, false, [&sys](sim::PlantState& state) {
+    using systems::CommandPort;
+    const CommandPort ports[] = {CommandPort::Voltage,       CommandPort::MotorTorque, CommandPort::Current,
+                                 CommandPort::MotorVelocity, CommandPort::Voltage,     CommandPort::Setpoint};
+    for (int k = 0; k < 6; ++k) sys.setCommandPort(state, k, ports[k]);
+  });
+}
+
+TEST(StructuredJacobian, TheMemoisedFrictionIsBitForBitAFreshEvaluationAndFollowsAParameterFault) {
+  // RobotSystem memoises each drive's last friction evaluation by (model, v, z) bits: a state that evaluated other
+  // points in between gives exactly what a fresh one gives, and a parameter fault (a new friction model of the drive
+  // at the same v and z) is not served the old value.
+  systems::RobotSystem sys = twin();
+  const Eigen::VectorXd y1 = movingState(sys, 5), y2 = movingState(sys, 6);
+  const Eigen::Index n = y1.size();
+  Eigen::VectorXd fresh(n), f(n), other(n);
+  const auto a = sys.makeState(), b = sys.makeState();
+  sys.start(*a, 0.1, y1);
+  sys.derivatives(*a, 0.1, y1, fresh);
+  sys.start(*b, 0.1, y1);
+  for (const Eigen::VectorXd* y : {&y2, &y1, &y1}) {
+    sys.derivatives(*b, 0.1, *y, f);
+    if (y == &y2) other = f;
+  }
+  EXPECT_EQ(std::memcmp(f.data(), fresh.data(), sizeof(double) * static_cast<size_t>(n)), 0);
+  EXPECT_NE(other, fresh);
+  // The elbow's Coulomb friction doubled from 0.05 s: the memo filled before the onset must not answer after it.
+  systems::Fault fault;
+  fault.type = systems::FaultType::CoulombFrictionScale;
+  fault.joint = "elbow_joint";
+  fault.value = 2.0;
+  fault.onset = 0.05;
+  sys.setFaults({fault});
+  const int z = sys.layout(2).friction;
+  ASSERT_GE(z, 0);
+  Eigen::VectorXd y = y1;
+  y[z] = 1e-6;  // a loaded bristle (about f_c / σ0): ż depends on f_c
+  const auto c = sys.makeState(), d = sys.makeState();
+  Eigen::VectorXd before(n), after(n), want(n);
+  sys.start(*c, 0.0, y);
+  sys.derivatives(*c, 0.0, y, before);
+  sys.start(*c, 0.06, y);
+  sys.derivatives(*c, 0.06, y, after);
+  sys.start(*d, 0.06, y);
+  sys.derivatives(*d, 0.06, y, want);
+  EXPECT_NE(before[z], after[z]);
+  EXPECT_EQ(after[z], want[z]);
+  EXPECT_EQ(after, want);
 }
 
 TEST(StructuredJacobian, SampledControlAndCoupledRigidDrivesEqualPlainDifferenceQuotients) {

@@ -35,6 +35,9 @@ class Friction {
   virtual double evaluate(const FrictionInput& in, const double* z, double* zdot) const = 0;
   /// Steady-state friction torque at constant sliding velocity v (the static map) [N·m].
   virtual double steadyState(double v) const = 0;
+  /// Whether evaluate() reads FrictionInput::driving_torque (models with true sticking). When false, its result and
+  /// zdot are a function of v and z alone, which a caller may memoise (RobotSystem does, per drive, within a run).
+  virtual bool readsDrivingTorque() const { return true; }
   /// Names with units of the internal states, e.g. "z[rad]".
   virtual std::vector<std::string> stateNames() const { return {}; }
   /// The parameter table (parameters.hpp): every scalar parameter with its key, unit, range, value and role.

@@ -89,6 +89,7 @@ class CoulombViscousFriction : public Friction {
   std::string type() const override { return "coulomb_viscous"; }
   double evaluate(const FrictionInput& in, const double* z, double* zdot) const override;
   double steadyState(double v) const override;
+  bool readsDrivingTorque() const override { return false; }
   const CoulombViscousParams& params() const { return p_; }
 
   std::vector<ParameterInfo> parameters() const override;
@@ -194,6 +195,7 @@ class StribeckFriction : public Friction {
   std::string type() const override { return "stribeck"; }
   double evaluate(const FrictionInput& in, const double* z, double* zdot) const override;
   double steadyState(double v) const override;
+  bool readsDrivingTorque() const override { return false; }
   const StribeckParams& params() const { return p_; }
 
   std::vector<ParameterInfo> parameters() const override;
@@ -230,6 +232,7 @@ class DahlFriction : public Friction {
   double evaluate(const FrictionInput& in, const double* z, double* zdot) const override;
   /// F_C·sgn(v) [N·m] (0 at v = 0).
   double steadyState(double v) const override;
+  bool readsDrivingTorque() const override { return false; }
   std::vector<std::string> stateNames() const override { return {"z[rad]"}; }
   const DahlParams& params() const { return p_; }
 
@@ -270,6 +273,7 @@ class LuGreFriction : public Friction {
   double evaluate(const FrictionInput& in, const double* z, double* zdot) const override;
   /// Static map, eq. 4.21 [N·m].
   double steadyState(double v) const override;
+  bool readsDrivingTorque() const override { return false; }
   std::vector<std::string> stateNames() const override { return {"z[rad]"}; }
   /// g(v) of eq. 4.17 with the α-set of the direction of v [N·m].
   double g(double v) const;
@@ -317,6 +321,7 @@ class LuGreUr5Friction : public Friction {
   double evaluate(const FrictionInput& in, const double* z, double* zdot) const override;
   /// Static map sgn(q̇)·g(q̇) [N·m].
   double steadyState(double v) const override;
+  bool readsDrivingTorque() const override { return false; }
   std::vector<std::string> stateNames() const override { return {"z[rad]"}; }
   /// g(q̇) of eq. 7 [N·m].
   double g(double v) const;

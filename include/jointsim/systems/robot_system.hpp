@@ -191,6 +191,16 @@ class RobotSystem : public sim::Plant {
     mutable Eigen::MatrixXd jac_P;
     mutable sim::JacobianStructure jac_structure;
     mutable std::vector<int> jac_block_drive;
+    mutable std::vector<size_t> jac_block_columns;  // per block: how many of its states get a column evaluation
+    /// Per drive, the last friction evaluation of a model that reads only v and its one state z (bit patterns
+    /// compared): the Jacobian's drive columns evaluate the drives a dozen times at the same joint speed, where
+    /// LuGre's Stribeck curve (a pow and an exp) would be recomputed each time. Holding the model keeps its address
+    /// from being reused by another while the entry exists.
+    struct FrictionMemo {
+      std::shared_ptr<const drive::Friction> model;
+      double v = 0.0, z = 0.0, tau = 0.0, zdot = 0.0;
+    };
+    mutable std::vector<FrictionMemo> friction_memo;
     mutable multibody::Data jac_data;  ///< the analytic ABA derivatives of the Jacobian (robot_dynamics.cpp)
     mutable Eigen::VectorXd jac_tau_base;
     double gauss(double sigma) { return sigma > 0.0 ? sigma * normal(engine) : 0.0; }
@@ -350,8 +360,10 @@ class RobotSystem : public sim::Plant {
                 const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::VectorXd>& inc,
                 Eigen::Ref<Eigen::MatrixXd> J, sim::JacobianKind kind) const override;
   sim::JacobianStructure jacobianStructure() const override;
-  /// Under sampled control, without a wrench function of time and without a load-torque port driven by its profile:
-  /// the right-hand side reads only held values and y.
+  /// Without a wrench function of time and without a load-torque port driven by its profile, under sampled control
+  /// or with every drive on a port that replaces its controller (voltage, motor torque): the right-hand side reads
+  /// only held values and y (the reference and the sensor faults' episodes, functions of t, reach it only through a
+  /// continuous controller).
   bool timeInvariant(const sim::PlantState& state) const override;
   /// The same, and for each block the index of its drive.
   sim::JacobianStructure jacobianStructure(std::vector<int>* drive_of_block) const;
