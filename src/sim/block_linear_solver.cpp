@@ -428,6 +428,10 @@ bool DirectSolver::factorIdentityMinus(const Eigen::MatrixXd& J, double c) {
   return denseFactor(c_, impl_->dense);
 }
 
+long DirectSolver::denseFallbacks() const {
+  return static_cast<const EigenDenseContent*>(impl_->holder.get())->dense_fallbacks;
+}
+
 int DirectSolver::determinantSign() const {
   const EigenDenseContent& c = *static_cast<const EigenDenseContent*>(impl_->holder.get());
   if (c.plan && c.blocks_factored) return c.plan->determinantSign();

@@ -44,6 +44,9 @@ class DirectSolver {
   /// The sign of det A of the last successful factor() or factorIdentityMinus(): +1 or −1 (the product of the pivots'
   /// signs and of the permutations' parities, over the blocks and the Schur complement: det A = Π det D_k · det S).
   int determinantSign() const;
+  /// How many factorisations fell back from the block elimination to the dense LU (a block or the Schur complement
+  /// singular or ill-conditioned).
+  long denseFallbacks() const;
 
  private:
   struct Impl;

@@ -344,6 +344,7 @@ TEST(StructuredJacobian, DeclaredHubCouplingsOfABlockAreAllTheEliminationReads) 
     Eigen::VectorXd x1(7), x2(7);
     by_entries.solve(b, x1);
     by_matrix.solve(b, x2);
+    EXPECT_EQ(by_entries.denseFallbacks() + by_matrix.denseFallbacks(), 0);  // the elimination itself solved
     if (st == &declared) {
       EXPECT_LE((x1 - want).cwiseAbs().maxCoeff(), 1e-14);
       EXPECT_LE((x2 - want).cwiseAbs().maxCoeff(), 1e-14);
@@ -411,6 +412,8 @@ TEST(StructuredJacobian, TheDenseFallbackReadsOnlyTheStructuresEntriesAsTheElimi
   by_matrix.solve(b, x2);
   EXPECT_LE((x1 - want).cwiseAbs().maxCoeff(), 1e-14);
   EXPECT_LE((x2 - want).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_EQ(by_entries.denseFallbacks(), 1);  // (the dense LU did)
+  EXPECT_EQ(by_matrix.denseFallbacks(), 1);
 
   SUNContext ctx = nullptr;
   ASSERT_EQ(SUNContext_Create(nullptr, &ctx), 0);
