@@ -72,11 +72,11 @@ struct SmallLu {
     piv.assign(static_cast<size_t>(m), 0);
   }
 
-  /// Factorises `a` in place. False when a pivot or a multiplier is zero or not finite, or the smallest pivot magnitude is below
-  /// 1e-13 of the largest (a lower bound of the condition number: such a matrix is at least that ill-conditioned). A
-  /// cheap test in place of a condition estimate, which cost 10 % of a sampled-control run; an ill-conditioned block
-  /// that passes only slows CVODE's Newton iteration (its residual is the right-hand side itself), which it answers
-  /// with a fresh Jacobian or a smaller step.
+  /// Factorises `a` in place. False when a pivot is zero or not finite, a multiplier is not finite, or the smallest
+  /// pivot magnitude is below 1e-13 of the largest (a lower bound of the condition number: such a matrix is at least
+  /// that ill-conditioned). A cheap test in place of a condition estimate, which cost 10 % of a sampled-control run;
+  /// an ill-conditioned block that passes only slows CVODE's Newton iteration (its residual is the right-hand side
+  /// itself), which it answers with a fresh Jacobian or a smaller step.
   bool factor() {
     const Eigen::Index m = a.rows();
     double* __restrict d = a.data();

@@ -171,9 +171,10 @@ class Plant {
   /// A Jacobian of its own (jacobian(), jacobianStructure()) that the simulators use for BDF (unless
   /// CvodeOptions::plant_jacobian is false).
   virtual bool providesJacobian() const { return false; }
-  /// J = ∂f/∂y at (t, y) with f = f(t, y), J zero on entry (inside jacobianStructure(); outside it never read); `inc` holds the difference increment CVODE would use
-  /// per state (DifferenceJacobianFunction); `kind` says whether analytic parts may replace differences (a plant
-  /// without any ignores it). Pure like derivatives(); must respect jacobianStructure().
+  /// J = ∂f/∂y at (t, y) with f = f(t, y), J zero on entry (inside jacobianStructure(); outside it never read);
+  /// `inc` holds the difference increment CVODE would use per state (DifferenceJacobianFunction); `kind` says whether
+  /// analytic parts may replace differences (a plant without any ignores it). Pure like derivatives(); must respect
+  /// jacobianStructure().
   virtual void jacobian(const PlantState& /*state*/, double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
                         const Eigen::Ref<const Eigen::VectorXd>& /*f*/,
                         const Eigen::Ref<const Eigen::VectorXd>& /*inc*/, Eigen::Ref<Eigen::MatrixXd> /*J*/,
