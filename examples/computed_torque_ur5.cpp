@@ -42,6 +42,9 @@ int main(int argc, char** argv) try {
   const double duration = argc > 2 ? std::stod(argv[2]) : 1.5;
   const double rtol = argc > 3 ? std::stod(argv[3]) : 1e-4;
   const double fixed_step = argc > 4 ? std::stod(argv[4]) : 0.0;
+  // A fifth argument "adaptive": the fixed step keeps its Jacobian while it describes the steps (jacobian_every:
+  // adaptive of the experiment files, sim::CvodeOptions::jacobian_defect).
+  const bool adaptive = argc > 5 && std::string(argv[5]) == "adaptive";
 
   systems::RobotSystem robot = systems::loadRobotWithDrives(robot_file);
   const int n = robot.dof();
@@ -54,6 +57,10 @@ int main(int argc, char** argv) try {
   if (fixed_step > 0.0) {
     solver.method = sim::Method::Rosenbrock;
     solver.fixed_step = fixed_step;
+    if (adaptive) {
+      solver.jacobian_every = sim::kAdaptiveJacobianEvery;
+      solver.jacobian_defect = sim::kAdaptiveJacobianDefect;
+    }
   }
   sim::Simulator sim(robot, solver);
   for (int k = 0; k < n; ++k) robot.setCommandPort(sim.plantState(), k, systems::CommandPort::MotorTorque);

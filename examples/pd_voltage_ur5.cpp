@@ -26,6 +26,9 @@ int main(int argc, char** argv) try {
   const double duration = argc > 2 ? std::stod(argv[2]) : 2.0;
   const double rtol = argc > 3 ? std::stod(argv[3]) : 1e-4;
   const double fixed_step = argc > 4 ? std::stod(argv[4]) : 0.0;
+  // A fifth argument "adaptive": the fixed step keeps its Jacobian while it describes the steps (jacobian_every:
+  // adaptive of the experiment files, sim::CvodeOptions::jacobian_defect).
+  const bool adaptive = argc > 5 && std::string(argv[5]) == "adaptive";
 
   systems::RobotSystem robot = systems::loadRobotWithDrives(robot_file);
   const int n = robot.dof();
@@ -42,6 +45,10 @@ int main(int argc, char** argv) try {
   if (fixed_step > 0.0) {
     solver.method = sim::Method::Rosenbrock;
     solver.fixed_step = fixed_step;
+    if (adaptive) {
+      solver.jacobian_every = sim::kAdaptiveJacobianEvery;
+      solver.jacobian_defect = sim::kAdaptiveJacobianDefect;
+    }
   }
   sim::Simulator sim(robot, solver);
   // The robot is only read; the run's inputs live in the simulator's state.

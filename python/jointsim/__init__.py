@@ -731,21 +731,27 @@ class Simulator:
     @staticmethod
     def from_robot(path: PathLike, q0: Optional[Sequence[float]] = None, rtol: float = 1e-6, atol: float = 1e-9,
                    max_order: int = 2, max_step: float = 0.0, max_gamma_change: float = 0.3,
-                   max_state: float = DEFAULT_MAX_STATE, method: str = "bdf", step: float = 0.0) -> "Simulator":
+                   max_state: float = DEFAULT_MAX_STATE, method: str = "bdf", step: float = 0.0,
+                   jacobian_every: Union[int, str] = 1) -> "Simulator":
         """A simulator over a robot-with-drives file (e.g. data_path("robots/ur5_drives.yaml")) starting at rest at
         q0 [rad], shape (dof,) (default zeros), with the drives holding it; BDF of order <= max_order with rtol and
         atol [state units], steps of at most max_step [s] (0: unlimited), a new Newton matrix when h*beta0 changes by
         more than max_gamma_change (relative; 0.5 suits a 1 kHz loop, docs/performance.md). max_state: the bound on
         every state's magnitude (see set_limits; 0: none). method="rosenbrock": the fixed-step method instead of BDF
         (ROS2, steps of `step` [s] on the grid k*step; docs/design.md "Fixed-step integration"), for a loop closed
-        in Python at a fixed period: a step that divides the period keeps every advance() at the same cost."""
+        in Python at a fixed period: a step that divides the period keeps every advance() at the same cost.
+        jacobian_every (fixed step only): renew the Jacobian every that many steps, or "adaptive": keep it while it
+        describes the steps (renewed where a linearisation defect shows it moved; docs/design.md "Jacobian reuse")."""
         q = None if q0 is None else _array(q0, "q0")
         if not isinstance(method, str):
             raise TypeError(f"method: expected 'bdf' or 'rosenbrock', got {type(method).__name__}")
+        if isinstance(jacobian_every, bool) or not isinstance(jacobian_every, (int, str)):
+            raise TypeError(f"jacobian_every: expected a number of steps or 'adaptive', got "
+                            f"{type(jacobian_every).__name__}")
         core = _core.Simulator.from_robot(_input_file(path, "robot file"), q, _float(rtol, "rtol"),
                                           _float(atol, "atol"), _int(max_order, "max_order"),
                                           _float(max_step, "max_step"), _float(max_gamma_change, "max_gamma_change"),
-                                          method, _float(step, "step"))
+                                          method, _float(step, "step"), str(jacobian_every))
         sim = Simulator(core)
         sim.set_limits(max_state=max_state)
         return sim
@@ -757,6 +763,10 @@ class Simulator:
                                                      "see state_name).")
     restarts = property(lambda self: self._s.restarts, doc="Integrator restarts so far.")
     steps = property(lambda self: self._s.steps, doc="Internal solver steps so far.")
+    solver_stats = property(lambda self: self._s.solver_stats,
+                            doc="Solver counters so far (dict: steps, rhs_evals, rhs_evals_jacobian, jac_evals, "
+                                "lin_setups, error_test_failures, split_steps, retaken_steps; the run summary's "
+                                "solver_stats).")
     period_wall_times = property(
         lambda self: self._s.period_wall_times,
         doc="Wall-clock time per control period of a sampled plant, from one sample to the next (the caller's work "

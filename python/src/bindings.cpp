@@ -273,7 +273,7 @@ struct PySnapshot {
 };
 
 sim::CvodeOptions solverFrom(double rtol, double atol, int max_order, double max_step, double max_gamma_change,
-                             const std::string& method, double step) {
+                             const std::string& method, double step, const std::string& jacobian_every) {
   sim::CvodeOptions o;
   o.max_gamma_change = max_gamma_change;
   if (method == "bdf")
@@ -286,6 +286,24 @@ sim::CvodeOptions solverFrom(double rtol, double atol, int max_order, double max
   if (method != "rosenbrock" && step != 0.0)
     throw InputError("Simulator.from_robot: step: only with method='rosenbrock'");
   o.fixed_step = step;
+  if (jacobian_every == "adaptive") {
+    o.jacobian_every = sim::kAdaptiveJacobianEvery;
+    o.jacobian_defect = sim::kAdaptiveJacobianDefect;
+  } else {
+    long every = 0;
+    try {
+      size_t used = 0;
+      every = std::stol(jacobian_every, &used);
+      if (used != jacobian_every.size()) every = 0;
+    } catch (const std::exception&) {
+      every = 0;
+    }
+    if (every < 1 || every > sim::kAdaptiveJacobianEvery)
+      throw InputError(
+          "Simulator.from_robot: jacobian_every: expected a number of steps from 1 to 1e6 or 'adaptive', got '" +
+          jacobian_every + "'");
+    o.jacobian_every = static_cast<int>(every);
+  }
   o.rtol = rtol;
   o.atol = atol;
   o.max_order = max_order;
@@ -655,19 +673,19 @@ PYBIND11_MODULE(_core, m) {
       .def_static(
           "from_robot",
           [](const std::string& path, const py::object& q0, double rtol, double atol, int max_order, double max_step,
-             double max_gamma_change, const std::string& method, double step) {
+             double max_gamma_change, const std::string& method, double step, const std::string& jacobian_every) {
             auto robot = std::make_shared<systems::RobotSystem>(systems::loadRobotWithDrives(path));
             if (!q0.is_none()) robot->setInitialPositions(Eigen::VectorXd(vec(q0.cast<Array>(), robot->dof(), "q0")));
             PySimulator s;
             s.plant = robot;
             s.robot_ptr = robot.get();
-            s.sim = std::make_unique<sim::Simulator>(s.plant, solverFrom(rtol, atol, max_order, max_step,
-                                                                         max_gamma_change, method, step));
+            s.sim = std::make_unique<sim::Simulator>(
+                s.plant, solverFrom(rtol, atol, max_order, max_step, max_gamma_change, method, step, jacobian_every));
             return s;
           },
           py::arg("path"), py::arg("q0") = py::none(), py::arg("rtol") = 1e-6, py::arg("atol") = 1e-9,
           py::arg("max_order") = 2, py::arg("max_step") = 0.0, py::arg("max_gamma_change") = 0.3,
-          py::arg("method") = "bdf", py::arg("step") = 0.0)
+          py::arg("method") = "bdf", py::arg("step") = 0.0, py::arg("jacobian_every") = "1")
       .def_property_readonly("name",
                              [](PySimulator& s) {
                                const Use use(s.gate, "Simulator");
@@ -824,6 +842,21 @@ PYBIND11_MODULE(_core, m) {
                              [](PySimulator& s) {
                                const Use use(s.gate, "Simulator");
                                return s.sim->stats().steps;
+                             })
+      .def_property_readonly("solver_stats",
+                             [](PySimulator& s) {
+                               const Use use(s.gate, "Simulator");
+                               const sim::SolverStats st = s.sim->stats();
+                               py::dict d;
+                               d["steps"] = st.steps;
+                               d["rhs_evals"] = st.rhs_evals;
+                               d["rhs_evals_jacobian"] = st.rhs_evals_jacobian;
+                               d["jac_evals"] = st.jac_evals;
+                               d["lin_setups"] = st.lin_setups;
+                               d["error_test_failures"] = st.error_test_failures;
+                               d["split_steps"] = st.split_steps;
+                               d["retaken_steps"] = st.retaken_steps;
+                               return d;
                              })
       .def_property_readonly("period_wall_times",
                              [](PySimulator& s) {

@@ -19,7 +19,7 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   if (!node.defined()) return o;
   node.expectMap("a solver mapping {method, rtol, atol, max_step, max_order, stability_limit_detection}");
   node.allowKeys({"method", "rtol", "atol", "max_step", "max_order", "stability_limit_detection", "max_num_steps",
-                  "input_jumps", "max_gamma_change", "step", "jacobian_every", "analytic_jacobian"});
+                  "input_jumps", "max_gamma_change", "step", "jacobian_every", "jacobian_defect", "analytic_jacobian"});
   const char* const methods = "bdf, adams or rosenbrock (fixed step)";
   if (node.has("method")) {
     const std::string m = node["method"].asString(methods);
@@ -32,16 +32,29 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
     else
       node["method"].failExpected(methods);
   }
-  const bool fixed = o.method == sim::Method::Rosenbrock;
-  for (const char* key : {"step", "jacobian_every"})
-    if (node.has(key) && !fixed) node[key].failExpected(std::string("no ") + key + " unless method: rosenbrock");
+  // step, jacobian_every and jacobian_defect belong to the fixed-step method; with CVODE's methods they are checked
+  // and kept but unused, so that `--set solver.method=bdf` turns a fixed-step file into a CVODE run (as a solver
+  // switch in Simulink keeps the fixed-step size).
   o.fixed_step = node["step"].asDouble(o.fixed_step, "a fixed step in s (0: the control period)");
   if (!(o.fixed_step >= 0.0) || !std::isfinite(o.fixed_step))
     node["step"].failExpected("a fixed step >= 0 s (0: the control period)");
+  const char* const every_expected = "a number of steps from 1 to 1e6, or adaptive";
   if (node.has("jacobian_every")) {
-    const long every = node["jacobian_every"].asInt("a number of steps >= 1");
-    if (every < 1 || every > 1000000) node["jacobian_every"].failExpected("a number of steps from 1 to 1e6");
-    o.jacobian_every = static_cast<int>(every);
+    const YamlValue& e = node["jacobian_every"];
+    if (e.isScalar() && e.asString(every_expected) == "adaptive") {
+      // Kept while it describes the steps (CvodeOptions::jacobian_defect), with no limit of its own.
+      o.jacobian_every = sim::kAdaptiveJacobianEvery;
+      if (!(o.jacobian_defect > 0.0)) o.jacobian_defect = sim::kAdaptiveJacobianDefect;
+    } else {
+      const long every = e.asInt(every_expected);
+      if (every < 1 || every > 1000000) e.failExpected(every_expected);
+      o.jacobian_every = static_cast<int>(every);
+    }
+  }
+  if (node.has("jacobian_defect")) {
+    const char* const expected = "a relative linearisation defect > 0 that refreshes the Jacobian (default 0.2)";
+    o.jacobian_defect = node["jacobian_defect"].asDouble(expected);
+    if (!(o.jacobian_defect > 0.0) || !std::isfinite(o.jacobian_defect)) node["jacobian_defect"].failExpected(expected);
   }
   o.rtol = node["rtol"].asDouble(o.rtol, "a relative tolerance > 0");
   if (!(o.rtol > 0)) node["rtol"].failExpected("a relative tolerance > 0");
@@ -185,7 +198,11 @@ void solverJson(nlohmann::ordered_json& out, const sim::CvodeOptions& o) {
   if (o.analytic_jacobian) out["analytic_jacobian"] = true;
   if (o.method == sim::Method::Rosenbrock) {
     out["step"] = o.fixed_step;
-    out["jacobian_every"] = o.jacobian_every;
+    if (o.jacobian_defect > 0.0 && o.jacobian_every == sim::kAdaptiveJacobianEvery)
+      out["jacobian_every"] = "adaptive";
+    else
+      out["jacobian_every"] = o.jacobian_every;
+    if (o.jacobian_defect > 0.0) out["jacobian_defect"] = o.jacobian_defect;
   }
 }
 

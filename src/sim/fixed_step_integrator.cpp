@@ -57,6 +57,7 @@ struct FixedStepIntegrator::Impl {
   std::vector<EntryRun> zero_runs;
   bool jac_valid = false;
   int steps_since_jac = 0;
+  bool jac_defective = false;  // the last step's linearisation defect exceeded jacobian_defect (refresh next step)
   double factored_h = kNoTime;
   // After a step was shortened (step()): the shorter step, kept up to the end the step aimed at [s].
   double sub_h = 0.0, sub_until = kNoTime;
@@ -66,7 +67,7 @@ struct FixedStepIntegrator::Impl {
   bool last_full = false;    // the last step was taken at its full length (not in a run of shortened steps)
 
   // Workspace; ft = ∂f/∂t, by a difference quotient with the Jacobian (part of W: as outdated as it).
-  Eigen::VectorXd f0, f1, k1, k2, ytmp, rhs2, inc, ft;
+  Eigen::VectorXd f0, f1, k1, k2, ytmp, rhs2, inc, ft, defect;
   // The last step's cubic Hermite segment [seg_t0, seg_t1] (valid while seg_valid); seg_f1 evaluated on demand.
   bool seg_valid = false, seg_f1_valid = false;
   double seg_t0 = kNoTime, seg_t1 = kNoTime;
@@ -177,6 +178,39 @@ struct FixedStepIntegrator::Impl {
     factored_h = kNoTime;
   }
 
+  /// The relative linearisation defect of W over the first stage of a step of length hs from (t, y): with
+  /// f0 = f(t, y) and f1 = f(t + hs, y + hs·k1) (the same held inputs), d = f1 − f0 − W·hs·k1 − hs·fₜ against
+  /// Δf = f1 − f0, as ‖d‖_w / ‖Δf‖_w in the weights of the tolerances, w_i = 1 / (rtol |y_i| + atol_i). W exact and f
+  /// linear give 0; a Jacobian that has moved along the step (a LuGre bristle that begins to slip, a gear leaving its
+  /// stiffness segment) gives a defect of the order of Δf. Near an equilibrium Δf is tiny and the test renews W at
+  /// most steps (a floor of 1/hs for ‖Δf‖_w, a defect below the tolerances, kept W there and let the 1 kHz PD loop of
+  /// examples/ meet a LuGre break-away with it: STEP_UNSTABLE). Work: one product with W over the structure's entries.
+  double linearisationDefect(double hs) {
+    defect = f1 - f0 - hs * ft;
+    if (zero_runs.empty()) {
+      defect.noalias() -= J * (hs * k1);
+    } else {
+      const double* d = J.data();
+      for (const EntryRun& r : zero_runs) {
+        const double dy = hs * k1[r.col];
+        if (dy == 0.0) continue;
+        const double* c = d + static_cast<Eigen::Index>(r.col) * n + r.row;
+        double* out = defect.data() + r.row;
+        for (int i = 0; i < r.len; ++i) out[i] -= c[i] * dy;
+      }
+    }
+    double nd = 0.0, nf = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double atol = opts.atol_vector.size() ? opts.atol_vector[i] : opts.atol;
+      const double w = 1.0 / (opts.rtol * std::abs(y[i]) + atol);
+      const double di = defect[i] * w, fi = (f1[i] - f0[i]) * w;
+      nd += di * di;
+      nf += fi * fi;
+    }
+    if (nd == 0.0) return 0.0;
+    return nf > 0.0 ? std::sqrt(nd / nf) : std::numeric_limits<double>::infinity();
+  }
+
   /// Factorises I − γ·hs·W. A non-finite entry of W is found here, where the factorisation fails (its pivots are then
   /// not finite), instead of by a scan of every entry at each Jacobian (3 µs of a 30 µs twin step).
   void factor(double hs, double at) {
@@ -273,7 +307,8 @@ struct FixedStepIntegrator::Impl {
   void step(double t1) {
     const double merge = kMergeFraction * h;
     evalRhs(t, y, f0);
-    if (!jac_valid || steps_since_jac >= opts.jacobian_every) evalJacobian(t, y);
+    if (!jac_valid || steps_since_jac >= opts.jacobian_every || jac_defective) evalJacobian(t, y);
+    jac_defective = false;
     double aim = t1;  // where a run of shortened steps (this one, or one begun before) ends
     if (sub_h > 0.0) {
       if (t >= sub_until - merge) {
@@ -299,7 +334,9 @@ struct FixedStepIntegrator::Impl {
       }
     }
     double hs = t1 - t;
-    if (factored_h != hs) factor(hs, t);
+    // (A factorisation at a length within 1e-9 of hs is kept: the grid's rounding moves hs in its last bits, and
+    // I − γ·hs(1 + δ)·W is I − γ·hs·W' with W' = (1 + δ)W, as good a W for a W-method.)
+    if (!(std::abs(factored_h - hs) <= 1e-9 * hs)) factor(hs, t);
     if (solver->determinantSign() < 0) {
       halveWhileUnstable(hs, 1.0, 0.25);
       hs *= 0.25;
@@ -332,6 +369,7 @@ struct FixedStepIntegrator::Impl {
     solver->solve(rhs2, k1);
     ytmp = y + hs * k1;
     evalRhs(t1, ytmp, f1);
+    if (opts.jacobian_defect > 0.0 && linearisationDefect(hs) > opts.jacobian_defect) jac_defective = true;
     rhs2 = f1 - 2.0 * k1 - (kGamma * hs) * ft;
     solver->solve(rhs2, k2);
     seg_t0 = t;
@@ -445,6 +483,8 @@ FixedStepIntegrator::FixedStepIntegrator(int n, RhsFunction rhs, CvodeOptions op
   if (!(m.opts.fixed_step > 0.0) || !std::isfinite(m.opts.fixed_step))
     bad("fixed_step must be a finite step > 0 s, got " + formatNumber(m.opts.fixed_step));
   if (m.opts.jacobian_every < 1) bad("jacobian_every must be >= 1 step, got " + std::to_string(m.opts.jacobian_every));
+  if (!(m.opts.jacobian_defect >= 0.0) || !std::isfinite(m.opts.jacobian_defect))
+    bad("jacobian_defect must be finite and >= 0 (0: off), got " + formatNumber(m.opts.jacobian_defect));
   if (m.opts.max_num_steps <= 0) bad("max_num_steps must be > 0, got " + std::to_string(m.opts.max_num_steps));
   if (!(m.opts.rtol > 0.0) || !std::isfinite(m.opts.rtol)) bad("rtol must be finite and > 0");
   if (m.opts.atol_vector.size() != 0 && m.opts.atol_vector.size() != n)
@@ -453,8 +493,8 @@ FixedStepIntegrator::FixedStepIntegrator(int n, RhsFunction rhs, CvodeOptions op
   m.h = m.opts.fixed_step;
   m.rhs = std::move(rhs);
   m.J.setZero(n, n);
-  for (Eigen::VectorXd* v :
-       {&m.f0, &m.f1, &m.k1, &m.k2, &m.ytmp, &m.rhs2, &m.inc, &m.seg_y0, &m.seg_f0, &m.seg_y1, &m.seg_f1, &m.y, &m.ft})
+  for (Eigen::VectorXd* v : {&m.f0, &m.f1, &m.k1, &m.k2, &m.ytmp, &m.rhs2, &m.inc, &m.seg_y0, &m.seg_f0, &m.seg_y1,
+                             &m.seg_f1, &m.y, &m.ft, &m.defect})
     v->setZero(n);
   m.solver = std::make_unique<DirectSolver>(n, m.structure);
 }
@@ -475,6 +515,7 @@ void FixedStepIntegrator::initialize(double t0, const Eigen::Ref<const Eigen::Ve
   m.last_full = false;
   m.grow_after = kNoTime;
   if (!reuse_jacobian) m.jac_valid = false;
+  m.jac_defective = false;
   if (m.n_roots > 0) {
     m.evalRoots(t0, m.y, m.g0);
     std::fill(m.dirs.begin(), m.dirs.end(), 0);

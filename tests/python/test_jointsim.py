@@ -106,15 +106,18 @@ def test_overrides_and_experiment_objects(root):
     assert r.units["q_shoulder_pan_joint"] == "rad"
 
 
-@pytest.mark.parametrize("method", ["bdf", "rosenbrock"])
+@pytest.mark.parametrize("method", ["bdf", "rosenbrock", "rosenbrock-adaptive"])
 def test_python_pd_controller_tracks_a_step_on_the_ur5_twin(root, method):
     """A PD law with gravity feed-forward, in Python at 1 kHz, commands the six motor voltages of the UR5 twin;
     every joint steps by 0.1 rad at 0.2 s and is within 5 mrad of its reference from 1.7 s on (the C++ example
     examples/pd_voltage_ur5.cpp does the same, with the same solver settings: rtol 1e-4, see docs/performance.md). The
     damping acts on the motor speed (collocated with the voltage). With BDF and with the fixed-step method at one
-    step per 1 ms period (the C++ example's `2 1e-4 1e-3`)."""
+    step per 1 ms period (the C++ example's `2 1e-4 1e-3`), there also with the Jacobian kept while it describes the
+    steps (`2 1e-4 1e-3 adaptive`)."""
     q0 = np.array([0.0, -1.2, 1.2, -1.5, -1.5708, 0.0])
-    fixed = {"method": "rosenbrock", "step": 1e-3} if method == "rosenbrock" else {}
+    fixed = {"method": "rosenbrock", "step": 1e-3} if method.startswith("rosenbrock") else {}
+    if method == "rosenbrock-adaptive":
+        fixed["jacobian_every"] = "adaptive"
     sim = jointsim.Simulator.from_robot(str(root / "config/robots/ur5_drives.yaml"), q0=q0, rtol=1e-4,
                                         max_gamma_change=0.5, **fixed)
     ratios = sim.gear_ratios
@@ -136,9 +139,26 @@ def test_python_pd_controller_tracks_a_step_on_the_ur5_twin(root, method):
         if sim.time >= 1.7 - 1e-9:
             worst = max(worst, float(np.max(np.abs(q_ref - sim.joint_positions))))
     wall = time.perf_counter() - wall0
+    stats = sim.solver_stats
+    if method == "rosenbrock":
+        assert stats["jac_evals"] == stats["steps"]
+    elif method == "rosenbrock-adaptive":
+        assert stats["jac_evals"] < stats["steps"] / 2  # measured 637 of 2,280 (C++ example)
     print(f"Python PD loop at 1 kHz ({method}): 2 s simulated in {wall:.2f} s (real-time factor {2.0 / wall:.2f}), "
           f"largest error from 1.7 s on {1e3 * worst:.3f} mrad")
     assert worst < 5e-3
+
+
+def test_jacobian_policy_of_the_fixed_step_from_python(root):
+    robot = str(root / "config/robots/ur5_drives.yaml")
+    for bad in ("sometimes", 0, "2.5"):
+        with pytest.raises(jointsim.InputError, match="jacobian_every"):
+            jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every=bad)
+    with pytest.raises(TypeError, match="jacobian_every"):
+        jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every=1.5)
+    sim = jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every=3)
+    sim.advance_to(0.03)
+    assert sim.solver_stats["steps"] == 30 and sim.solver_stats["jac_evals"] == 10
 
 
 def _gravity_voltage_gains(root):

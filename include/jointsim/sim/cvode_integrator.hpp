@@ -147,12 +147,23 @@ struct CvodeOptions {
   /// >= 1, and after every restart that does not reuse it. ROS2 keeps order 2 with an outdated Jacobian (a W-method);
   /// a stale one weakens only the damping of the fastest modes.
   int jacobian_every = 1;
+  /// Method::Rosenbrock: with a value θ > 0, a Jacobian is also kept for as long as it describes each step: after
+  /// every step the linearisation defect along the first stage, d = f(tₙ + h, yₙ + hk₁) − f(tₙ, yₙ) − W·hk₁ − h·fₜ (the
+  /// same held inputs at both points), is compared with the change of f itself in the weighted RMS norm of the
+  /// tolerances, and ‖d‖ > θ‖Δf‖ refreshes the Jacobian at the next step (at the latest every jacobian_every steps).
+  /// 0 (default): only jacobian_every counts. The experiment files' `jacobian_every: adaptive` is θ = 0.2 with no
+  /// step limit (docs/design.md, "Jacobian reuse").
+  double jacobian_defect = 0.0;
   /// BDF: let the plant's Jacobian use its analytic parts (sim::JacobianKind::Analytic: for the robot with drives the
   /// multibody's columns from the analytic ABA derivatives, fewer right-hand sides). false (default): difference
   /// quotients, as the shipped calibrations were made (BDF's result moves within its tolerance with its Jacobian).
   /// The fixed-step method always uses the analytic parts. Read by sim::Simulator and sim::simulate.
   bool analytic_jacobian = false;
 };
+
+/// `jacobian_every: adaptive` (experiment files, Python): CvodeOptions::jacobian_every and jacobian_defect so set.
+inline constexpr int kAdaptiveJacobianEvery = 1000000;
+inline constexpr double kAdaptiveJacobianDefect = 0.2;
 
 /// BDF capped at order 2 with the given tolerances: the default for drive trains. BDF orders 3–5 are not
 /// A-stable: lightly damped kHz drive modes (strain-wave gear, stiff springs, LuGre bristles) then force steps
