@@ -189,6 +189,24 @@ struct BlockPlan {
     r.resize(h);
     xr.resize(h);
   }
+
+  void useExplicitInverses() {
+    explicit_inverses = true;
+    Dinv.clear();
+    bk.clear();
+    for (const auto& B : blocks) {
+      const auto m = static_cast<Eigen::Index>(B.size());
+      Dinv.emplace_back(m, m);
+      bk.emplace_back(m);
+    }
+    Sinv.resize(static_cast<Eigen::Index>(hub.size()), static_cast<Eigen::Index>(hub.size()));
+  }
+
+  /// The inverse of a factorised matrix, column by column: A⁻¹ e_j.
+  static void invert(const SmallLu& f, Eigen::MatrixXd& out) {
+    out.setIdentity();
+    for (Eigen::Index j = 0; j < out.cols(); ++j) f.solveInPlace(out.col(j).data());
+  }
   std::vector<int> hub;
   std::vector<std::vector<int>> blocks;
   std::vector<Eigen::MatrixXd> C, W;
@@ -200,6 +218,17 @@ struct BlockPlan {
   std::vector<std::vector<Eigen::Index>> erows;  // the hub rows E_k may be non-zero in (positions in hub)
   SmallLu luS;                                   // S, then its factors
   Eigen::VectorXd r, xr;
+  // With explicit_inverses (set for factorisations that many solves reuse: the fixed step's kept Jacobian), D_k⁻¹
+  // and S⁻¹ are formed once a factorisation serves its third solve (a step's two solves do not pay for them: the
+  // growing-mode probes and short-lived Jacobians keep substituting), and a solve is then matrix–vector products
+  // without the substitutions' chains of dependent divisions. Its results differ from the substitutions' in the last
+  // bits.
+  bool explicit_inverses = false;
+  bool inverses_formed = false;
+  int solves_since_factor = 0;
+  std::vector<Eigen::MatrixXd> Dinv;
+  Eigen::MatrixXd Sinv;
+  std::vector<Eigen::VectorXd> bk;  // b's block k
 
   /// sign(det A) = Π sign(det D_k) · sign(det S).
   int determinantSign() const {
@@ -255,6 +284,8 @@ struct BlockPlan {
         for (Eigen::Index i = 0; i < ne; ++i) S(er[static_cast<size_t>(i)], j) -= ez[k][i];
       }
     }
+    inverses_formed = false;
+    solves_since_factor = 0;
     return luS.factor();
   }
 
@@ -264,17 +295,32 @@ struct BlockPlan {
   void solve(const double* b, double* x) {
     const size_t nb = blocks.size();
     const auto h = static_cast<Eigen::Index>(hub.size());
+    if (explicit_inverses && !inverses_formed && ++solves_since_factor > 2) {
+      for (size_t k = 0; k < nb; ++k) invert(lu[k], Dinv[k]);
+      invert(luS, Sinv);
+      inverses_formed = true;
+    }
+    const bool by_inverses = inverses_formed;
     for (Eigen::Index i = 0; i < h; ++i) r[i] = b[hub[static_cast<size_t>(i)]];
     for (size_t k = 0; k < nb; ++k) {
       const auto& B = blocks[k];
-      for (size_t i = 0; i < B.size(); ++i) z[k][static_cast<Eigen::Index>(i)] = b[B[i]];
-      lu[k].solveInPlace(z[k].data());
+      if (by_inverses) {
+        for (size_t i = 0; i < B.size(); ++i) bk[k][static_cast<Eigen::Index>(i)] = b[B[i]];
+        z[k].noalias() = Dinv[k] * bk[k];
+      } else {
+        for (size_t i = 0; i < B.size(); ++i) z[k][static_cast<Eigen::Index>(i)] = b[B[i]];
+        lu[k].solveInPlace(z[k].data());
+      }
       ez[k].noalias() = E[k] * z[k];
       const auto& er = erows[k];
       for (size_t i = 0; i < er.size(); ++i) r[er[i]] -= ez[k][static_cast<Eigen::Index>(i)];
     }
-    xr = r;
-    luS.solveInPlace(xr.data());
+    if (by_inverses) {
+      xr.noalias() = Sinv * r;
+    } else {
+      xr = r;
+      luS.solveInPlace(xr.data());
+    }
     for (Eigen::Index i = 0; i < h; ++i) x[hub[static_cast<size_t>(i)]] = xr[i];
     for (size_t k = 0; k < nb; ++k) {
       const auto& B = blocks[k];
@@ -426,6 +472,11 @@ bool DirectSolver::factorIdentityMinus(const Eigen::MatrixXd& J, double c) {
   impl_->dense = -c * J;
   impl_->dense.diagonal().array() += 1.0;
   return denseFactor(c_, impl_->dense);
+}
+
+void DirectSolver::useExplicitInverses() {
+  EigenDenseContent& c = *static_cast<EigenDenseContent*>(impl_->holder.get());
+  if (c.plan) c.plan->useExplicitInverses();
 }
 
 long DirectSolver::denseFallbacks() const {

@@ -67,7 +67,7 @@ struct FixedStepIntegrator::Impl {
   bool last_full = false;    // the last step was taken at its full length (not in a run of shortened steps)
 
   // Workspace; ft = ∂f/∂t, by a difference quotient with the Jacobian (part of W: as outdated as it).
-  Eigen::VectorXd f0, f1, k1, k2, ytmp, rhs2, inc, ft, defect;
+  Eigen::VectorXd f0, f1, k1, k2, ytmp, rhs2, inc, ft;
   // The last step's cubic Hermite segment [seg_t0, seg_t1] (valid while seg_valid); seg_f1 evaluated on demand.
   bool seg_valid = false, seg_f1_valid = false;
   double seg_t0 = kNoTime, seg_t1 = kNoTime;
@@ -184,28 +184,18 @@ struct FixedStepIntegrator::Impl {
   /// linear give 0; a Jacobian that has moved along the step (a LuGre bristle that begins to slip, a gear leaving its
   /// stiffness segment) gives a defect of the order of Δf. Near an equilibrium Δf is tiny and the test renews W at
   /// most steps (a floor of 1/hs for ‖Δf‖_w, a defect below the tolerances, kept W there and let the 1 kHz PD loop of
-  /// examples/ meet a LuGre break-away with it: STEP_UNSTABLE). Work: one product with W over the structure's entries.
+  /// examples/ meet a LuGre break-away with it: STEP_UNSTABLE). W·hs·k1 needs no product with W: the first stage
+  /// solved (I − γ·hs·W) k1 = f0 + γ·hs·fₜ, so hs·W·k1 = (k1 − f0 − γ·hs·fₜ)/γ (to the solve's rounding).
   double linearisationDefect(double hs) {
-    defect = f1 - f0 - hs * ft;
-    if (zero_runs.empty()) {
-      defect.noalias() -= J * (hs * k1);
-    } else {
-      const double* d = J.data();
-      for (const EntryRun& r : zero_runs) {
-        const double dy = hs * k1[r.col];
-        if (dy == 0.0) continue;
-        const double* c = d + static_cast<Eigen::Index>(r.col) * n + r.row;
-        double* out = defect.data() + r.row;
-        for (int i = 0; i < r.len; ++i) out[i] -= c[i] * dy;
-      }
-    }
     double nd = 0.0, nf = 0.0;
+    const double rg = 1.0 / kGamma;
     for (Eigen::Index i = 0; i < n; ++i) {
       const double atol = opts.atol_vector.size() ? opts.atol_vector[i] : opts.atol;
       const double w = 1.0 / (opts.rtol * std::abs(y[i]) + atol);
-      const double di = defect[i] * w, fi = (f1[i] - f0[i]) * w;
-      nd += di * di;
-      nf += fi * fi;
+      const double df = f1[i] - f0[i];
+      const double d = df - hs * ft[i] - rg * (k1[i] - f0[i] - kGamma * hs * ft[i]);
+      nd += (d * w) * (d * w);
+      nf += (df * w) * (df * w);
     }
     if (nd == 0.0) return 0.0;
     return nf > 0.0 ? std::sqrt(nd / nf) : std::numeric_limits<double>::infinity();
@@ -493,10 +483,11 @@ FixedStepIntegrator::FixedStepIntegrator(int n, RhsFunction rhs, CvodeOptions op
   m.h = m.opts.fixed_step;
   m.rhs = std::move(rhs);
   m.J.setZero(n, n);
-  for (Eigen::VectorXd* v : {&m.f0, &m.f1, &m.k1, &m.k2, &m.ytmp, &m.rhs2, &m.inc, &m.seg_y0, &m.seg_f0, &m.seg_y1,
-                             &m.seg_f1, &m.y, &m.ft, &m.defect})
+  for (Eigen::VectorXd* v :
+       {&m.f0, &m.f1, &m.k1, &m.k2, &m.ytmp, &m.rhs2, &m.inc, &m.seg_y0, &m.seg_f0, &m.seg_y1, &m.seg_f1, &m.y, &m.ft})
     v->setZero(n);
   m.solver = std::make_unique<DirectSolver>(n, m.structure);
+  if (m.opts.jacobian_defect > 0.0) m.solver->useExplicitInverses();  // a kept W serves many solves
 }
 
 FixedStepIntegrator::~FixedStepIntegrator() = default;
@@ -618,6 +609,7 @@ void FixedStepIntegrator::setJacobianStructure(JacobianStructure structure) {
   structure.validate(m.n);
   m.structure = std::move(structure);
   m.solver = std::make_unique<DirectSolver>(m.n, m.structure);
+  if (m.opts.jacobian_defect > 0.0) m.solver->useExplicitInverses();
   m.factored_h = kNoTime;
   m.zero_runs = structureRuns(m.structure, m.n);
 }
