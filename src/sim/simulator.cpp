@@ -455,7 +455,8 @@ void Simulator::takeSample() {
     period_max_ = std::max(period_max_, dt);
   }
   last_sample_clock_ = now;
-  if (keep_history_ && !jump_) plant_->derivatives(*state_, t_, y_, f_old_);  // before the held inputs jump
+  // f before the held inputs jump, for the jump's error estimate (none for a fixed-step method: it keeps no history).
+  if (keep_history_ && !jump_ && !integ_->jumpErrorIsZero()) plant_->derivatives(*state_, t_, y_, f_old_);
   plant_->sample(*state_, t_, y_);
   ++samples_;
   t_sample_ = t0_ + static_cast<double>(++sample_k_) * Ts_;
@@ -493,8 +494,8 @@ void Simulator::inputJumped() {
 void Simulator::restartIfNeeded(double h_max) {
   if (jump_ && !restart_) {
     // Keep the history only where the jump leaves the next step within the error test (CvodeOptions::input_jump).
-    plant_->derivatives(*state_, t_, y_, f_work_);
-    if (integ_->jumpError(f_old_, f_work_, h_max) <= kKeepHistoryLimit)
+    if (!integ_->jumpErrorIsZero()) plant_->derivatives(*state_, t_, y_, f_work_);
+    if (integ_->jumpErrorIsZero() || integ_->jumpError(f_old_, f_work_, h_max) <= kKeepHistoryLimit)
       ++input_jumps_;  // CVODE stopped exactly here (a stop time) and goes on with the new right-hand side
     else
       restart_ = true;
@@ -598,7 +599,8 @@ double Simulator::advanceTo(double t_target, Landing landing) {
   }
   // The derivative with the inputs in force now: the reference for an input change before the next advance (none
   // between the calls of an output grid).
-  if (keep_history_ && landing == Landing::Stop) plant_->derivatives(*state_, t_, y_, f_old_);
+  if (keep_history_ && landing == Landing::Stop && !integ_->jumpErrorIsZero())
+    plant_->derivatives(*state_, t_, y_, f_old_);
   return t_;
 }
 

@@ -237,6 +237,9 @@ class Integrator {
   virtual void setJacobianStructure(JacobianStructure structure) = 0;
   virtual double jumpError(const Eigen::Ref<const Eigen::VectorXd>& f_old,
                            const Eigen::Ref<const Eigen::VectorXd>& f_new, double h_max) const = 0;
+  /// True where jumpError() is 0 whatever f_old and f_new are (no history to keep): the caller then need not evaluate
+  /// them (two right-hand sides per sample under sampled control).
+  virtual bool jumpErrorIsZero() const { return false; }
   virtual void setRootFunction(int n_roots, RootFunction g) = 0;
   virtual bool rootFound() const = 0;
   virtual const std::vector<int>& rootDirections() const = 0;

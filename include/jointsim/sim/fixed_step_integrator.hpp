@@ -71,6 +71,7 @@ class FixedStepIntegrator final : public Integrator {
   /// 0: a fixed-step method carries no history across an input jump (the next step starts from f with the new inputs).
   double jumpError(const Eigen::Ref<const Eigen::VectorXd>& f_old, const Eigen::Ref<const Eigen::VectorXd>& f_new,
                    double h_max) const override;
+  bool jumpErrorIsZero() const override { return true; }
   void setRootFunction(int n_roots, RootFunction g) override;
   bool rootFound() const override;
   const std::vector<int>& rootDirections() const override;
