@@ -745,13 +745,17 @@ class Simulator:
         q = None if q0 is None else _array(q0, "q0")
         if not isinstance(method, str):
             raise TypeError(f"method: expected 'bdf' or 'rosenbrock', got {type(method).__name__}")
-        if isinstance(jacobian_every, bool) or not isinstance(jacobian_every, (int, str)):
+        if isinstance(jacobian_every, bool) or not isinstance(jacobian_every, (numbers.Integral, str)):
             raise TypeError(f"jacobian_every: expected a number of steps or 'adaptive', got "
                             f"{type(jacobian_every).__name__}")
+        if method != "rosenbrock" and not (isinstance(jacobian_every, numbers.Integral) and jacobian_every == 1):
+            raise InputError("Simulator.from_robot: jacobian_every: only with method='rosenbrock'")
         core = _core.Simulator.from_robot(_input_file(path, "robot file"), q, _float(rtol, "rtol"),
                                           _float(atol, "atol"), _int(max_order, "max_order"),
                                           _float(max_step, "max_step"), _float(max_gamma_change, "max_gamma_change"),
-                                          method, _float(step, "step"), str(jacobian_every))
+                                          method, _float(step, "step"),
+                                          str(int(jacobian_every)) if isinstance(jacobian_every, numbers.Integral)
+                                          else jacobian_every)
         sim = Simulator(core)
         sim.set_limits(max_state=max_state)
         return sim

@@ -42,7 +42,7 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   if (node.has("jacobian_every")) {
     const YamlValue& e = node["jacobian_every"];
     if (e.isScalar() && e.asString(every_expected) == "adaptive") {
-      // Kept while it describes the steps (CvodeOptions::jacobian_defect), with no limit of its own.
+      // Kept while it describes the steps (CvodeOptions::jacobian_defect), renewed at least every 1e6 steps.
       o.jacobian_every = sim::kAdaptiveJacobianEvery;
       if (!(o.jacobian_defect > 0.0)) o.jacobian_defect = sim::kAdaptiveJacobianDefect;
     } else {
@@ -55,6 +55,8 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
     const char* const expected = "a relative linearisation defect > 0 that refreshes the Jacobian (default 0.2)";
     o.jacobian_defect = node["jacobian_defect"].asDouble(expected);
     if (!(o.jacobian_defect > 0.0) || !std::isfinite(o.jacobian_defect)) node["jacobian_defect"].failExpected(expected);
+    // Alone it means adaptive (with jacobian_every 1 it would never act); beside a number of steps both apply.
+    if (!node.has("jacobian_every")) o.jacobian_every = sim::kAdaptiveJacobianEvery;
   }
   o.rtol = node["rtol"].asDouble(o.rtol, "a relative tolerance > 0");
   if (!(o.rtol > 0)) node["rtol"].failExpected("a relative tolerance > 0");

@@ -250,6 +250,8 @@ struct BlockPlan {
   /// The factorisation, reading A(i, j) through `A`.
   template <class Entry>
   bool factorEntries(const Entry& A) {
+    inverses_formed = false;  // (also when this factorisation fails: the blocks' factors are overwritten)
+    solves_since_factor = 0;
     const size_t nb = blocks.size();
     const auto h = static_cast<Eigen::Index>(hub.size());
     Eigen::MatrixXd& S = luS.a;
@@ -284,8 +286,6 @@ struct BlockPlan {
         for (Eigen::Index i = 0; i < ne; ++i) S(er[static_cast<size_t>(i)], j) -= ez[k][i];
       }
     }
-    inverses_formed = false;
-    solves_since_factor = 0;
     return luS.factor();
   }
 

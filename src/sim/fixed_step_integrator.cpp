@@ -505,8 +505,10 @@ void FixedStepIntegrator::initialize(double t0, const Eigen::Ref<const Eigen::Ve
   m.sub_h = 0.0;
   m.last_full = false;
   m.grow_after = kNoTime;
-  if (!reuse_jacobian) m.jac_valid = false;
-  m.jac_defective = false;
+  if (!reuse_jacobian) {
+    m.jac_valid = false;
+    m.jac_defective = false;
+  }  // (a kept Jacobian keeps its verdict: under input_jumps: restart every sample restarts)
   if (m.n_roots > 0) {
     m.evalRoots(t0, m.y, m.g0);
     std::fill(m.dirs.begin(), m.dirs.end(), 0);

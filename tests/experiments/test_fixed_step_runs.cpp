@@ -67,7 +67,7 @@ TEST(FixedStepTwin, TwoStepsPerControlPeriodMeetTheAccuracyOfTheValidationProtoc
   EXPECT_LT(worst(ref.log, fixed.log, "current_", true), 0.02);
   EXPECT_LT(worst(ref.log, fixed.log, "gear_torque_", true), 0.03);
   // One step per period with the adaptive Jacobian of the shipped realtime file (jacobian_every: adaptive, θ = 0.2):
-  // measured 4.8e-6 rad, 1.72 % and 2.74 %, within the protocol — a Jacobian kept from before the wrists' stick phase
+  // measured 4.7e-6 rad, 1.67 % and 2.66 %, within the protocol — a Jacobian kept from before the wrists' stick phase
   // damps the bristles' transient less than a fresh one at every step (3.2 %, 5.1 % above). Not a margin to build on:
   // θ = 0.05 gave 2.2 % and 3.4 %, θ = 0.5 2.4 % and 3.9 % (docs/design.md, "Jacobian reuse").
   const auto adaptive = runTwin({"solver.method=rosenbrock", "+solver.jacobian_every=adaptive"});
@@ -197,6 +197,17 @@ TEST(FixedStepTwin, TheJacobianPolicyKeysAreCheckedAndKeptUnusedByCvode) {
   const sim::CvodeOptions every = solver({"solver.jacobian_every=4"});
   EXPECT_EQ(every.jacobian_every, 4);
   EXPECT_EQ(every.jacobian_defect, 0.0);
+  // jacobian_defect alone means adaptive (with a Jacobian per step it would never act); beside a number both apply.
+  const sim::CvodeOptions alone =
+      experiments::loadExperiment(test::sourcePath("config/experiments/ur5_excitation.yaml"),
+                                  {"+control.rate=20000", "solver.method=rosenbrock", "+solver.jacobian_defect=0.3"})
+          ->simulateOptions()
+          .solver;
+  EXPECT_EQ(alone.jacobian_every, sim::kAdaptiveJacobianEvery);
+  EXPECT_EQ(alone.jacobian_defect, 0.3);
+  const sim::CvodeOptions both = solver({"solver.jacobian_every=50", "+solver.jacobian_defect=0.3"});
+  EXPECT_EQ(both.jacobian_every, 50);
+  EXPECT_EQ(both.jacobian_defect, 0.3);
   EXPECT_EQ(solver({"solver.method=bdf"}).method, sim::Method::BDF);
   for (const auto& [set, expected] : std::vector<std::pair<std::string, std::string>>{
            {"solver.jacobian_every=sometimes", "a number of steps from 1 to 1e6, or adaptive"},

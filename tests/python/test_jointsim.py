@@ -156,7 +156,9 @@ def test_jacobian_policy_of_the_fixed_step_from_python(root):
             jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every=bad)
     with pytest.raises(TypeError, match="jacobian_every"):
         jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every=1.5)
-    sim = jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every=3)
+    with pytest.raises(jointsim.InputError, match="only with method='rosenbrock'"):
+        jointsim.Simulator.from_robot(robot, jacobian_every="adaptive")
+    sim = jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every=np.int64(3))
     sim.advance_to(0.03)
     assert sim.solver_stats["steps"] == 30 and sim.solver_stats["jac_evals"] == 10
 

@@ -427,7 +427,9 @@ TEST(FixedStep, AnAdaptiveJacobianIsKeptWhileItDescribesTheStepsAndRenewedWhereT
   ref_opts.atol = 1e-14;
   CvodeIntegrator ref(3, rhs, ref_opts);
   ref.initialize(0.0, y0, false);
-  auto fixed = [&](int every, double defect, Eigen::VectorXd& zs, sim::SolverStats& st) {
+  // restart: after every step initialize(t, y, true), as under input_jumps: restart at every sample (the kept
+  // Jacobian keeps its verdict: a defect found in the step before still renews it).
+  auto fixed = [&](int every, double defect, Eigen::VectorXd& zs, sim::SolverStats& st, bool restart = false) {
     CvodeOptions o = fixedStep(h, every);
     o.jacobian_defect = defect;
     o.atol = 1e-12;
@@ -435,8 +437,17 @@ TEST(FixedStep, AnAdaptiveJacobianIsKeptWhileItDescribesTheStepsAndRenewedWhereT
     integ.initialize(0.0, y0, false);
     Eigen::VectorXd y(3);
     zs.resize(50);
+    const int per_output = static_cast<int>(std::lround(t_end / 50 / h));
     for (int k = 0; k < 50; ++k) {
-      integ.advance((k + 1) * t_end / 50, y);
+      if (restart) {
+        for (int i = 1; i <= per_output; ++i) {
+          const double t = (k * per_output + i) * h;
+          integ.advance(t, y);
+          integ.initialize(t, y, true);
+        }
+      } else {
+        integ.advance((k + 1) * t_end / 50, y);
+      }
       zs[k] = y[2];
     }
     st = integ.stats();
@@ -457,6 +468,11 @@ TEST(FixedStep, AnAdaptiveJacobianIsKeptWhileItDescribesTheStepsAndRenewedWhereT
   EXPECT_EQ(s1.jac_evals, s1.steps);
   EXPECT_LT(sa.jac_evals, sa.steps / 3);
   EXPECT_GT(sa.jac_evals, 10);  // renewed as |v| moves, not kept from the start
+  Eigen::VectorXd zr;
+  sim::SolverStats sr;
+  fixed(sim::kAdaptiveJacobianEvery, sim::kAdaptiveJacobianDefect, zr, sr, true);
+  EXPECT_EQ(sr.jac_evals, sa.jac_evals);  // restarts that keep the Jacobian change nothing
+  EXPECT_EQ(zr, za);
   // Kept from the start without the test: the step at |v| = 1 is explicit with h·σ = 10.
   Eigen::VectorXd zk;
   sim::SolverStats sk;

@@ -355,6 +355,64 @@ TEST(StructuredJacobian, DeclaredHubCouplingsOfABlockAreAllTheEliminationReads) 
   }
 }
 
+TEST(StructuredJacobian, ExplicitInversesSolveAsTheSubstitutionsFromTheThirdSolveAndFollowEachFactorisation) {
+  // DirectSolver::useExplicitInverses (the fixed step's kept Jacobians): the first two solves after a factorisation
+  // substitute (bit for bit the plain solver), from the third the blocks' and the Schur complement's inverses are
+  // multiplied (the dense LU's solution to rounding); a new factorisation (another matrix) is solved with its own
+  // factors, also after a factorisation that failed in between (a singular block: the dense fallback).
+  Eigen::MatrixXd A(7, 7);
+  A << -1, 0.5, 0, 0, 0, 0.3, -0.1,    //
+      0, -900, 40, 0, 0, 1, 7,         //
+      0, 30, -50, 0, 0, 0, 2,          //
+      1, 0, 0, -3000, 200, 0, 0,       //
+      0.7, 0, 0, -200, -10, 0, 0,      //
+      0.1, 0.3, 0, 0.4, 0.2, -2, 0.1,  //
+      0, 5, 1, 0, 0, 0, -20;
+  const sim::JacobianStructure st{{0, 5}, {{1, 2, 6}, {3, 4}}, {{5}, {0}}, {{0, 5}, {5}}};
+  sim::DirectSolver plain(7, st), inverses(7, st);
+  inverses.useExplicitInverses();
+  Eigen::VectorXd b(7), x1(7), x2(7);
+  for (double c : {0.01, 0.002}) {
+    const Eigen::MatrixXd M = Eigen::MatrixXd::Identity(7, 7) - c * A;
+    ASSERT_TRUE(plain.factorIdentityMinus(A, c));
+    ASSERT_TRUE(inverses.factorIdentityMinus(A, c));
+    double by_inverse = 0.0;
+    for (int k = 0; k < 5; ++k) {
+      b = Eigen::VectorXd::LinSpaced(7, 1.0 + k, -2.0 + 3.0 * k);
+      plain.solve(b, x1);
+      inverses.solve(b, x2);
+      const Eigen::VectorXd want = M.partialPivLu().solve(b);
+      EXPECT_LE((x2 - want).cwiseAbs().maxCoeff(), 1e-13 * want.cwiseAbs().maxCoeff()) << c << " " << k;
+      if (k < 2) {
+        EXPECT_EQ(x1, x2) << c << " " << k;  // substituted
+      } else {
+        by_inverse = std::max(by_inverse, (x1 - x2).cwiseAbs().maxCoeff());
+      }
+    }
+    EXPECT_GT(by_inverse, 0.0) << c;  // multiplied: other roundings than the substitutions'
+    // Block {3, 4} of I − cJ made singular ([[0, 0], [0, 1 + 10c]]; the matrix is not, through its hub column 0):
+    // the factorisation falls back to the dense LU, whose solution is returned, inverses formed before or not.
+    Eigen::MatrixXd J = A;
+    J(3, 3) = 1.0 / c;
+    J(3, 4) = J(4, 3) = 0.0;
+    ASSERT_TRUE(inverses.factorIdentityMinus(J, c));
+    EXPECT_EQ(inverses.denseFallbacks(), c == 0.01 ? 1 : 2);
+    const Eigen::MatrixXd MJ = Eigen::MatrixXd::Identity(7, 7) - c * J;
+    for (int k = 0; k < 4; ++k) {
+      b = Eigen::VectorXd::Constant(7, 1.0 + k);
+      inverses.solve(b, x2);
+      EXPECT_LE((x2 - MJ.partialPivLu().solve(b)).cwiseAbs().maxCoeff(), 1e-12) << c << " " << k;
+    }
+  }
+  ASSERT_TRUE(inverses.factorIdentityMinus(A, 0.01));
+  const Eigen::MatrixXd M = Eigen::MatrixXd::Identity(7, 7) - 0.01 * A;
+  for (int k = 0; k < 4; ++k) {
+    b = Eigen::VectorXd::Constant(7, 1.0 + k);
+    inverses.solve(b, x2);
+    EXPECT_LE((x2 - M.partialPivLu().solve(b)).cwiseAbs().maxCoeff(), 1e-13) << k;
+  }
+}
+
 TEST(StructuredJacobian, TheStructuresEntriesAreWhatTheMatrixOperationsTouch) {
   // structureRuns (the entries the Jacobian's zeroing, copies and A = cA + I touch) against the structure's
   // definition entry by entry, with and without the blocks' declared hub couplings: hub × hub, block × itself, a

@@ -151,8 +151,8 @@ struct CvodeOptions {
   /// every step the linearisation defect along the first stage, d = f(tₙ + h, yₙ + hk₁) − f(tₙ, yₙ) − W·hk₁ − h·fₜ (the
   /// same held inputs at both points), is compared with the change of f itself in the weighted RMS norm of the
   /// tolerances, and ‖d‖ > θ‖Δf‖ refreshes the Jacobian at the next step (at the latest every jacobian_every steps).
-  /// 0 (default): only jacobian_every counts. The experiment files' `jacobian_every: adaptive` is θ = 0.2 with no
-  /// step limit (docs/design.md, "Jacobian reuse").
+  /// 0 (default): only jacobian_every counts. The experiment files' `jacobian_every: adaptive` is θ = 0.2 with
+  /// jacobian_every = kAdaptiveJacobianEvery (1e6 steps: 50 s at 20 kHz) (docs/design.md, "Jacobian reuse").
   double jacobian_defect = 0.0;
   /// BDF: let the plant's Jacobian use its analytic parts (sim::JacobianKind::Analytic: for the robot with drives the
   /// multibody's columns from the analytic ABA derivatives, fewer right-hand sides). false (default): difference
