@@ -83,10 +83,7 @@ void DriveCount(benchmark::State& state, double duration, bool fixed_step, bool 
   if (rate > 0) sys->setSampledControl(rate, 1);
   sim::SimulateOptions o = sim::SimulateOptions::atRate(duration, 100.0, sim::stiffDriveSolver(1e-6, 1e-9));
   if (fixed_step) o.solver.method = sim::Method::Rosenbrock;  // step 0: the control period
-  if (adaptive) {
-    o.solver.jacobian_every = sim::kAdaptiveJacobianEvery;
-    o.solver.jacobian_defect = sim::kAdaptiveJacobianDefect;
-  }
+  if (adaptive) sim::setAdaptiveJacobian(o.solver);
   long steps = 0, jacobians = 0;
   double wall = 0.0;  // [s], summed over the iterations
   for (auto _ : state) {

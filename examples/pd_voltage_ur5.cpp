@@ -45,10 +45,7 @@ int main(int argc, char** argv) try {
   if (fixed_step > 0.0) {
     solver.method = sim::Method::Rosenbrock;
     solver.fixed_step = fixed_step;
-    if (adaptive) {
-      solver.jacobian_every = sim::kAdaptiveJacobianEvery;
-      solver.jacobian_defect = sim::kAdaptiveJacobianDefect;
-    }
+    if (adaptive) sim::setAdaptiveJacobian(solver);
   }
   sim::Simulator sim(robot, solver);
   // The robot is only read; the run's inputs live in the simulator's state.

@@ -754,7 +754,7 @@ class Simulator:
                                           _float(atol, "atol"), _int(max_order, "max_order"),
                                           _float(max_step, "max_step"), _float(max_gamma_change, "max_gamma_change"),
                                           method, _float(step, "step"),
-                                          str(int(jacobian_every)) if isinstance(jacobian_every, numbers.Integral)
+                                          int(jacobian_every) if isinstance(jacobian_every, numbers.Integral)
                                           else jacobian_every)
         sim = Simulator(core)
         sim.set_limits(max_state=max_state)
@@ -767,9 +767,9 @@ class Simulator:
                                                      "see state_name).")
     restarts = property(lambda self: self._s.restarts, doc="Integrator restarts so far.")
     steps = property(lambda self: self._s.steps, doc="Internal solver steps so far.")
-    solver_stats = property(lambda self: self._s.solver_stats,
+    solver_stats = property(lambda self: json.loads(self._s.solver_stats_json),
                             doc="Solver counters so far (dict: steps, rhs_evals, rhs_evals_jacobian, jac_evals, "
-                                "lin_setups, error_test_failures, split_steps, retaken_steps; the run summary's "
+                                "lin_setups, error_test_failures, split_steps, retaken_steps, ...; the run summary's "
                                 "solver_stats).")
     period_wall_times = property(
         lambda self: self._s.period_wall_times,

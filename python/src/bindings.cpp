@@ -27,6 +27,7 @@
 #include "jointsim/common/interrupt.hpp"
 #include "jointsim/common/version.hpp"
 #include "jointsim/experiments/batch.hpp"
+#include "jointsim/experiments/config.hpp"
 #include "jointsim/experiments/experiment.hpp"
 #include "jointsim/fmi/fmu.hpp"
 #include "jointsim/identify/clamping_fit.hpp"
@@ -273,7 +274,7 @@ struct PySnapshot {
 };
 
 sim::CvodeOptions solverFrom(double rtol, double atol, int max_order, double max_step, double max_gamma_change,
-                             const std::string& method, double step, const std::string& jacobian_every) {
+                             const std::string& method, double step, const py::object& jacobian_every) {
   sim::CvodeOptions o;
   o.max_gamma_change = max_gamma_change;
   if (method == "bdf")
@@ -286,22 +287,16 @@ sim::CvodeOptions solverFrom(double rtol, double atol, int max_order, double max
   if (method != "rosenbrock" && step != 0.0)
     throw InputError("Simulator.from_robot: step: only with method='rosenbrock'");
   o.fixed_step = step;
-  if (jacobian_every == "adaptive") {
-    o.jacobian_every = sim::kAdaptiveJacobianEvery;
-    o.jacobian_defect = sim::kAdaptiveJacobianDefect;
+  // jacobian_every: a number of steps (a Python int) or 'adaptive' (the Python layer checked the type).
+  const bool is_int = py::isinstance<py::int_>(jacobian_every);
+  if (!is_int && py::str(jacobian_every).cast<std::string>() == "adaptive") {
+    sim::setAdaptiveJacobian(o);
   } else {
-    long every = 0;
-    try {
-      size_t used = 0;
-      every = std::stol(jacobian_every, &used);
-      if (used != jacobian_every.size()) every = 0;
-    } catch (const std::exception&) {
-      every = 0;
-    }
+    const long every = is_int ? jacobian_every.cast<long>() : 0;
     if (every < 1 || every > sim::kAdaptiveJacobianEvery)
       throw InputError(
           "Simulator.from_robot: jacobian_every: expected a number of steps from 1 to 1e6 or 'adaptive', got '" +
-          jacobian_every + "'");
+          py::str(jacobian_every).cast<std::string>() + "'");
     o.jacobian_every = static_cast<int>(every);
   }
   o.rtol = rtol;
@@ -673,7 +668,7 @@ PYBIND11_MODULE(_core, m) {
       .def_static(
           "from_robot",
           [](const std::string& path, const py::object& q0, double rtol, double atol, int max_order, double max_step,
-             double max_gamma_change, const std::string& method, double step, const std::string& jacobian_every) {
+             double max_gamma_change, const std::string& method, double step, const py::object& jacobian_every) {
             auto robot = std::make_shared<systems::RobotSystem>(systems::loadRobotWithDrives(path));
             if (!q0.is_none()) robot->setInitialPositions(Eigen::VectorXd(vec(q0.cast<Array>(), robot->dof(), "q0")));
             PySimulator s;
@@ -685,7 +680,7 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("path"), py::arg("q0") = py::none(), py::arg("rtol") = 1e-6, py::arg("atol") = 1e-9,
           py::arg("max_order") = 2, py::arg("max_step") = 0.0, py::arg("max_gamma_change") = 0.3,
-          py::arg("method") = "bdf", py::arg("step") = 0.0, py::arg("jacobian_every") = "1")
+          py::arg("method") = "bdf", py::arg("step") = 0.0, py::arg("jacobian_every") = 1)
       .def_property_readonly("name",
                              [](PySimulator& s) {
                                const Use use(s.gate, "Simulator");
@@ -843,20 +838,12 @@ PYBIND11_MODULE(_core, m) {
                                const Use use(s.gate, "Simulator");
                                return s.sim->stats().steps;
                              })
-      .def_property_readonly("solver_stats",
+      .def_property_readonly("solver_stats_json",
                              [](PySimulator& s) {
                                const Use use(s.gate, "Simulator");
-                               const sim::SolverStats st = s.sim->stats();
-                               py::dict d;
-                               d["steps"] = st.steps;
-                               d["rhs_evals"] = st.rhs_evals;
-                               d["rhs_evals_jacobian"] = st.rhs_evals_jacobian;
-                               d["jac_evals"] = st.jac_evals;
-                               d["lin_setups"] = st.lin_setups;
-                               d["error_test_failures"] = st.error_test_failures;
-                               d["split_steps"] = st.split_steps;
-                               d["retaken_steps"] = st.retaken_steps;
-                               return d;
+                               nlohmann::ordered_json j;
+                               experiments::solverStatsJson(j, s.sim->stats());  // the run summary's solver_stats
+                               return j.dump();
                              })
       .def_property_readonly("period_wall_times",
                              [](PySimulator& s) {

@@ -122,22 +122,24 @@ struct FixedStepIntegrator::Impl {
     guarded("root function", at, [&] { g(at, state, out); });
   }
 
+  /// The tolerance of state i at the value yi, rtol |yi| + atol_i (its error weight is the reciprocal).
+  double tolerance(Eigen::Index i, double yi) const {
+    return opts.rtol * std::abs(yi) + (opts.atol_vector.size() ? opts.atol_vector[i] : opts.atol);
+  }
+
   /// W = ∂f/∂y at (t, y) with f0 = f(t, y): the plant's (difference increments as CVODE's cvLsDenseDQJac) or dense
   /// difference quotients.
   void evalJacobian(double at, const Eigen::VectorXd& state) {
     // inc_j = max(√ε |y_j|, m / w_j), w_j = 1 / (rtol |y_j| + atol_j), m = 1000 h ε n ‖f‖_w (weighted RMS norm).
     double norm = 0.0;
     for (Eigen::Index i = 0; i < n; ++i) {
-      const double atol = opts.atol_vector.size() ? opts.atol_vector[i] : opts.atol;
-      const double w = 1.0 / (opts.rtol * std::abs(state[i]) + atol);
+      const double w = 1.0 / tolerance(i, state[i]);
       norm += (f0[i] * w) * (f0[i] * w);
     }
     norm = std::sqrt(norm / n);
     const double min_inc = norm > 0.0 ? 1000.0 * h * kEps * n * norm : 1.0;
-    for (Eigen::Index j = 0; j < n; ++j) {
-      const double atol = opts.atol_vector.size() ? opts.atol_vector[j] : opts.atol;
-      inc[j] = std::max(std::sqrt(kEps) * std::abs(state[j]), min_inc * (opts.rtol * std::abs(state[j]) + atol));
-    }
+    for (Eigen::Index j = 0; j < n; ++j)
+      inc[j] = std::max(std::sqrt(kEps) * std::abs(state[j]), min_inc * tolerance(j, state[j]));
     if (djac) {
       if (zero_runs.empty()) {
         J.setZero();
@@ -190,8 +192,7 @@ struct FixedStepIntegrator::Impl {
     double nd = 0.0, nf = 0.0;
     const double rg = 1.0 / kGamma;
     for (Eigen::Index i = 0; i < n; ++i) {
-      const double atol = opts.atol_vector.size() ? opts.atol_vector[i] : opts.atol;
-      const double w = 1.0 / (opts.rtol * std::abs(y[i]) + atol);
+      const double w = 1.0 / tolerance(i, y[i]);
       const double df = f1[i] - f0[i];
       const double d = df - hs * ft[i] - rg * (k1[i] - f0[i] - kGamma * hs * ft[i]);
       nd += (d * w) * (d * w);

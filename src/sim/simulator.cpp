@@ -493,9 +493,14 @@ void Simulator::inputJumped() {
 
 void Simulator::restartIfNeeded(double h_max) {
   if (jump_ && !restart_) {
-    // Keep the history only where the jump leaves the next step within the error test (CvodeOptions::input_jump).
-    if (!integ_->jumpErrorIsZero()) plant_->derivatives(*state_, t_, y_, f_work_);
-    if (integ_->jumpErrorIsZero() || integ_->jumpError(f_old_, f_work_, h_max) <= kKeepHistoryLimit)
+    // Keep the history only where the jump leaves the next step within the error test (CvodeOptions::input_jump);
+    // a fixed-step method keeps none, so there is nothing to estimate.
+    bool keep = integ_->jumpErrorIsZero();
+    if (!keep) {
+      plant_->derivatives(*state_, t_, y_, f_work_);
+      keep = integ_->jumpError(f_old_, f_work_, h_max) <= kKeepHistoryLimit;
+    }
+    if (keep)
       ++input_jumps_;  // CVODE stopped exactly here (a stop time) and goes on with the new right-hand side
     else
       restart_ = true;

@@ -387,8 +387,8 @@ TEST(FixedStep, AnAdaptiveJacobianIsKeptWhileItDescribesTheStepsAndRenewedWhereT
   {
     auto run = [](bool adaptive) {
       // (h = 2⁻¹⁰ s: the grid's step lengths are exact, so a kept factorisation is of the very same matrix)
-      CvodeOptions o = fixedStep(std::ldexp(1.0, -10), adaptive ? sim::kAdaptiveJacobianEvery : 1);
-      if (adaptive) o.jacobian_defect = sim::kAdaptiveJacobianDefect;
+      CvodeOptions o = fixedStep(std::ldexp(1.0, -10));
+      if (adaptive) sim::setAdaptiveJacobian(o);
       FixedStepIntegrator integ(
           2,
           [](double, const auto& y, auto yd) {

@@ -297,10 +297,9 @@ TEST(StructuredJacobian, BlockEliminationSolvesLikeTheDenseLu) {
   EXPECT_THROW(integ.setJacobianStructure({{0, 5}, {{1, 2, 6}, {3, 4}}, {}, {{0, 5}, {5, 5}}}), InputError);
 }
 
-TEST(StructuredJacobian, DeclaredHubCouplingsOfABlockAreAllTheEliminationReads) {
-  // Block {3, 4} reads only hub state 0 and acts only on hub row 5; block {1, 2, 6} reads hub state 5 only and acts
-  // on both hub rows. Declared so, the elimination skips the other entries: the same solution as the dense LU and
-  // the matrix exponential. Declared too narrowly (block {3, 4} said not to act on row 5), it solves another system.
+// A stiff 7-state system whose block {3, 4} reads only hub state 0 and acts only on hub row 5, and whose block
+// {1, 2, 6} reads hub state 5 only and acts on both hub rows (hub {0, 5}).
+Eigen::MatrixXd coupledSevenStates() {
   Eigen::MatrixXd A(7, 7);
   A << -1, 0.5, 0, 0, 0, 0.3, -0.1,    //
       0, -900, 40, 0, 0, 1, 7,         //
@@ -309,6 +308,14 @@ TEST(StructuredJacobian, DeclaredHubCouplingsOfABlockAreAllTheEliminationReads) 
       0.7, 0, 0, -200, -10, 0, 0,      //
       0.1, 0.3, 0, 0.4, 0.2, -2, 0.1,  //
       0, 5, 1, 0, 0, 0, -20;
+  return A;
+}
+
+TEST(StructuredJacobian, DeclaredHubCouplingsOfABlockAreAllTheEliminationReads) {
+  // Block {3, 4} reads only hub state 0 and acts only on hub row 5; block {1, 2, 6} reads hub state 5 only and acts
+  // on both hub rows. Declared so, the elimination skips the other entries: the same solution as the dense LU and
+  // the matrix exponential. Declared too narrowly (block {3, 4} said not to act on row 5), it solves another system.
+  const Eigen::MatrixXd A = coupledSevenStates();
   Eigen::VectorXd y0(7);
   y0 << 1, -1, 0.5, 2, 0.3, -0.7, 0.1;
   auto run = [&](const sim::JacobianStructure* st) {
@@ -360,14 +367,7 @@ TEST(StructuredJacobian, ExplicitInversesSolveAsTheSubstitutionsFromTheThirdSolv
   // substitute (bit for bit the plain solver), from the third the blocks' and the Schur complement's inverses are
   // multiplied (the dense LU's solution to rounding); a new factorisation (another matrix) is solved with its own
   // factors, also after a factorisation that failed in between (a singular block: the dense fallback).
-  Eigen::MatrixXd A(7, 7);
-  A << -1, 0.5, 0, 0, 0, 0.3, -0.1,    //
-      0, -900, 40, 0, 0, 1, 7,         //
-      0, 30, -50, 0, 0, 0, 2,          //
-      1, 0, 0, -3000, 200, 0, 0,       //
-      0.7, 0, 0, -200, -10, 0, 0,      //
-      0.1, 0.3, 0, 0.4, 0.2, -2, 0.1,  //
-      0, 5, 1, 0, 0, 0, -20;
+  const Eigen::MatrixXd A = coupledSevenStates();
   const sim::JacobianStructure st{{0, 5}, {{1, 2, 6}, {3, 4}}, {{5}, {0}}, {{0, 5}, {5}}};
   sim::DirectSolver plain(7, st), inverses(7, st);
   inverses.useExplicitInverses();

@@ -164,6 +164,11 @@ struct CvodeOptions {
 /// `jacobian_every: adaptive` (experiment files, Python): CvodeOptions::jacobian_every and jacobian_defect so set.
 inline constexpr int kAdaptiveJacobianEvery = 1000000;
 inline constexpr double kAdaptiveJacobianDefect = 0.2;
+/// Sets `o` to the fixed step's adaptive Jacobian (`jacobian_every: adaptive`).
+inline void setAdaptiveJacobian(CvodeOptions& o) {
+  o.jacobian_every = kAdaptiveJacobianEvery;
+  o.jacobian_defect = kAdaptiveJacobianDefect;
+}
 
 /// BDF capped at order 2 with the given tolerances: the default for drive trains. BDF orders 3–5 are not
 /// A-stable: lightly damped kHz drive modes (strain-wave gear, stiff springs, LuGre bristles) then force steps
