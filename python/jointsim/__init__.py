@@ -732,7 +732,7 @@ class Simulator:
     def from_robot(path: PathLike, q0: Optional[Sequence[float]] = None, rtol: float = 1e-6, atol: float = 1e-9,
                    max_order: int = 2, max_step: float = 0.0, max_gamma_change: float = 0.3,
                    max_state: float = DEFAULT_MAX_STATE, method: str = "bdf", step: float = 0.0,
-                   jacobian_every: Union[int, str] = 1) -> "Simulator":
+                   jacobian_every: Union[int, str] = 1, oscillations: str = "damp") -> "Simulator":
         """A simulator over a robot-with-drives file (e.g. data_path("robots/ur5_drives.yaml")) starting at rest at
         q0 [rad], shape (dof,) (default zeros), with the drives holding it; BDF of order <= max_order with rtol and
         atol [state units], steps of at most max_step [s] (0: unlimited), a new Newton matrix when h*beta0 changes by
@@ -741,13 +741,19 @@ class Simulator:
         (ROS2, steps of `step` [s] on the grid k*step; docs/design.md "Fixed-step integration"), for a loop closed
         in Python at a fixed period: a step that divides the period keeps every advance() at the same cost.
         jacobian_every (fixed step only): renew the Jacobian every that many steps, or "adaptive": keep it while it
-        describes the steps (renewed where a linearisation defect shows it moved; docs/design.md "Jacobian reuse")."""
+        describes the steps (renewed where a linearisation defect shows it moved; docs/design.md "Jacobian reuse").
+        oscillations (fixed step only): "damp" (default) or "resolve": the drive trains' motor, current and gear
+        states and the joint angles are stepped with ROS2's other L-stable gamma, 1 - 1/sqrt(2), so that their lightly
+        damped kHz modes keep their amplitude instead of being damped (what noise-driven statistics of sampled control
+        need; docs/design.md "Resolving the drive trains' oscillations"); it needs jacobian_every 1 or "adaptive"."""
         q = None if q0 is None else _array(q0, "q0")
         if not isinstance(method, str):
             raise TypeError(f"method: expected 'bdf' or 'rosenbrock', got {type(method).__name__}")
         if isinstance(jacobian_every, bool) or not isinstance(jacobian_every, (numbers.Integral, str)):
             raise TypeError(f"jacobian_every: expected a number of steps or 'adaptive', got "
                             f"{type(jacobian_every).__name__}")
+        if not isinstance(oscillations, str):
+            raise TypeError(f"oscillations: expected 'damp' or 'resolve', got {type(oscillations).__name__}")
         if method != "rosenbrock" and not (isinstance(jacobian_every, numbers.Integral) and jacobian_every == 1):
             raise InputError("Simulator.from_robot: jacobian_every: only with method='rosenbrock'")
         core = _core.Simulator.from_robot(_input_file(path, "robot file"), q, _float(rtol, "rtol"),
@@ -755,7 +761,7 @@ class Simulator:
                                           _float(max_step, "max_step"), _float(max_gamma_change, "max_gamma_change"),
                                           method, _float(step, "step"),
                                           int(jacobian_every) if isinstance(jacobian_every, numbers.Integral)
-                                          else jacobian_every)
+                                          else jacobian_every, oscillations)
         sim = Simulator(core)
         sim.set_limits(max_state=max_state)
         return sim

@@ -71,7 +71,8 @@ class Simulator:
     @staticmethod
     def from_robot(path: str, q0: Optional[ArrayLike] = None, rtol: float = 1e-6, atol: float = 1e-9,
                    max_order: int = 2, max_step: float = 0.0, max_gamma_change: float = 0.3,
-                   method: str = "bdf", step: float = 0.0, jacobian_every: Union[int, str] = 1) -> Simulator: ...
+                   method: str = "bdf", step: float = 0.0, jacobian_every: Union[int, str] = 1,
+                   oscillations: str = "damp") -> Simulator: ...
     @property
     def name(self) -> str: ...
     @property

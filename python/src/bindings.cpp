@@ -274,7 +274,8 @@ struct PySnapshot {
 };
 
 sim::CvodeOptions solverFrom(double rtol, double atol, int max_order, double max_step, double max_gamma_change,
-                             const std::string& method, double step, const py::object& jacobian_every) {
+                             const std::string& method, double step, const py::object& jacobian_every,
+                             const std::string& oscillations) {
   sim::CvodeOptions o;
   o.max_gamma_change = max_gamma_change;
   if (method == "bdf")
@@ -287,6 +288,11 @@ sim::CvodeOptions solverFrom(double rtol, double atol, int max_order, double max
   if (method != "rosenbrock" && step != 0.0)
     throw InputError("Simulator.from_robot: step: only with method='rosenbrock'");
   o.fixed_step = step;
+  if (oscillations != "damp" && oscillations != "resolve")
+    throw InputError("Simulator.from_robot: oscillations: expected 'damp' or 'resolve', got '" + oscillations + "'");
+  if (method != "rosenbrock" && oscillations != "damp")
+    throw InputError("Simulator.from_robot: oscillations: only with method='rosenbrock'");
+  o.resolve_oscillations = oscillations == "resolve";  // (before the adaptive Jacobian: its defect depends on it)
   // jacobian_every: a number of steps (a Python int) or 'adaptive' (the Python layer checked the type).
   const bool is_int = py::isinstance<py::int_>(jacobian_every);
   if (!is_int && py::str(jacobian_every).cast<std::string>() == "adaptive") {
@@ -668,19 +674,22 @@ PYBIND11_MODULE(_core, m) {
       .def_static(
           "from_robot",
           [](const std::string& path, const py::object& q0, double rtol, double atol, int max_order, double max_step,
-             double max_gamma_change, const std::string& method, double step, const py::object& jacobian_every) {
+             double max_gamma_change, const std::string& method, double step, const py::object& jacobian_every,
+             const std::string& oscillations) {
             auto robot = std::make_shared<systems::RobotSystem>(systems::loadRobotWithDrives(path));
             if (!q0.is_none()) robot->setInitialPositions(Eigen::VectorXd(vec(q0.cast<Array>(), robot->dof(), "q0")));
             PySimulator s;
             s.plant = robot;
             s.robot_ptr = robot.get();
-            s.sim = std::make_unique<sim::Simulator>(
-                s.plant, solverFrom(rtol, atol, max_order, max_step, max_gamma_change, method, step, jacobian_every));
+            s.sim =
+                std::make_unique<sim::Simulator>(s.plant, solverFrom(rtol, atol, max_order, max_step, max_gamma_change,
+                                                                     method, step, jacobian_every, oscillations));
             return s;
           },
           py::arg("path"), py::arg("q0") = py::none(), py::arg("rtol") = 1e-6, py::arg("atol") = 1e-9,
           py::arg("max_order") = 2, py::arg("max_step") = 0.0, py::arg("max_gamma_change") = 0.3,
-          py::arg("method") = "bdf", py::arg("step") = 0.0, py::arg("jacobian_every") = 1)
+          py::arg("method") = "bdf", py::arg("step") = 0.0, py::arg("jacobian_every") = 1,
+          py::arg("oscillations") = "damp")
       .def_property_readonly("name",
                              [](PySimulator& s) {
                                const Use use(s.gate, "Simulator");

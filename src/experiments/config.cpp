@@ -19,7 +19,8 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   if (!node.defined()) return o;
   node.expectMap("a solver mapping {method, rtol, atol, max_step, max_order, stability_limit_detection}");
   node.allowKeys({"method", "rtol", "atol", "max_step", "max_order", "stability_limit_detection", "max_num_steps",
-                  "input_jumps", "max_gamma_change", "step", "jacobian_every", "jacobian_defect", "analytic_jacobian"});
+                  "input_jumps", "max_gamma_change", "step", "jacobian_every", "jacobian_defect", "analytic_jacobian",
+                  "oscillations"});
   const char* const methods = "bdf, adams or rosenbrock (fixed step)";
   if (node.has("method")) {
     const std::string m = node["method"].asString(methods);
@@ -32,19 +33,27 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
     else
       node["method"].failExpected(methods);
   }
-  // step, jacobian_every and jacobian_defect belong to the fixed-step method; with CVODE's methods they are checked
+  // step, jacobian_every, jacobian_defect and oscillations belong to the fixed-step method; with CVODE's methods they
+  // are checked
   // and kept but unused, so that `--set solver.method=bdf` turns a fixed-step file into a CVODE run (as a solver
   // switch in Simulink keeps the fixed-step size).
   o.fixed_step = node["step"].asDouble(o.fixed_step, "a fixed step in s (0: the control period)");
   if (!(o.fixed_step >= 0.0) || !std::isfinite(o.fixed_step))
     node["step"].failExpected("a fixed step >= 0 s (0: the control period)");
+  if (node.has("oscillations")) {
+    const char* const expected = "resolve (rows of the drive trains' oscillatory states with γ = 1 − 1/√2) or damp";
+    const std::string v = node["oscillations"].asString(expected);
+    if (v != "resolve" && v != "damp") node["oscillations"].failExpected(expected);
+    o.resolve_oscillations = v == "resolve";
+  }
   const char* const every_expected = "a number of steps from 1 to 1e6, or adaptive";
   if (node.has("jacobian_every")) {
     const YamlValue& e = node["jacobian_every"];
     if (e.isScalar() && e.asString(every_expected) == "adaptive") {
       // Kept while it describes the steps (CvodeOptions::jacobian_defect), renewed at least every 1e6 steps.
       o.jacobian_every = sim::kAdaptiveJacobianEvery;
-      if (!(o.jacobian_defect > 0.0)) o.jacobian_defect = sim::kAdaptiveJacobianDefect;
+      if (!(o.jacobian_defect > 0.0))
+        o.jacobian_defect = o.resolve_oscillations ? sim::kResolveJacobianDefect : sim::kAdaptiveJacobianDefect;
     } else {
       const long every = e.asInt(every_expected);
       if (every < 1 || every > 1000000) e.failExpected(every_expected);
@@ -57,6 +66,20 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
     if (!(o.jacobian_defect > 0.0) || !std::isfinite(o.jacobian_defect)) node["jacobian_defect"].failExpected(expected);
     // Alone it means adaptive (with jacobian_every 1 it would never act); beside a number of steps both apply.
     if (!node.has("jacobian_every")) o.jacobian_every = sim::kAdaptiveJacobianEvery;
+  }
+  if (o.resolve_oscillations) {
+    // Rows taken with γ = 1 − 1/√2 tolerate a Jacobian off by 17 % (CvodeOptions::resolve_oscillations).
+    if (o.jacobian_defect > sim::kResolveMaxJacobianDefect) {
+      if (node.has("jacobian_defect"))
+        node["jacobian_defect"].failExpected("a defect of at most " + formatNumber(sim::kResolveMaxJacobianDefect) +
+                                             " with oscillations: resolve (adaptive gives " +
+                                             formatNumber(sim::kResolveJacobianDefect) + ")");
+      o.jacobian_defect = sim::kResolveJacobianDefect;  // the adaptive default of a file below this one
+    }
+    if (o.jacobian_every > 1 && o.jacobian_defect == 0.0)
+      node[node.has("jacobian_every") ? "jacobian_every" : "oscillations"].failExpected(
+          "1 or adaptive with oscillations: resolve (a Jacobian kept without the "
+          "defect test diverges)");
   }
   o.rtol = node["rtol"].asDouble(o.rtol, "a relative tolerance > 0");
   if (!(o.rtol > 0)) node["rtol"].failExpected("a relative tolerance > 0");
@@ -205,6 +228,7 @@ void solverJson(nlohmann::ordered_json& out, const sim::CvodeOptions& o) {
     else
       out["jacobian_every"] = o.jacobian_every;
     if (o.jacobian_defect > 0.0) out["jacobian_defect"] = o.jacobian_defect;
+    out["oscillations"] = o.resolve_oscillations ? "resolve" : "damp";
   }
 }
 

@@ -18,6 +18,9 @@ namespace jointsim::sim {
 namespace {
 /// ROS2's γ = 1 + 1/√2 [Verwer1999, eq. 2.3]: L-stable, and the error constant of the second-order pair smallest.
 const double kGamma = 1.0 + 1.0 / std::sqrt(2.0);
+/// The other root of γ² − 2γ + 1/2 = 0 (R(∞) = 0: also L-stable), 1 − 1/√2, as a factor on W's rows: the method's
+/// coefficients do not depend on γ, so γ only ever multiplies W, and rows scaled by this ratio are taken with it.
+const double kOscillatoryRowScale = (1.0 - 1.0 / std::sqrt(2.0)) / kGamma;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 constexpr double kNoTime = std::numeric_limits<double>::quiet_NaN();  // unset time [s]
 /// A step shorter than this fraction of the fixed step is not taken: the grid point or stop time this close is
@@ -56,6 +59,14 @@ struct FixedStepIntegrator::Impl {
   // 0 from the start: 8 % of a step at 24 drives was the memset of the whole n × n).
   std::vector<EntryRun> zero_runs;
   bool jac_valid = false;
+  // Oscillatory rows (setOscillatoryStates, with opts.resolve_oscillations): W with those rows scaled by
+  // kOscillatoryRowScale (kept with J) and its factorisation, used on every step that is not shortened.
+  std::vector<int> osc_rows;
+  std::vector<char> is_osc;
+  Eigen::MatrixXd Wo;
+  std::unique_ptr<DirectSolver> solver_osc;
+  double factored_osc_h = kNoTime;
+  bool used_osc = false;  // the last step solved with solver_osc
   int steps_since_jac = 0;
   bool jac_defective = false;  // the last step's linearisation defect exceeded jacobian_defect (refresh next step)
   double factored_h = kNoTime;
@@ -174,6 +185,11 @@ struct FixedStepIntegrator::Impl {
                                 ") at t = " + formatNumber(at + delta) + " s (while differencing it in time)",
                             at + delta, "RHS_NONFINITE", opts.component);
     }
+    if (!osc_rows.empty()) {
+      Wo = J;
+      for (int i : osc_rows) Wo.row(i) *= kOscillatoryRowScale;
+      factored_osc_h = kNoTime;
+    }
     ++stats.jac_evals;
     jac_valid = true;
     steps_since_jac = 0;
@@ -187,14 +203,17 @@ struct FixedStepIntegrator::Impl {
   /// stiffness segment) gives a defect of the order of Δf. Near an equilibrium Δf is tiny and the test renews W at
   /// most steps (a floor of 1/hs for ‖Δf‖_w, a defect below the tolerances, kept W there and let the 1 kHz PD loop of
   /// examples/ meet a LuGre break-away with it: STEP_UNSTABLE). W·hs·k1 needs no product with W: the first stage
-  /// solved (I − γ·hs·W) k1 = f0 + γ·hs·fₜ, so hs·W·k1 = (k1 − f0 − γ·hs·fₜ)/γ (to the solve's rounding).
+  /// solved (I − γ·hs·W) k1 = f0 + γ·hs·fₜ, so hs·W·k1 = (k1 − f0 − γ·hs·fₜ)/γ (to the solve's rounding). W is the
+  /// Jacobian: a step solved with the oscillatory rows scaled gets their W·hs·k1 back by the reciprocal scale.
   double linearisationDefect(double hs) {
     double nd = 0.0, nf = 0.0;
     const double rg = 1.0 / kGamma;
     for (Eigen::Index i = 0; i < n; ++i) {
       const double w = 1.0 / tolerance(i, y[i]);
       const double df = f1[i] - f0[i];
-      const double d = df - hs * ft[i] - rg * (k1[i] - f0[i] - kGamma * hs * ft[i]);
+      double whk = rg * (k1[i] - f0[i] - kGamma * hs * ft[i]);
+      if (used_osc && is_osc[static_cast<size_t>(i)]) whk /= kOscillatoryRowScale;
+      const double d = df - hs * ft[i] - whk;
       nd += (d * w) * (d * w);
       nf += (df * w) * (df * w);
     }
@@ -355,14 +374,28 @@ struct FixedStepIntegrator::Impl {
       }
       t1 = t + hs;
     }
-    // [Verwer1999, eq. 2.2] with W and ∂f/∂t from the last Jacobian evaluation.
+    // [Verwer1999, eq. 2.2] with W and ∂f/∂t from the last Jacobian evaluation; with oscillatory rows, W with those
+    // rows scaled unless the step was shortened (the shortenings' analysis and the growing modes are γ = 1 + 1/√2's).
+    DirectSolver* w_solver = solver.get();
+    used_osc = !osc_rows.empty() && sub_h == 0.0;
+    if (used_osc) {
+      if (!(std::abs(factored_osc_h - hs) <= 1e-9 * hs)) {
+        ++stats.lin_setups;
+        if (!solver_osc->factorIdentityMinus(Wo, kGamma * hs))
+          throw SolverError(prefix() + ": I - γhW with the oscillatory rows scaled is singular at t = " +
+                                formatNumber(t) + " s (step " + formatNumber(hs) + " s)",
+                            t, "LSETUP_FAIL", opts.component);
+        factored_osc_h = hs;
+      }
+      w_solver = solver_osc.get();
+    }
     rhs2 = f0 + (kGamma * hs) * ft;
-    solver->solve(rhs2, k1);
+    w_solver->solve(rhs2, k1);
     ytmp = y + hs * k1;
     evalRhs(t1, ytmp, f1);
     if (opts.jacobian_defect > 0.0 && linearisationDefect(hs) > opts.jacobian_defect) jac_defective = true;
     rhs2 = f1 - 2.0 * k1 - (kGamma * hs) * ft;
-    solver->solve(rhs2, k2);
+    w_solver->solve(rhs2, k2);
     seg_t0 = t;
     seg_y0 = y;
     seg_f0 = f0;
@@ -476,6 +509,16 @@ FixedStepIntegrator::FixedStepIntegrator(int n, RhsFunction rhs, CvodeOptions op
   if (m.opts.jacobian_every < 1) bad("jacobian_every must be >= 1 step, got " + std::to_string(m.opts.jacobian_every));
   if (!(m.opts.jacobian_defect >= 0.0) || !std::isfinite(m.opts.jacobian_defect))
     bad("jacobian_defect must be finite and >= 0 (0: off), got " + formatNumber(m.opts.jacobian_defect));
+  if (m.opts.resolve_oscillations) {
+    if (m.opts.jacobian_defect > kResolveMaxJacobianDefect)
+      bad("with oscillations resolved (rows taken with γ = 1 − 1/√2, which tolerate a Jacobian off by 17 %) "
+          "jacobian_defect must be at most " +
+          formatNumber(kResolveMaxJacobianDefect) + ", got " + formatNumber(m.opts.jacobian_defect) +
+          " (jacobian_every: adaptive gives " + formatNumber(kResolveJacobianDefect) + ")");
+    if (m.opts.jacobian_every > 1 && m.opts.jacobian_defect == 0.0)
+      bad("with oscillations resolved a Jacobian kept for " + std::to_string(m.opts.jacobian_every) +
+          " steps without the defect test diverges: jacobian_every 1 or adaptive");
+  }
   if (m.opts.max_num_steps <= 0) bad("max_num_steps must be > 0, got " + std::to_string(m.opts.max_num_steps));
   if (!(m.opts.rtol > 0.0) || !std::isfinite(m.opts.rtol)) bad("rtol must be finite and > 0");
   if (m.opts.atol_vector.size() != 0 && m.opts.atol_vector.size() != n)
@@ -489,6 +532,7 @@ FixedStepIntegrator::FixedStepIntegrator(int n, RhsFunction rhs, CvodeOptions op
     v->setZero(n);
   m.solver = std::make_unique<DirectSolver>(n, m.structure);
   if (m.opts.jacobian_defect > 0.0) m.solver->useExplicitInverses();  // a kept W serves many solves
+  m.is_osc.assign(static_cast<size_t>(n), 0);
 }
 
 FixedStepIntegrator::~FixedStepIntegrator() = default;
@@ -607,6 +651,28 @@ void FixedStepIntegrator::setTimeInvariance(std::function<bool()> invariant) {
   impl_->time_invariant = std::move(invariant);
 }
 
+void FixedStepIntegrator::setOscillatoryStates(std::vector<int> states) {
+  Impl& m = *impl_;
+  std::sort(states.begin(), states.end());
+  for (size_t k = 0; k < states.size(); ++k)
+    if (states[k] < 0 || states[k] >= m.n || (k > 0 && states[k] == states[k - 1]))
+      throw InputError(m.prefix() + ": setOscillatoryStates: state " + std::to_string(states[k]) +
+                       (states[k] < 0 || states[k] >= m.n ? " is not one of the " + std::to_string(m.n) + " states"
+                                                          : " is given twice"));
+  if (!m.opts.resolve_oscillations) states.clear();
+  m.osc_rows = std::move(states);
+  m.is_osc.assign(static_cast<size_t>(m.n), 0);
+  for (int i : m.osc_rows) m.is_osc[static_cast<size_t>(i)] = 1;
+  m.solver_osc.reset();
+  if (!m.osc_rows.empty()) {
+    m.solver_osc = std::make_unique<DirectSolver>(m.n, m.structure);
+    if (m.opts.jacobian_defect > 0.0) m.solver_osc->useExplicitInverses();
+    m.Wo.setZero(m.n, m.n);
+  }
+  m.jac_valid = false;
+  m.factored_osc_h = kNoTime;
+}
+
 void FixedStepIntegrator::setJacobianStructure(JacobianStructure structure) {
   Impl& m = *impl_;
   structure.validate(m.n);
@@ -614,6 +680,11 @@ void FixedStepIntegrator::setJacobianStructure(JacobianStructure structure) {
   m.solver = std::make_unique<DirectSolver>(m.n, m.structure);
   if (m.opts.jacobian_defect > 0.0) m.solver->useExplicitInverses();
   m.factored_h = kNoTime;
+  if (m.solver_osc) {
+    m.solver_osc = std::make_unique<DirectSolver>(m.n, m.structure);
+    if (m.opts.jacobian_defect > 0.0) m.solver_osc->useExplicitInverses();
+    m.factored_osc_h = kNoTime;
+  }
   m.zero_runs = structureRuns(m.structure, m.n);
 }
 

@@ -132,6 +132,7 @@ JacobianKind jacobianKind(const CvodeOptions& o) {
 void installPlantJacobian(const Plant& plant, const PlantState& state, Integrator& integ) {
   const CvodeOptions& o = integ.options();
   integ.setTimeInvariance([&plant, &state] { return plant.timeInvariant(state); });
+  integ.setOscillatoryStates(plant.oscillatoryStates());
   if (!plant.providesJacobian() || !o.plant_jacobian || o.method == Method::Adams) return;
   const JacobianKind kind = jacobianKind(o);
   integ.setDifferenceJacobian(

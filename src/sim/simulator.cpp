@@ -141,6 +141,7 @@ void Simulator::build(const CvodeOptions& solver) {
       integ_->setJacobianStructure(std::move(structure));
   }
   integ_->setTimeInvariance([this, p] { return p->timeInvariant(*state_); });
+  integ_->setOscillatoryStates(p->oscillatoryStates());
   if (p->rootCount() > 0)
     integ_->setRootFunction(p->rootCount(), [this, p](double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                                                       Eigen::Ref<Eigen::VectorXd> g) { p->roots(*state_, t, y, g); });

@@ -391,6 +391,21 @@ bool RobotSystem::timeInvariant(const sim::PlantState& state) const {
   return true;
 }
 
+std::vector<int> RobotSystem::oscillatoryStates() const {
+  std::vector<int> states;
+  for (int i = 0; i < model_.nq; ++i) states.push_back(i);
+  for (const DriveLayout& L : layout_) {
+    auto add = [&states](int first, int count) {
+      if (first >= 0)
+        for (int j = 0; j < count; ++j) states.push_back(first + j);
+    };
+    if (!L.rigid) add(L.motor, 2);
+    add(L.current, 1);
+    add(L.gear, L.n_gear);
+  }
+  return states;
+}
+
 sim::JacobianStructure RobotSystem::jacobianStructure(std::vector<int>* drive_of_block) const {
   sim::JacobianStructure s;
   const int n = model_.nq;

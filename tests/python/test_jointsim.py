@@ -161,6 +161,20 @@ def test_jacobian_policy_of_the_fixed_step_from_python(root):
     sim = jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every=np.int64(3))
     sim.advance_to(0.03)
     assert sim.solver_stats["steps"] == 30 and sim.solver_stats["jac_evals"] == 10
+    # oscillations="resolve": the oscillatory rows' factorisation beside the plain one, the tighter adaptive defect.
+    sim = jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every="adaptive",
+                                        oscillations="resolve")
+    sim.advance_to(0.03)
+    stats = sim.solver_stats
+    assert stats["steps"] == 30 and 0 < stats["jac_evals"] < 30 and stats["lin_setups"] == 2 * stats["jac_evals"]
+    with pytest.raises(jointsim.InputError, match="'damp' or 'resolve'"):
+        jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, oscillations="sometimes")
+    with pytest.raises(jointsim.InputError, match="oscillations: only with method='rosenbrock'"):
+        jointsim.Simulator.from_robot(robot, oscillations="resolve")
+    with pytest.raises(jointsim.InputError, match="jacobian_every 1 or adaptive"):
+        jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every=3, oscillations="resolve")
+    with pytest.raises(TypeError, match="oscillations"):
+        jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, oscillations=True)
 
 
 def _gravity_voltage_gains(root):

@@ -25,6 +25,11 @@
 /// docs/design.md, "Growing modes", has the measurements on the UR5 drives' LuGre break-aways that made this
 /// necessary, and what it does not catch.
 ///
+/// With CvodeOptions::resolve_oscillations the rows of the plant's oscillatory states (setOscillatoryStates) are taken
+/// with ROS2's other L-stable γ, 1 − 1/√2: W's rows scaled by (1 − 1/√2)/(1 + 1/√2), factorised beside I − γhW
+/// (whose determinant still decides the shortenings; a shortened step uses it alone). The linearisation defect is
+/// measured against the Jacobian itself.
+///
 /// Steps end on the grid k·fixed_step (k integer). A stop time between two grid points (a time event) ends a short
 /// step on it, after which the grid is met again. Root functions are checked at the end of every step; a sign change
 /// is located on the step's cubic Hermite interpolant (from yₙ, f(tₙ, yₙ), yₙ₊₁, f(tₙ₊₁, yₙ₊₁)) by the Illinois
@@ -68,6 +73,9 @@ class FixedStepIntegrator final : public Integrator {
   void setJacobianStructure(JacobianStructure structure) override;
   /// While `invariant()` is true, fₜ = 0 without the difference in time (its right-hand side is saved).
   void setTimeInvariance(std::function<bool()> invariant) override;
+  /// The rows taken with γ = 1 − 1/√2 under CvodeOptions::resolve_oscillations (ignored without); InputError for an
+  /// index outside 0..n−1 or given twice.
+  void setOscillatoryStates(std::vector<int> states) override;
   /// 0: a fixed-step method carries no history across an input jump (the next step starts from f with the new inputs).
   double jumpError(const Eigen::Ref<const Eigen::VectorXd>& f_old, const Eigen::Ref<const Eigen::VectorXd>& f_new,
                    double h_max) const override;

@@ -185,6 +185,12 @@ class Plant {
   /// f(y) there: held inputs, no reference or profile of time): the fixed-step method then takes ∂f/∂t = 0 instead of
   /// differencing it (one right-hand side per Jacobian). False, the default, is always safe.
   virtual bool timeInvariant(const PlantState& /*state*/) const { return false; }
+  /// The states whose rows the fixed-step method takes with γ = 1 − 1/√2 under `oscillations: resolve`
+  /// (CvodeOptions::resolve_oscillations): those of lightly damped oscillatory modes that a step should follow rather
+  /// than damp (a drive train's motor, current and gear states, the joint angles), not those where stiff real modes
+  /// and growing modes act (friction bristles, the joint velocities that friction and the gear torques drive).
+  /// Default: none (the option then changes nothing). CVODE ignores them.
+  virtual std::vector<int> oscillatoryStates() const { return {}; }
 
   /// What continuous state `i` is, for messages ("q_elbow_joint [rad]"); empty when the plant does not say.
   virtual std::string stateName(int /*i*/) const { return {}; }

@@ -365,6 +365,11 @@ class RobotSystem : public sim::Plant {
   /// only held values and y (the reference and the sensor faults' episodes, functions of t, reach it only through a
   /// continuous controller).
   bool timeInvariant(const sim::PlantState& state) const override;
+  /// The joint angles and each drive's motor, current and gear states: the drive trains' lightly damped modes (the
+  /// strain-wave gear's 4.6–5.3 kHz motor–gear modes, ζ ≈ 0.001–0.006). Not the joint velocities (friction's σ₁ż and
+  /// the gear torques act there: the stick–slip's stiff real and growing modes), the friction states or a continuous
+  /// controller's states.
+  std::vector<int> oscillatoryStates() const override;
   /// The same, and for each block the index of its drive.
   sim::JacobianStructure jacobianStructure(std::vector<int>* drive_of_block) const;
   void signals(const sim::PlantState& state, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
