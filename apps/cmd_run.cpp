@@ -55,6 +55,10 @@ void addRunCommand(CLI::App& app) {
     if (r.stats.retaken_steps > 0)
       std::printf("  fixed step: retook %ld step(s) that ran into a growing mode unseen at their start\n",
                   r.stats.retaken_steps);
+    if (r.stats.damped_steps > 0)
+      std::printf("  fixed step: took %ld step(s) with the oscillations damped (oscillations: resolve: a real mode the "
+                  "scaled rows would not follow)\n",
+                  r.stats.damped_steps);
     if (!r.csv_path.empty())
       std::printf("  next:    read the log (one column per signal, SI units) or draw it: %s plot %s\n",
                   programName().c_str(), std::filesystem::path(r.csv_path).parent_path().string().c_str());

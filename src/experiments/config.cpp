@@ -69,13 +69,10 @@ sim::CvodeOptions readSolver(const YamlValue& node, sim::CvodeOptions o) {
   }
   if (o.resolve_oscillations) {
     // Rows taken with γ = 1 − 1/√2 tolerate a Jacobian off by 17 % (CvodeOptions::resolve_oscillations).
-    if (o.jacobian_defect > sim::kResolveMaxJacobianDefect) {
-      if (node.has("jacobian_defect"))
-        node["jacobian_defect"].failExpected("a defect of at most " + formatNumber(sim::kResolveMaxJacobianDefect) +
-                                             " with oscillations: resolve (adaptive gives " +
-                                             formatNumber(sim::kResolveJacobianDefect) + ")");
-      o.jacobian_defect = sim::kResolveJacobianDefect;  // the adaptive default of a file below this one
-    }
+    if (o.jacobian_defect > sim::kResolveMaxJacobianDefect)
+      node[node.has("jacobian_defect") ? "jacobian_defect" : "oscillations"].failExpected(
+          "a defect of at most " + formatNumber(sim::kResolveMaxJacobianDefect) +
+          " with oscillations: resolve (adaptive gives " + formatNumber(sim::kResolveJacobianDefect) + ")");
     if (o.jacobian_every > 1 && o.jacobian_defect == 0.0)
       node[node.has("jacobian_every") ? "jacobian_every" : "oscillations"].failExpected(
           "1 or adaptive with oscillations: resolve (a Jacobian kept without the "
@@ -245,7 +242,8 @@ void solverStatsJson(nlohmann::ordered_json& out, const sim::SolverStats& s) {
          {"last_order", s.last_order},
          {"last_step_s", s.last_step},
          {"split_steps", s.split_steps},
-         {"retaken_steps", s.retaken_steps}};
+         {"retaken_steps", s.retaken_steps},
+         {"damped_steps", s.damped_steps}};
 }
 
 namespace detail {

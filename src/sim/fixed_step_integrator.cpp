@@ -19,7 +19,9 @@ namespace {
 /// ROS2's γ = 1 + 1/√2 [Verwer1999, eq. 2.3]: L-stable, and the error constant of the second-order pair smallest.
 const double kGamma = 1.0 + 1.0 / std::sqrt(2.0);
 /// The other root of γ² − 2γ + 1/2 = 0 (R(∞) = 0: also L-stable), 1 − 1/√2, as a factor on W's rows: the method's
-/// coefficients do not depend on γ, so γ only ever multiplies W, and rows scaled by this ratio are taken with it.
+/// coefficients do not depend on γ, so γ only multiplies W (and fₜ), and rows scaled by this ratio are taken with it
+/// (exactly so for a right-hand side free of t; with fₜ ≠ 0 those rows keep γ = 1 + 1/√2's γh·fₜ: still a W-method
+/// of order 2).
 const double kOscillatoryRowScale = (1.0 - 1.0 / std::sqrt(2.0)) / kGamma;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 constexpr double kNoTime = std::numeric_limits<double>::quiet_NaN();  // unset time [s]
@@ -186,8 +188,16 @@ struct FixedStepIntegrator::Impl {
                             at + delta, "RHS_NONFINITE", opts.component);
     }
     if (!osc_rows.empty()) {
-      Wo = J;
-      for (int i : osc_rows) Wo.row(i) *= kOscillatoryRowScale;
+      // Wo = D·J over the entries J may hold (the structure's, or all of them), the others staying 0.
+      auto copy = [&](Eigen::Index row, Eigen::Index col, Eigen::Index len) {
+        for (Eigen::Index i = row; i < row + len; ++i)
+          Wo(i, col) = is_osc[static_cast<size_t>(i)] ? kOscillatoryRowScale * J(i, col) : J(i, col);
+      };
+      if (zero_runs.empty()) {
+        for (Eigen::Index j = 0; j < n; ++j) copy(0, j, n);
+      } else {
+        for (const EntryRun& r : zero_runs) copy(r.row, r.col, r.len);
+      }
       factored_osc_h = kNoTime;
     }
     ++stats.jac_evals;
@@ -387,7 +397,14 @@ struct FixedStepIntegrator::Impl {
                             t, "LSETUP_FAIL", opts.component);
         factored_osc_h = hs;
       }
-      w_solver = solver_osc.get();
+      // The scaled matrix's own determinant: a real eigenvalue of D·W with γhμ > 1 that W does not have (a mode
+      // shared by scaled and unscaled rows) would put the step next to R's pole; such a step is taken with W.
+      if (solver_osc->determinantSign() > 0) {
+        w_solver = solver_osc.get();
+      } else {
+        used_osc = false;
+        ++stats.damped_steps;
+      }
     }
     rhs2 = f0 + (kGamma * hs) * ft;
     w_solver->solve(rhs2, k1);
@@ -659,6 +676,9 @@ void FixedStepIntegrator::setOscillatoryStates(std::vector<int> states) {
       throw InputError(m.prefix() + ": setOscillatoryStates: state " + std::to_string(states[k]) +
                        (states[k] < 0 || states[k] >= m.n ? " is not one of the " + std::to_string(m.n) + " states"
                                                           : " is given twice"));
+  if (m.opts.resolve_oscillations && states.empty())
+    throw InputError(m.prefix() + ": oscillations: resolve, but the model declares no oscillatory states "
+                                  "(Plant::oscillatoryStates: the robot with drives does; other models only damp)");
   if (!m.opts.resolve_oscillations) states.clear();
   m.osc_rows = std::move(states);
   m.is_osc.assign(static_cast<size_t>(m.n), 0);

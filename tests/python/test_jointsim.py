@@ -161,7 +161,7 @@ def test_jacobian_policy_of_the_fixed_step_from_python(root):
     sim = jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every=np.int64(3))
     sim.advance_to(0.03)
     assert sim.solver_stats["steps"] == 30 and sim.solver_stats["jac_evals"] == 10
-    # oscillations="resolve": the oscillatory rows' factorisation beside the plain one, the tighter adaptive defect.
+    # oscillations="resolve": the oscillatory rows' factorisation beside the plain one.
     sim = jointsim.Simulator.from_robot(robot, method="rosenbrock", step=1e-3, jacobian_every="adaptive",
                                         oscillations="resolve")
     sim.advance_to(0.03)

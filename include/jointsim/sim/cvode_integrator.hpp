@@ -151,17 +151,21 @@ struct CvodeOptions {
   /// every step the linearisation defect along the first stage, d = f(tₙ + h, yₙ + hk₁) − f(tₙ, yₙ) − W·hk₁ − h·fₜ (the
   /// same held inputs at both points), is compared with the change of f itself in the weighted RMS norm of the
   /// tolerances, and ‖d‖ > θ‖Δf‖ refreshes the Jacobian at the next step (at the latest every jacobian_every steps).
-  /// 0 (default): only jacobian_every counts. The experiment files' `jacobian_every: adaptive` is θ = 0.2 with
-  /// jacobian_every = kAdaptiveJacobianEvery (1e6 steps: 50 s at 20 kHz) (docs/design.md, "Jacobian reuse").
+  /// 0 (default): only jacobian_every counts. The experiment files' `jacobian_every: adaptive` is θ = 0.2 (0.02 with
+  /// resolve_oscillations) with jacobian_every = kAdaptiveJacobianEvery (1e6 steps: 50 s at 20 kHz) (docs/design.md,
+  /// "Jacobian reuse"; setAdaptiveJacobian).
   double jacobian_defect = 0.0;
   /// Method::Rosenbrock: the rows of the plant's oscillatory states (Plant::oscillatoryStates) are taken with
   /// ROS2's other L-stable γ, 1 − 1/√2, instead of 1 + 1/√2 (W's rows scaled by their ratio: still a W-method of order
-  /// 2), on every step that is not shortened for a growing mode. A lightly damped mode at ωh = 1.66 (the UR5 drives'
+  /// 2), on every step that is not shortened for a growing mode (nor has a negative determinant with the rows scaled:
+  /// SolverStats::damped_steps). A plant that declares no such states is refused. A lightly damped mode at ωh = 1.66 (the UR5 drives'
   /// 5.3 kHz motor–gear mode at 50 µs) then keeps 98 % of its amplitude per step instead of 46 %, which is what
   /// noise-driven statistics of sampled control need (docs/design.md, "Resolving the drive trains' oscillations").
   /// The price: such rows tolerate a Jacobian whose stiff eigenvalues have moved by 17 % (6.8× with 1 + 1/√2), so a
   /// kept Jacobian needs jacobian_defect ≤ kResolveMaxJacobianDefect (`jacobian_every: adaptive` gives
-  /// kResolveJacobianDefect) and jacobian_every > 1 without a defect test is refused. Default false.
+  /// kResolveJacobianDefect: set this before calling setAdaptiveJacobian) and jacobian_every > 1 without a defect test
+  /// is refused. A Jacobian per step is safe but less accurate on the UR5 twin than the adaptive one (its stale W damps
+  /// the wrists' bristle transient at the stick less; docs/design.md). Default false.
   bool resolve_oscillations = false;
   /// BDF: let the plant's Jacobian use its analytic parts (sim::JacobianKind::Analytic: for the robot with drives the
   /// multibody's columns from the analytic ABA derivatives, fewer right-hand sides). false (default): difference
@@ -212,6 +216,9 @@ struct SolverStats {
   /// found a growing mode they could not see (split_steps counts these too; the discarded step stays counted in
   /// steps; FixedStepIntegrator).
   long retaken_steps = 0;
+  /// Fixed-step method with CvodeOptions::resolve_oscillations only: full steps taken with γ = 1 + 1/√2 on every row
+  /// because the matrix with the oscillatory rows scaled had a negative determinant (FixedStepIntegrator).
+  long damped_steps = 0;
 };
 
 /// Right-hand side ydot = f(t, y). `ydot` has size n and must be filled completely; it must not be

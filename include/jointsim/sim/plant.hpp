@@ -189,7 +189,7 @@ class Plant {
   /// (CvodeOptions::resolve_oscillations): those of lightly damped oscillatory modes that a step should follow rather
   /// than damp (a drive train's motor, current and gear states, the joint angles), not those where stiff real modes
   /// and growing modes act (friction bristles, the joint velocities that friction and the gear torques drive).
-  /// Default: none (the option then changes nothing). CVODE ignores them.
+  /// Default: none (the fixed step then refuses the option). CVODE ignores them.
   virtual std::vector<int> oscillatoryStates() const { return {}; }
 
   /// What continuous state `i` is, for messages ("q_elbow_joint [rad]"); empty when the plant does not say.
