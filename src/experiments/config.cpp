@@ -10,6 +10,7 @@
 #include "experiments/config_internal.hpp"
 #include "io/yaml_node.hpp"
 #include "jointsim/common/error.hpp"
+#include "jointsim/common/text.hpp"
 
 namespace jointsim::experiments {
 
